@@ -1,0 +1,113 @@
+"""Joint angles: the output convention, and configurations built from angles.
+
+Let R = [d1 d2 d3] be a body's director triad and R_rel = R_parent^T R_child the relative
+rotation of a joint (child directors in parent components); every angle is zero in the
+upright pose, where all triads equal the world axes (x forward, y left, z up).
+
+* Spherical joint ``j``: angles (``j_pitch``, ``j_roll``, ``j_yaw``) with
+  R_rel = Ry(pitch) Rx(roll) Rz(yaw): pitch about the parent's lateral axis d2 first
+  (flexion/extension, the large motion of walking), then roll about the once-rotated d1
+  (ab/adduction, inversion/eversion), then yaw about the child's own d3 (axial rotation).
+  Positive angles are right-handed rotations: a positive hip pitch swings the foot backward.
+  The sequence is singular at roll = +-90 deg (gimbal lock). There `joint_angles` returns
+  yaw = 0 and puts the whole rotation about the remaining axis into pitch; the angles then
+  still reproduce R_rel exactly (tested), but they jump, so no optimiser works in them.
+* Revolute joint (knee): one angle, right-handed about the joint axis (knees: about d2, so a
+  bent knee has a positive angle).
+* Root orientation (for /tf only): R = Rz(yaw) Ry(pitch) Rx(roll).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gait_planner.model.rotations import rot_axis, rot_x, rot_y, rot_z
+from gait_planner.model.scene import InitialPose, JointType, Scene
+
+# |sin(roll)| above this counts as gimbal lock (roll within ~1e-6 rad of 90 deg).
+_GIMBAL_LOCK = 1.0 - 1e-12
+
+
+def angle_names(scene: Scene) -> tuple[str, ...]:
+    """All joint angle names in joint (tree) order; also the order of the torques."""
+    return tuple(name for j in scene.joints for name in j.angle_names)
+
+
+def spherical_rotation(pitch: float, roll: float, yaw: float) -> np.ndarray:
+    return rot_y(pitch) @ rot_x(roll) @ rot_z(yaw)
+
+
+def spherical_angles(R: np.ndarray) -> tuple[float, float, float]:
+    """(pitch, roll, yaw) of R = Ry(pitch) Rx(roll) Rz(yaw); roll in [-pi/2, pi/2]."""
+    s_roll = float(np.clip(-R[1, 2], -1.0, 1.0))
+    roll = float(np.arcsin(s_roll))
+    if abs(s_roll) < _GIMBAL_LOCK:
+        pitch = float(np.arctan2(R[0, 2], R[2, 2]))
+        yaw = float(np.arctan2(R[1, 0], R[1, 1]))
+    else:  # gimbal lock: only pitch -/+ yaw is defined; put it all into pitch
+        yaw = 0.0
+        pitch = float(np.arctan2(-R[2, 0], R[0, 0]))
+    return pitch, roll, yaw
+
+
+def revolute_angle(R: np.ndarray, axis) -> float:
+    """Angle of the rotation R about the unit vector `axis` (R assumed to fix axis)."""
+    a = np.asarray(axis, dtype=float)
+    # components of R - R^T give 2 sin(theta) a; trace gives 1 + 2 cos(theta)
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    return float(np.arctan2(0.5 * w @ a, 0.5 * (np.trace(R) - 1.0)))
+
+
+def _frames(scene: Scene, q: np.ndarray) -> dict[str, np.ndarray]:
+    return {
+        b.name: q[12 * i + 3 : 12 * i + 12].reshape(3, 3).T for i, b in enumerate(scene.bodies)
+    }
+
+
+def joint_angles(scene: Scene, q: np.ndarray) -> np.ndarray:
+    """Joint angles (rad) of configurations q: (k,) -> (na,) or (n, k) -> (n, na)."""
+    q = np.asarray(q, dtype=float)
+    if q.ndim == 2:
+        return np.array([joint_angles(scene, row) for row in q])
+    frames = _frames(scene, q)
+    out: list[float] = []
+    for joint in scene.joints:
+        R = frames[joint.parent].T @ frames[joint.child]
+        if joint.type is JointType.SPHERICAL:
+            out += spherical_angles(R)
+        else:
+            out.append(revolute_angle(R, joint.axis))
+    return np.array(out)
+
+
+def root_angles(R: np.ndarray) -> tuple[float, float, float]:
+    """(yaw, pitch, roll) of R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    pitch = float(np.arcsin(np.clip(-R[2, 0], -1.0, 1.0)))
+    return float(np.arctan2(R[1, 0], R[0, 0])), pitch, float(np.arctan2(R[2, 1], R[2, 2]))
+
+
+def configuration(scene: Scene, pose: InitialPose | None = None) -> np.ndarray:
+    """Director coordinates q (k,) of a pose given by root position/angles and joint angles.
+
+    Satisfies every internal and joint constraint exactly (up to round-off).
+    """
+    pose = pose or scene.initial_pose
+    yaw, pitch, roll = pose.root_angles
+    frames = {scene.root.body: (np.asarray(pose.root_position, float),
+                                rot_z(yaw) @ rot_y(pitch) @ rot_x(roll))}
+    for joint in scene.joints:
+        values = pose.joint_angles.get(joint.name, (0.0,) * joint.dof)
+        if joint.type is JointType.SPHERICAL:
+            R_rel = spherical_rotation(*values)
+        else:
+            R_rel = rot_axis(np.asarray(joint.axis, float), values[0])
+        phi_p, D_p = frames[joint.parent]
+        D_c = D_p @ R_rel
+        rho_p = np.asarray(scene.body(joint.parent).points[joint.parent_point])
+        rho_c = np.asarray(scene.body(joint.child).points[joint.child_point])
+        frames[joint.child] = (phi_p + D_p @ rho_p - D_c @ rho_c, D_c)
+    q = np.zeros(12 * len(scene.bodies))
+    for i, b in enumerate(scene.bodies):
+        phi, D = frames[b.name]
+        q[12 * i : 12 * i + 12] = np.concatenate([phi, D.T.reshape(-1)])
+    return q

@@ -1,0 +1,69 @@
+"""Rotation helpers, symbolic (CasADi SX/MX) and numeric (numpy).
+
+Rotation matrices act on column vectors; a body's director triad D = [d1 d2 d3] is the
+rotation from body-fixed components to world components.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+# Below this squared angle the Rodrigues coefficients use their Taylor series, so that the
+# map and all its derivatives stay finite at zero rotation (|theta| < 1e-2 rad: the
+# truncation error of the series used is below 1e-17).
+_SMALL_ANGLE_SQ = 1e-4
+
+
+def skew(w):
+    """The 3x3 matrix w^ with w^ x = w cross x (works for SX, MX and DM)."""
+    return ca.vertcat(
+        ca.horzcat(0, -w[2], w[1]),
+        ca.horzcat(w[2], 0, -w[0]),
+        ca.horzcat(-w[1], w[0], 0),
+    )
+
+
+def exp_so3(w):
+    """Rodrigues' formula exp(w^) = I + a(s) w^ + b(s) w^2, s = |w|^2, for a 3-vector w (rad).
+
+    a = sin|w|/|w| and b = (1 - cos|w|)/|w|^2 switch to their Taylor series for small |w|,
+    so the result is exactly orthogonal in exact arithmetic and smooth (all derivatives
+    finite) at w = 0. Returns a 3x3 expression of the same CasADi type as w.
+    """
+    s = ca.dot(w, w)
+    r = ca.sqrt(ca.fmax(s, _SMALL_ANGLE_SQ))  # the unused branch never divides by 0
+    a_big = ca.sin(r) / r
+    b_big = (1 - ca.cos(r)) / (r * r)
+    a_small = 1 - s / 6 + s**2 / 120 - s**3 / 5040
+    b_small = 0.5 - s / 24 + s**2 / 720 - s**3 / 40320
+    big = s > _SMALL_ANGLE_SQ
+    a = ca.if_else(big, a_big, a_small)
+    b = ca.if_else(big, b_big, b_small)
+    W = skew(w)
+    return ca.DM.eye(3) + a * W + b * ca.mtimes(W, W)
+
+
+# ---- numeric (numpy) -------------------------------------------------------------------
+
+
+def rot_x(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def rot_y(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def rot_z(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rot_axis(axis: np.ndarray, a: float) -> np.ndarray:
+    """Numeric rotation by angle a about the unit vector axis."""
+    n = np.asarray(axis, dtype=float)
+    N = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
+    return np.eye(3) + np.sin(a) * N + (1.0 - np.cos(a)) * N @ N

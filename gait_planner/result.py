@@ -1,0 +1,90 @@
+"""The plain result of a plan: numpy arrays and statistics, nothing else.
+
+`gait_planner.ocp.plan` returns a `PlanResult`; MCAP, rerun and ROS messages only consume
+it (`gait_planner.io.messages` owns the conversion to message layouts).
+
+Node and interval conventions (DESIGN.md section 7): nodes n = 0 .. N, intervals
+n = 0 .. N-1 between t_n and t_{n+1}. The torque tau[n] acts on interval n. Nodes N-1 and N
+are the mirror images of nodes 0 and 1 (shifted by the step length), so the half cycle
+lasts t_{N-1} - t_0 (`duration`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gait_planner.model.scene import Scene
+
+
+@dataclass(frozen=True)
+class SolverStats:
+    """What the solver reports about one solve."""
+
+    status: str  # IPOPT's return status in words, e.g. "Solve_Succeeded"
+    iterations: int
+    solve_time: float  # s, wall clock of the NLP solve alone
+    build_time: float = 0.0  # s, building the transcription (cached builds cost ~0)
+    max_constraint_violation: float = float("nan")  # largest |g| of holonomic constraints, m
+    max_dynamics_residual: float = float("nan")  # largest relative full DEL residual
+    max_friction_violation: float = float("nan")  # largest cone violation, N
+    most_violated: str = ""  # name of the most violated constraint group on failure
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """A planned half-cycle gait (or a failed attempt, with `success = False`).
+
+    Shapes: N intervals, N + 1 nodes, nb bodies, k = 12 nb, na joint angles,
+    nt joint torque components (= na), C contact points of the scene.
+
+    Attributes:
+        times: (N+1,) s, times[0] = 0.
+        q: (N+1, k) director coordinates per node, bodies in scene order, each
+            (phi, d1, d2, d3) in world coordinates (m, -).
+        tau: (N, nt) joint torques per interval, N m; spherical joints: components along
+            the parent's directors; revolute joints: about the joint axis.
+        joint_angle_names / joint_angles: (N+1, na) rad, `gait_planner.model.angles`.
+        joint_velocities: (N+1, na) rad/s (central differences of the angles).
+        phases: (N+1,) phase name of each node.
+        active_contacts: (N+1,) names of the contacts held at each node.
+        contact_forces: contact name -> (N+1, 3) ground force on the body, N, world frame;
+            zero where the contact is not active.
+        generalized_force: (N+1, k) f+_{n-1} + f-_n (N, director form; zero on phi).
+        kinetic_energy, potential_energy: (N+1,) J.
+        phase_scaling: sigma, (n_sigma,).
+        cost_value: J of `cost_name` over the half cycle (J s for kinetic_energy).
+    """
+
+    success: bool
+    message: str
+    scene: Scene
+    cost_name: str
+    cost_value: float
+    step_length: float
+    friction_coefficient: float
+    times: np.ndarray
+    q: np.ndarray
+    tau: np.ndarray
+    joint_angle_names: tuple[str, ...]
+    joint_angles: np.ndarray
+    joint_velocities: np.ndarray
+    phases: tuple[str, ...]
+    active_contacts: tuple[tuple[str, ...], ...]
+    contact_forces: dict[str, np.ndarray]
+    generalized_force: np.ndarray
+    kinetic_energy: np.ndarray
+    potential_energy: np.ndarray
+    phase_scaling: np.ndarray
+    duration: float
+    stats: SolverStats
+    settings: dict[str, str] = field(default_factory=dict)  # extra metadata, strings
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.times.shape[0])
+
+    @property
+    def body_names(self) -> tuple[str, ...]:
+        return tuple(b.name for b in self.scene.bodies)
