@@ -104,6 +104,7 @@ class Checker:
 
     def __init__(self, file: str):
         self.file = file
+        self.warnings: list[str] = []  # logged by the loader once the whole scene is valid
 
     def fail(self, key: str, reason: str) -> NoReturn:
         raise SceneError(reason, file=self.file, key=key or "(top level)")
@@ -177,10 +178,7 @@ class Checker:
         """A name: a letter, then letters, digits and underscores."""
         value = self.string(value, key)
         if not NAME_PATTERN.fullmatch(value):
-            self.fail(
-                key,
-                f"must be a name (a letter, then letters, digits or '_'), got {value!r}",
-            )
+            self.fail(key, f"must be a name (a letter, then letters, digits or '_'), got {value!r}")
         return value
 
     def choice(self, value: Any, key: str, enum_type: type[E]) -> E:
@@ -194,7 +192,7 @@ class Checker:
         known = list(known)
         if value not in known:
             listing = ", ".join(known) if known else "none"
-            self.fail(key, f"unknown {what} {value!r} (known {what}s: {listing})")
+            self.fail(key, f"unknown {what} {value!r} (known: {listing})")
         return value
 
     def point(self, value: Any, key: str, body: Body) -> str:
@@ -222,7 +220,8 @@ class Checker:
         first: dict[str, int] = {}
         for i, name in enumerate(names):
             if name in first:
-                self.fail(key_of(i), f"duplicate {what} name {name!r} (first at index {first[name]})")
+                self.fail(key_of(i), f"duplicate {what} name {name!r} "
+                                     f"(first used at index {first[name]})")
             first[name] = i
 
     def free_value(self, value: Any, key: str) -> Any:
@@ -230,9 +229,7 @@ class Checker:
 
         Lists become tuples and mappings read-only, so the result is immutable.
         """
-        if isinstance(value, (bool, str)):
-            return value
-        if isinstance(value, int):
+        if isinstance(value, (bool, str, int)):
             return value
         if isinstance(value, float):
             return self.number(value, key)
@@ -330,9 +327,9 @@ def _mirror(c: Checker, value: Any, bodies: tuple[Body, ...]) -> MappingProxyTyp
         if not (_close(first.mass, second.mass) and all(
             _close(x, y) for x, y in zip(first.inertia, second.inertia)
         )):
-            c.fail(mkey, f"mirror images need equal mass and inertia: {name!r} has "
-                         f"{first.mass}, {first.inertia}, {other!r} has "
-                         f"{second.mass}, {second.inertia}")
+            c.fail(mkey, f"mirror images need equal mass and inertia: {name!r} has mass "
+                         f"{first.mass} and inertia {first.inertia}, {other!r} has mass "
+                         f"{second.mass} and inertia {second.inertia}")
     return MappingProxyType({b.name: pairs.get(b.name, b.name) for b in bodies})
 
 

@@ -37,7 +37,7 @@ YAML layout (exactly these keys; unknown keys are errors)::
       options: {}                     # optional; passed through to the optimiser
 
 Planar scenes (root type planar) move in the x-z plane: every joint is revolute about
-(0, 1, 0), and the initial pose has root y = 0, yaw = roll = 0.
+(0, 1, 0), and the initial root angles have yaw = roll = 0.
 """
 
 from __future__ import annotations
@@ -180,6 +180,8 @@ def _build_scene(data: Any, file: str, stem: str, source: str) -> Scene:
     contacts = _contacts(c, top["contacts"], bodies)
     pose = _initial_pose(c, top["initial_pose"], joints, root)
     gait = check_gait(c, top["gait"], bodies, contacts) if "gait" in top else None
+    for warning in c.warnings:
+        _log.warning("%s", warning)
     return Scene(
         name=name,
         bodies=bodies,
@@ -201,7 +203,7 @@ def _bodies(c: Checker, value: Any, allow_nonphysical: bool) -> tuple[Body, ...]
     bodies = []
     for i, item in enumerate(items):
         key = join("bodies", i)
-        b = c.mapping(item, key, required=("name", "mass", "inertia"), optional=("length", "points"))
+        b = c.mapping(item, key, ("name", "mass", "inertia"), ("length", "points"))
         points = c.mapping(b.get("points", {}), join(key, "points"))
         for point in points:
             c.name(point, join(join(key, "points"), point))
@@ -237,8 +239,8 @@ def _check_inertia(c: Checker, body: Body, key: str, allow_nonphysical: bool) ->
     )
     if not allow_nonphysical:
         c.fail(key, reason + "; fix the inertia or set allow_nonphysical_inertia: true")
-    _log.warning("%s: %s: %s; loading it because allow_nonphysical_inertia is true",
-                 c.file, key, reason)
+    c.warnings.append(f"{c.file}: {key}: {reason}; loading it because "
+                      f"allow_nonphysical_inertia is true")
 
 
 def _joints(c: Checker, value: Any, bodies: tuple[Body, ...], root: Root) -> tuple[Joint, ...]:
