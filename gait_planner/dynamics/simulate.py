@@ -4,12 +4,13 @@ At each node n the unknowns are the nodal increments u_{n+1} (ndof,) of
 q_{n+1} = F_d(u_{n+1}, q_n) and, if contact points are held, their multipliers lambda_n
 (ground force on the body, N). Newton's method solves (paper eqs. 1-2, reduced by P^T)
 
-    P^T(q_n) [p_n + D1 L_d(q_n, q_{n+1}, h_n) + h_n/2 B^T(q_n) tau_n - w_n G_C^T lambda_n] = 0
+    P^T(q_n) [p_n + D1 L_d(q_n, q_{n+1}, h_n) + h_n/2 B^T(q_n) tau_n + w_n G_C^T lambda_n] = 0
     G_C (q_{n+1} - q_n) = 0            (held contact points do not move)
 
 with the incoming discrete momentum p_n = D2 L_d(q_{n-1}, q_n, h_{n-1}) + f+_{n-1}
 (p_0 = M P(q_0) nu_0, the continuous Legendre transform of the initial velocity) and
-w_n = (h_{n-1} + h_n)/2 (h_0/2 at n = 0). Internal and joint constraints hold exactly by
+w_n = (h_{n-1} + h_n)/2 (h_0/2 at n = 0). With this sign lambda_n is the force the ground
+exerts on the body (the usual multiplier of eq. 1 is its negative). Internal and joint constraints hold exactly by
 construction of F_d; the contact constraints are linear in q and hold to Newton tolerance.
 """
 
@@ -60,7 +61,7 @@ class Simulator:
         h, w, tau = ca.SX.sym("h"), ca.SX.sym("w"), ca.SX.sym("tau", mb.nt)
         q_next = mb.reparametrise(u, q)
         force = (p + mech.discrete_lagrangian_d1(q, q_next, h)
-                 + 0.5 * h * ca.mtimes(mb.actuation(q), tau) - w * ca.mtimes(ca.DM(C).T, lam))
+                 + 0.5 * h * ca.mtimes(mb.actuation(q), tau) + w * ca.mtimes(ca.DM(C).T, lam))
         res = ca.vertcat(ca.mtimes(mb.null_space(q).T, force), ca.mtimes(ca.DM(C), q_next - q))
         x = ca.vertcat(u, lam)
         self._newton = ca.Function(

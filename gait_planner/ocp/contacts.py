@@ -1,0 +1,109 @@
+"""Contact modes of a gait phase: which rows of q a held contact fixes, and its forces.
+
+A phase holds a set of contact points. Points on different bodies are independent; the two
+points of one body held together form a full contact (the body's pose is fixed: 6
+independent rows in 3D, 3 in planar scenes). All contact rows are linear in q (a point's
+world position is x = C q; the foot's roll is the z component of its director d2), so a
+held contact is the chain condition C (q_{n+1} - q_n) = 0 over an interval (DESIGN.md
+section 5: no redundant rows), and the contact force of node n enters its discrete
+Euler-Lagrange equation as +(h_{n-1} + h_n)/2 C^T lambda_n: lambda is the force the ground
+exerts on the body (the multiplier of the paper's eq. 1 is its negative).
+
+Rows per body (3D; planar scenes drop the y rows and the roll row):
+  one point  p:        p_x, p_y, p_z                   lambda = ground force on p (N)
+  full  (a = first, b = second point in scene order):
+                       a_x, a_y, a_z, b_y, b_z, d2_z  lambda = (F_a, F_b,y, F_b,z, M_roll)
+where M_roll (N m) is the generalised force on d2_z: a moment d2 x e_z M_roll about the
+heel-toe line, which two point forces cannot carry. The net ground force on the body is
+F_a + F_b with F_b = (0, F_b,y, F_b,z).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gait_planner.model.multibody import Multibody
+
+
+@dataclass(frozen=True)
+class BodyContact:
+    """The held contact of one body in one phase."""
+
+    body: str
+    points: tuple[str, ...]  # contact names, scene order (1 = point, 2 = full contact)
+    rows: np.ndarray  # (r, k) constant rows of q fixed by the contact
+    planar: bool
+
+    @property
+    def full(self) -> bool:
+        return len(self.points) == 2
+
+    @property
+    def n_rows(self) -> int:
+        return int(self.rows.shape[0])
+
+    def point_forces(self, lam: np.ndarray) -> dict[str, np.ndarray]:
+        """Ground force (3,) on each point from this contact's multipliers (r,)."""
+        lam = np.asarray(lam, dtype=float)
+        if self.planar:
+            first = np.array([lam[0], 0.0, lam[1]])
+            if not self.full:
+                return {self.points[0]: first}
+            return {self.points[0]: first, self.points[1]: np.array([0.0, 0.0, lam[2]])}
+        if not self.full:
+            return {self.points[0]: lam[0:3].copy()}
+        return {self.points[0]: lam[0:3].copy(), self.points[1]: np.array([0.0, lam[3], lam[4]])}
+
+    def roll_moment(self, lam: np.ndarray) -> float:
+        """M_roll (N m) of a 3D full contact, else 0."""
+        return float(lam[5]) if self.full and not self.planar else 0.0
+
+
+def body_contacts(mb: Multibody, contact_names) -> tuple[BodyContact, ...]:
+    """Group held contact points by body, in scene body order, with their rows."""
+    scene = mb.scene
+    by_body: dict[str, list[str]] = {}
+    for c in scene.contacts:
+        if c.name in contact_names:
+            by_body.setdefault(c.body, []).append(c.name)
+    out = []
+    for body in mb.body_names:
+        names = by_body.get(body)
+        if not names:
+            continue
+        if len(names) > 2:
+            raise ValueError(f"body {body!r} holds {len(names)} contact points; at most 2")
+        first = mb.contact_rows(names[0])
+        if len(names) == 1:
+            rows = first
+        else:
+            second = mb.contact_rows(names[1])
+            roll = np.zeros((1, mb.k))
+            roll[0, mb.block(body).start + 6 + 2] = 1.0  # z component of d2
+            rows = (np.vstack([first, second[1:]]) if scene.planar
+                    else np.vstack([first, second[1:], roll]))
+        out.append(BodyContact(body, tuple(names), rows, scene.planar))
+    return tuple(out)
+
+
+def stacked_rows(contacts: tuple[BodyContact, ...], k: int) -> np.ndarray:
+    """All rows of a phase's contacts, (sum r, k)."""
+    return np.vstack([c.rows for c in contacts]) if contacts else np.zeros((0, k))
+
+
+def establishing_rows(mb: Multibody, before: tuple[BodyContact, ...],
+                      after: tuple[BodyContact, ...]) -> np.ndarray:
+    """Rows that must vanish at the node where `after` starts: the height of every point
+    that touches down there, and, for a body whose full contact is completed there, its
+    roll (d2_z = 0: foot flat). Returns (r, k) with r possibly 0."""
+    held = {p for c in before for p in c.points}
+    rows = []
+    for c in after:
+        new = [p for p in c.points if p not in held]
+        for p in new:
+            rows.append(mb.contact_rows(p)[-1])  # z row
+        if new and c.full and not c.planar:
+            rows.append(c.rows[-1])  # roll row
+    return np.array(rows) if rows else np.zeros((0, mb.k))

@@ -1,0 +1,127 @@
+"""An initial guess from nothing stored: a kinematic stepping motion.
+
+Each contact point gets a target path over the half cycle: on the ground where its phase
+holds it (the first stance foot where it stands in the scene pose, every later contact one
+step length ahead), in between a straight line with a sine-shaped lift, and across the
+cycle boundary the mirrored path of its partner (q_{n+N-1} = mirror(q_n) + step). The root
+follows the mean of the contact targets at a slightly lowered height, upright. Each node's
+configuration is then fitted to these targets by Gauss-Newton in the nodal
+reparametrisation about the scene pose, continued from node to node, so every guess
+satisfies all internal and joint constraints exactly.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from gait_planner.model.angles import configuration
+from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
+
+LIFT = 0.05  # m, swing lift of a free contact point at the middle of its gap
+DIP = 0.03  # m, root lowered below the scene pose
+_W_CONTACT, _W_ROOT, _W_UPRIGHT, _W_SMALL = 1.0, 0.3, 0.3, 1e-3
+
+
+def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[str, np.ndarray]:
+    """Target world positions (N+1, 3) of every contact point."""
+    mb, N = tr.mb, tr.N
+    mirror = dict(mb.scene.gait.mirror)
+    S = np.diag([1.0, -1.0, 1.0])
+    held = {c.name: [n for n in range(N) if c.name in
+                     {p for bc in tr.contacts[tr.phase_of_interval[n]] for p in bc.points}]
+            for c in mb.scene.contacts}
+    ground = {}
+    for c in mb.scene.contacts:
+        x = mb.point_matrix(c.body, c.point) @ q_pose
+        x[2] = 0.0
+        ground[c.name] = x + (0 if 0 in held[c.name] else step) * np.array([1.0, 0, 0])
+
+    def partner(name):
+        c = mb.scene.contact(name)
+        body = mirror.get(c.body, c.body)
+        return next(d.name for d in mb.scene.contacts if d.body == body and d.point == c.point)
+
+    targets = {}
+    for c in mb.scene.contacts:
+        samples = {}
+        for n in held[c.name]:
+            samples[n] = samples[n + 1] = ground[c.name]
+        other = partner(c.name)
+        for n in held[other]:
+            image = S @ ground[other]
+            for m in (n, n + 1):
+                samples[m - (N - 1)] = image - step * np.array([1.0, 0, 0])
+                samples[m + (N - 1)] = image + step * np.array([1.0, 0, 0])
+        nodes = np.array(sorted(samples))
+        pts = np.array([samples[n] for n in nodes])
+        path = np.zeros((N + 1, 3))
+        for n in range(N + 1):
+            j = np.searchsorted(nodes, n)
+            if j < nodes.size and nodes[j] == n:
+                path[n] = pts[j]
+                continue
+            a, b = max(j - 1, 0), min(j, nodes.size - 1)
+            frac = (n - nodes[a]) / max(nodes[b] - nodes[a], 1)
+            path[n] = (1 - frac) * pts[a] + frac * pts[b]
+            path[n, 2] += LIFT * np.sin(np.pi * frac)
+        targets[c.name] = path
+    return targets
+
+
+def kinematic_guess(tr: Transcription, step: float) -> np.ndarray:
+    """Configurations (N+1, k) of a kinematic stepping motion for transcription `tr`."""
+    mb = tr.mb
+    q_pose = configuration(mb.scene)
+    targets = contact_targets(tr, q_pose, step)
+    names = [c.name for c in mb.scene.contacts]
+    root = mb.block(mb.scene.root.body).start
+    points = [mb.point_matrix(mb.scene.contact(n).body, mb.scene.contact(n).point)
+              for n in names]
+    mean0 = np.mean([(C @ q_pose)[0] for C in points])
+    offset = q_pose[root] - mean0
+
+    u, qref = ca.SX.sym("u", mb.ndof), ca.DM(q_pose)
+    tgt = ca.SX.sym("target", 3 * len(names) + 3)
+    q = mb.reparametrise(u, qref)
+    res = [_W_CONTACT * (ca.mtimes(ca.DM(C), q) - tgt[3 * i : 3 * i + 3])
+           for i, C in enumerate(points)]
+    res.append(_W_ROOT * (q[root : root + 3] - tgt[-3:]))
+    res.append(_W_UPRIGHT * (q[root + 3 : root + 6] - ca.DM([1.0, 0, 0])))
+    res.append(_W_UPRIGHT * (q[root + 9 : root + 12] - ca.DM([0, 0, 1.0])))
+    res.append(_W_SMALL * u)
+    r = ca.vertcat(*res)
+    gn = ca.Function("guess_residual", [u, tgt], [r, ca.jacobian(r, u)]).expand()
+
+    out = np.zeros((tr.N + 1, mb.k))
+    x = np.zeros(mb.ndof)
+    for n in range(tr.N + 1):
+        pts = [targets[name][n] for name in names]
+        root_target = np.array([np.mean([p[0] for p in pts]) + offset,
+                                q_pose[root + 1], q_pose[root + 2] - DIP])
+        t = np.concatenate(pts + [root_target])
+        for _ in range(30):
+            rv, J = gn(x, t)
+            dx = np.linalg.lstsq(np.array(J), -np.array(rv).ravel(), rcond=None)[0]
+            x = x + dx
+            if np.abs(dx).max() < 1e-10:
+                break
+        out[n] = np.array(mb.reparametrise(x, qref)).ravel()
+    return out
+
+
+def initial_multipliers(tr: Transcription) -> np.ndarray:
+    """Scaled lambda: the weight shared by the bodies in contact, split over full-contact
+    points, no tangential force."""
+    weight = sum(b.mass for b in tr.mb.scene.bodies) * tr.mb.scene.gravity
+    out = []
+    for n in tr.lam_nodes:
+        contacts = tr.contacts[tr.phase_of_interval[n]]
+        for bc in contacts:
+            lam = np.zeros(bc.n_rows)
+            share = weight / len(contacts) / FORCE_SCALE
+            z_rows = ([1] if bc.planar else [2]) if not bc.full else \
+                ([1, 2] if bc.planar else [2, 4])
+            lam[z_rows] = share / len(z_rows)
+            out.append(lam)
+    return np.concatenate(out) if out else np.zeros(0)

@@ -1,0 +1,61 @@
+"""Mirror periodicity (paper section 6, eqs. 7-9): reflection about the plane y = 0.
+
+A body's mirror image lives in its partner body (right <-> left, torso <-> torso):
+phi' = S phi, d1' = S d1, d2' = -S d2, d3' = S d3 with S = diag(1, -1, 1), which keeps the
+triad right-handed and maps body point (X1, X2, X3) to the partner's (X1, -X2, X3).
+A couple m mirrors to -S m; in parent-director components a spherical joint torque
+(t1, t2, t3) becomes (-t1, t2, -t3) on the partner joint, a revolute torque about axis n
+becomes t * ((-F n) . n_partner) with F = diag(1, -1, 1), negated when the mirror image
+swaps the joint's parent and child (the compass hip).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gait_planner.model.multibody import Multibody
+from gait_planner.model.scene import JointType
+
+_S = np.diag([1.0, -1.0, 1.0])
+_F = np.diag([1.0, -1.0, 1.0])
+
+
+def configuration_mirror(mb: Multibody) -> tuple[np.ndarray, np.ndarray]:
+    """(A, e) with mirror(q) + s e_x = A q + s e: A (k, k), e (k,) the x-shift pattern."""
+    gait = mb.scene.gait
+    mirror = dict(gait.mirror) if gait else {}
+    A = np.zeros((mb.k, mb.k))
+    shift = np.zeros(mb.k)
+    for name in mb.body_names:
+        partner = mirror.get(name, name)
+        src, dst = mb.block(name).start, mb.block(partner).start
+        signs = (1.0, 1.0, -1.0, 1.0)  # phi, d1, d2, d3
+        for j, sign in enumerate(signs):
+            A[dst + 3 * j : dst + 3 * j + 3, src + 3 * j : src + 3 * j + 3] = sign * _S
+        shift[dst] = 1.0
+    return A, shift
+
+
+def torque_mirror(mb: Multibody) -> np.ndarray:
+    """B (nt, nt) with mirrored torques tau' = B tau (partner joints)."""
+    gait = mb.scene.gait
+    mirror = dict(gait.mirror) if gait else {}
+    by_bodies = {(j.parent, j.child): j for j in mb.scene.joints}
+    B = np.zeros((mb.nt, mb.nt))
+    for joint in mb.scene.joints:
+        parent, child = mirror.get(joint.parent, joint.parent), mirror.get(joint.child, joint.child)
+        src = mb.joint_slices[joint.name]
+        if (parent, child) in by_bodies:
+            partner, sign = by_bodies[(parent, child)], 1.0
+        elif (child, parent) in by_bodies and joint.type is JointType.REVOLUTE:
+            # the mirror image swaps parent and child (compass hip): the couple on the
+            # joint's child changes sign
+            partner, sign = by_bodies[(child, parent)], -1.0
+        else:
+            raise ValueError(f"joint {joint.name!r} has no mirror partner joint")
+        dst = mb.joint_slices[partner.name]
+        if joint.type is JointType.SPHERICAL:
+            B[dst, src] = np.diag([-1.0, 1.0, -1.0])
+        else:
+            B[dst, src] = sign * float((-_F @ np.array(joint.axis)) @ np.array(partner.axis))
+    return B

@@ -1,0 +1,122 @@
+"""Settings of one gait optimisation: the scene's gait block merged with request overrides.
+
+Every field is validated once, here, with an error that names the setting.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+from gait_planner.model.scene import Scene
+
+COSTS = ("kinetic_energy", "torque_squared")
+
+
+class SettingsError(ValueError):
+    """A request or scene option that cannot be planned, with the reason."""
+
+
+@dataclass(frozen=True)
+class GaitSettings:
+    """What the transcription needs beyond the scene's bodies.
+
+    Attributes (units): step_length m; base_time_step s; scaling_bounds (lower, upper);
+    friction_coefficient -; cost one of COSTS; intervals per phase;
+    torque_regularisation weight on sum h |tau|^2 (J s per (N m)^2 s, i.e. 1/(N s)) added to
+    any cost; friction_smoothing delta (N) of mu f_z - sqrt(f_x^2 + f_y^2 + delta^2) >= 0;
+    torso_lean_max rad (torso d3 within this angle of vertical; 0 = off);
+    torso_height_min m (torso centre-of-mass height; 0 = off); knee_max rad (knees in
+    [0, knee_max]; 0 = off); foot_half_width m (|roll moment| <= half width * normal force of a full
+    contact; the paper's foot breadth is 0.0915 m); ground_clearance: free contact points stay at
+    or above the ground (off for the rigid-legged compass, which must scuff at mid-stance);
+    max_iterations, max_solve_time s (IPOPT); tolerance (IPOPT tol);
+    constraint_tolerance (IPOPT constr_viol_tol).
+    """
+
+    step_length: float
+    base_time_step: float
+    scaling_bounds: tuple[float, float]
+    friction_coefficient: float
+    cost: str
+    intervals: tuple[int, ...]
+    torque_regularisation: float = 1e-4
+    friction_smoothing: float = 1.0
+    torso_lean_max: float = 0.0
+    torso_height_min: float = 0.0
+    knee_max: float = 0.0
+    foot_half_width: float = 0.04575
+    ground_clearance: bool = True
+    max_iterations: int = 3000
+    max_solve_time: float = 600.0
+    tolerance: float = 1e-8
+    constraint_tolerance: float = 1e-10
+
+    def __post_init__(self):
+        def bad(name, why):
+            raise SettingsError(f"{name}: {why}")
+
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            values = v if isinstance(v, tuple) else (v,)
+            for x in values:
+                if isinstance(x, (int, float)) and not math.isfinite(x):
+                    bad(f.name, f"must be finite, got {x}")
+        if self.step_length <= 0:
+            bad("step_length", f"must be positive (m), got {self.step_length}")
+        if self.base_time_step <= 0:
+            bad("base_time_step", f"must be positive (s), got {self.base_time_step}")
+        lo, hi = self.scaling_bounds
+        if not 0 < lo <= hi:
+            bad("scaling_bounds", f"need 0 < lower <= upper, got {self.scaling_bounds}")
+        if self.friction_coefficient <= 0:
+            bad("friction_coefficient", f"must be positive, got {self.friction_coefficient}")
+        if self.cost not in COSTS:
+            bad("cost", f"unknown cost {self.cost!r}; known: {', '.join(COSTS)}")
+        if any(i < 1 for i in self.intervals):
+            bad("intervals", f"every phase needs at least 1 interval, got {self.intervals}")
+        if self.max_solve_time <= 0:
+            bad("max_solve_time", f"must be positive (s), got {self.max_solve_time}")
+        for name in ("torque_regularisation", "friction_smoothing", "torso_lean_max",
+                     "torso_height_min", "knee_max", "foot_half_width"):
+            if getattr(self, name) < 0:
+                bad(name, f"must be >= 0, got {getattr(self, name)}")
+
+
+_OPTION_NAMES = {f.name for f in dataclasses.fields(GaitSettings)} - {
+    "step_length", "base_time_step", "scaling_bounds", "friction_coefficient", "cost",
+    "intervals",
+}
+
+
+def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | None = None,
+                 friction_coefficient: float | None = None,
+                 intervals_per_phase: int | None = None,
+                 max_solve_time: float | None = None, **overrides) -> GaitSettings:
+    """The scene's gait settings with the given overrides (None = the scene's value)."""
+    gait = scene.gait
+    if gait is None:
+        raise SettingsError(f"scene {scene.name!r} declares no gait: nothing to plan")
+    options = dict(gait.options)
+    unknown = (set(options) | set(overrides)) - _OPTION_NAMES
+    if unknown:
+        raise SettingsError(
+            f"unknown gait option(s) {sorted(unknown)}; known: {sorted(_OPTION_NAMES)}"
+        )
+    options.update(overrides)
+    if max_solve_time is not None:
+        options["max_solve_time"] = max_solve_time
+    intervals = tuple(p.intervals for p in gait.phases)
+    if intervals_per_phase is not None:
+        intervals = (int(intervals_per_phase),) * len(gait.phases)
+    return GaitSettings(
+        step_length=gait.step_length if step_length is None else float(step_length),
+        base_time_step=gait.base_time_step,
+        scaling_bounds=tuple(gait.scaling_bounds),
+        friction_coefficient=(gait.friction_coefficient if friction_coefficient is None
+                              else float(friction_coefficient)),
+        cost=gait.cost if cost is None else cost,
+        intervals=intervals,
+        **options,
+    )

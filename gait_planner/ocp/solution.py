@@ -1,0 +1,153 @@
+"""From an NLP solution vector to a plain `PlanResult` (and failed results)."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from gait_planner.model.angles import angle_names, joint_angles
+from gait_planner.model.scene import Scene
+from gait_planner.ocp.settings import GaitSettings
+from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
+from gait_planner.result import PlanResult, SolverStats
+
+STATUS_WORDS = {
+    "Solve_Succeeded": "converged",
+    "Solved_To_Acceptable_Level": "stopped at an acceptable but not optimal point",
+    "Infeasible_Problem_Detected": "the constraints cannot be satisfied (locally infeasible)",
+    "Restoration_Failed": "no feasible point found (restoration failed)",
+    "Maximum_Iterations_Exceeded": "iteration limit reached",
+    "Maximum_CpuTime_Exceeded": "time limit reached",
+    "Maximum_WallTime_Exceeded": "time limit reached",
+    "User_Requested_Stop": "time limit reached",
+    "Search_Direction_Becomes_Too_Small": "search direction became too small",
+    "Diverging_Iterates": "iterates diverged",
+    "Invalid_Number_Detected": "NaN or Inf in a function evaluation",
+    "Error_In_Step_Computation": "the step computation failed (singular KKT system)",
+}
+# a converged solve must also meet these (the checks of recordings judge 1e-8 m)
+CONSTRAINT_LIMIT = 1e-8
+
+
+def violations(tr: Transcription, g: np.ndarray) -> dict[str, float]:
+    """Largest violation of each constraint group (equalities |g|, inequalities max(0, -g))."""
+    out, offset = {}, 0
+    for name, size, equality in tr.constraint_groups():
+        part = g[offset : offset + size]
+        offset += size
+        v = np.abs(part) if equality else np.maximum(0.0, -part)
+        out[name] = max(out.get(name, 0.0), float(v.max()) if size else 0.0)
+    return out
+
+
+def _extractor(tr: Transcription) -> ca.Function:
+    if not hasattr(tr, "_extract"):
+        tr._extract = ca.Function(
+            "extract", [tr.x, tr.p],
+            [tr.Q, tr.TAU, tr.h, tr.cost_parts["kinetic_energy"], tr.cost_parts["torque_squared"]])
+    return tr._extract
+
+
+def _mirror_forces(tr: Transcription, forces: dict[str, np.ndarray], src: int, dst: int):
+    """Forces at node dst = mirror images of those at node src on the partner points."""
+    scene = tr.mb.scene
+    mirror = dict(scene.gait.mirror)
+    S = np.array([1.0, -1.0, 1.0])
+    for c in scene.contacts:
+        body = mirror.get(c.body, c.body)
+        partner = next(d.name for d in scene.contacts if d.body == body and d.point == c.point)
+        forces[partner][dst] = S * forces[c.name][src]
+
+
+def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray, *,
+                 status: str, iterations: int, solve_time: float, build_time: float,
+                 origin: str) -> PlanResult:
+    mb, mech, s, N = tr.mb, tr.mech, tr.settings, tr.N
+    scene = mb.scene
+    Q, TAU, h, kinetic, torque = (np.array(v) for v in _extractor(tr)(x, p))
+    q, tau, h = Q.T, TAU.T, h.ravel()
+    times = np.concatenate([[0.0], np.cumsum(h)])
+    phases = scene.gait.phases
+    node_phase = [tr.phase_of_interval[min(n, N - 1)] for n in range(N + 1)]
+    active = tuple(tuple(pt for bc in tr.contacts[k] for pt in bc.points) for k in node_phase)
+
+    forces = {c.name: np.zeros((N + 1, 3)) for c in scene.contacts}
+    lam = x[tr.U.numel() + tr.T.numel() : tr.U.numel() + tr.T.numel() + tr.L.numel()]
+    offset = 0
+    for n, size in zip(tr.lam_nodes, tr.lam_sizes):
+        values, inner = FORCE_SCALE * lam[offset : offset + size], 0
+        offset += size
+        for bc in tr.contacts[tr.phase_of_interval[n]]:
+            for name, f in bc.point_forces(values[inner : inner + bc.n_rows]).items():
+                forces[name][n] = f
+            inner += bc.n_rows
+    _mirror_forces(tr, forces, N - 1, 0)
+    _mirror_forces(tr, forces, 1, N)
+
+    Bt = [np.array(mb.actuation(qn)) for qn in q]
+    gen = np.zeros((N + 1, mb.k))
+    for n in range(N + 1):
+        if n > 0:
+            gen[n] += 0.5 * h[n - 1] * Bt[n] @ tau[n - 1]
+        if n < N:
+            gen[n] += 0.5 * h[n] * Bt[n] @ tau[n]
+    v = np.diff(q, axis=0) / h[:, None]
+    T_int = 0.5 * np.einsum("ni,i,ni->n", v, mb.mass_diagonal, v)
+    T_node = np.concatenate([[T_int[0]], 0.5 * (T_int[:-1] + T_int[1:]), [T_int[-1]]])
+    angles = joint_angles(scene, q)
+
+    viol = violations(tr, g)
+    constraint = max(max(float(np.abs(np.array(mb.constraints(qn))).max()) for qn in q),
+                     *(v for k, v in viol.items() if not k.startswith("dynamics")
+                       and k in ("contact_hold", "contact_establish", "pin_x")))
+    dynamics = max((v for k, v in viol.items() if k.startswith("dynamics")), default=0.0)
+    worst = max(viol, key=viol.get) if viol else ""
+    success = status == "Solve_Succeeded" and max(viol.values(), default=0.0) <= CONSTRAINT_LIMIT
+    words = STATUS_WORDS.get(status, status)
+    message = f"IPOPT: {words} ({status}) after {iterations} iterations"
+    if not success:
+        message += f"; most violated: {worst} ({viol.get(worst, 0.0):.3e})"
+    cost_value = float((kinetic if s.cost == "kinetic_energy" else torque).item())
+    stats = SolverStats(
+        status=status, iterations=iterations, solve_time=solve_time, build_time=build_time,
+        max_constraint_violation=float(constraint), max_dynamics_residual=float(dynamics),
+        max_friction_violation=float(viol.get("friction_cone", 0.0)), most_violated=worst,
+    )
+    return PlanResult(
+        success=success, message=message, scene=scene, cost_name=s.cost,
+        cost_value=cost_value, step_length=float(p[-2]), friction_coefficient=float(p[-1]),
+        times=times, q=q, tau=tau, joint_angle_names=angle_names(scene), joint_angles=angles,
+        joint_velocities=np.gradient(angles, times, axis=0),
+        phases=tuple(phases[k].name for k in node_phase), active_contacts=active,
+        contact_forces=forces, generalized_force=gen, kinetic_energy=T_node,
+        potential_energy=q @ mech.gravity_gradient, phase_scaling=x[-int(tr.S.shape[0]):].copy(),
+        duration=float(times[N - 1] - times[0]), stats=stats,
+        settings={
+            "periodicity": "nodes N-1, N mirror nodes 0, 1 (paper eqs. 7-9)",
+            "initial_guess": origin,
+            "intervals_per_phase": ",".join(str(i) for i in s.intervals),
+            "base_time_step": repr(s.base_time_step),
+            "scaling_bounds": ",".join(repr(b) for b in s.scaling_bounds),
+            "torque_regularisation": repr(s.torque_regularisation),
+            "torque_squared": repr(float(torque.item())),
+            "kinetic_energy": repr(float(kinetic.item())),
+        },
+    )
+
+
+def failed_result(scene: Scene, settings: GaitSettings | None, message: str) -> PlanResult:
+    """A result with no trajectory, success False and the reason."""
+    empty = np.zeros((0,))
+    k = 12 * len(scene.bodies)
+    return PlanResult(
+        success=False, message=message, scene=scene,
+        cost_name=settings.cost if settings else "", cost_value=float("nan"),
+        step_length=settings.step_length if settings else float("nan"),
+        friction_coefficient=settings.friction_coefficient if settings else float("nan"),
+        times=empty, q=np.zeros((0, k)), tau=np.zeros((0, 0)),
+        joint_angle_names=angle_names(scene), joint_angles=np.zeros((0, 0)),
+        joint_velocities=np.zeros((0, 0)), phases=(), active_contacts=(), contact_forces={},
+        generalized_force=np.zeros((0, k)), kinetic_energy=empty, potential_energy=empty,
+        phase_scaling=empty, duration=float("nan"),
+        stats=SolverStats(status="not solved", iterations=0, solve_time=0.0),
+    )

@@ -1,0 +1,176 @@
+"""Solving the gait NLP with IPOPT, with progress, a time limit and warm starts.
+
+`Planner` caches one built transcription + solvers per (scene, settings other than step
+length, friction coefficient and time limit) and the plans it found, so a changed step
+length or friction coefficient re-plans from the nearest stored plan (primal and dual warm
+start) without rebuilding anything.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Callable
+
+import casadi as ca
+import numpy as np
+
+from gait_planner.dynamics.discrete import DiscreteMechanics
+from gait_planner.model.multibody import Multibody
+from gait_planner.model.scene import Scene
+from gait_planner.ocp.guess import initial_multipliers, kinematic_guess
+from gait_planner.ocp.settings import GaitSettings
+from gait_planner.ocp.solution import build_result, failed_result
+from gait_planner.ocp.transcription import Transcription
+from gait_planner.result import PlanResult
+
+Progress = Callable[[int, float, float, float], None]  # iteration, cost, violation, seconds
+
+
+class _IterationCallback(ca.Callback):
+    """Called by IPOPT every iteration: reports progress, stops at the deadline."""
+
+    def __init__(self, nx: int, ng: int, lbg: np.ndarray, ubg: np.ndarray):
+        ca.Callback.__init__(self)
+        self.nx, self.ng, self.lbg, self.ubg = nx, ng, lbg, ubg
+        self.deadline = np.inf
+        self.started = time.perf_counter()
+        self.iteration = 0
+        self.report: Progress | None = None
+        self.construct("iteration_callback", {})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "ret"
+
+    def get_sparsity_in(self, i):
+        name = ca.nlpsol_out(i)
+        if name == "f":
+            return ca.Sparsity.scalar()
+        if name in ("x", "lam_x"):
+            return ca.Sparsity.dense(self.nx)
+        if name in ("g", "lam_g"):
+            return ca.Sparsity.dense(self.ng)
+        return ca.Sparsity(0, 0)
+
+    def eval(self, arg):
+        g = np.array(arg[ca.nlpsol_out().index("g")]).ravel()
+        viol = float(np.max(np.concatenate([[0.0], self.lbg - g, g - self.ubg])))
+        if self.report is not None:
+            cost = float(arg[ca.nlpsol_out().index("f")])
+            self.report(self.iteration, cost, viol, time.perf_counter() - self.started)
+        self.iteration += 1
+        return [1 if time.perf_counter() > self.deadline else 0]
+
+
+@dataclasses.dataclass
+class _Built:
+    tr: Transcription
+    nlp: dict
+    bounds: tuple
+    callback: _IterationCallback
+    build_time: float
+    solvers: dict = dataclasses.field(default_factory=dict)
+    stored: list = dataclasses.field(default_factory=list)  # (step, mu, x, lam_x, lam_g, qref)
+
+
+def _key(scene: Scene, s: GaitSettings):
+    fixed = dataclasses.replace(s, step_length=1.0, friction_coefficient=1.0, max_solve_time=1.0)
+    return scene.name, scene.source, fixed
+
+
+class Planner:
+    """Plans gaits; keeps built problems and previous plans for warm starts."""
+
+    def __init__(self, *, progress: Progress | None = None):
+        self.progress = progress
+        self._built: dict = {}
+
+    def _build(self, scene: Scene, s: GaitSettings) -> _Built:
+        key = _key(scene, s)
+        if key not in self._built:
+            start = time.perf_counter()
+            tr = Transcription(DiscreteMechanics(Multibody(scene)), s)
+            bounds = tr.bounds()
+            nlp = {"x": tr.x, "p": tr.p, "f": tr.cost, "g": tr.g}
+            cb = _IterationCallback(int(tr.x.shape[0]), int(tr.g.shape[0]), bounds[2], bounds[3])
+            self._built[key] = _Built(tr, nlp, bounds, cb, time.perf_counter() - start)
+        return self._built[key]
+
+    def _solver(self, built: _Built, s: GaitSettings, warm: bool) -> ca.Function:
+        if warm not in built.solvers:
+            start = time.perf_counter()
+            opts = {
+                "print_time": False,
+                "iteration_callback": built.callback,
+                "ipopt.print_level": 0,
+                "ipopt.sb": "yes",
+                "ipopt.linear_solver": "mumps",
+                "ipopt.tol": s.tolerance,
+                "ipopt.constr_viol_tol": s.constraint_tolerance,
+                "ipopt.max_iter": s.max_iterations,
+                "ipopt.mu_strategy": "adaptive",
+            }
+            if warm:
+                opts.update({"ipopt.warm_start_init_point": "yes",
+                             "ipopt.mu_init": 1e-6,
+                             "ipopt.warm_start_bound_push": 1e-9,
+                             "ipopt.warm_start_mult_bound_push": 1e-9})
+            built.solvers[warm] = ca.nlpsol("gait", "ipopt", built.nlp, opts)
+            built.build_time += time.perf_counter() - start
+        return built.solvers[warm]
+
+    def plan(self, scene: Scene, settings: GaitSettings, *, warm_start: bool = True) -> PlanResult:
+        """Solve one half cycle; a numerical failure is a result with a reason."""
+        start = time.perf_counter()
+        try:
+            built = self._build(scene, settings)
+        except (ValueError, RuntimeError) as err:
+            return failed_result(scene, settings, f"could not build the problem: {err}")
+        tr, step, mu = built.tr, settings.step_length, settings.friction_coefficient
+        nsig = int(tr.S.shape[0])
+        if warm_start and built.stored:
+            step0, mu0, x0, lam_x, lam_g, qref = min(
+                built.stored, key=lambda r: abs(r[0] - step) + abs(r[1] - mu))
+            stages, duals = [False], {"lam_x0": lam_x, "lam_g0": lam_g}
+            origin = f"warm start from the plan for step length {step0:.4f} m, mu {mu0:.3g}"
+        else:
+            qref = kinematic_guess(tr, step)[: tr.N - 1]
+            x0 = np.concatenate([np.zeros(tr.U.numel() + tr.T.numel()), initial_multipliers(tr),
+                                 np.full(nsig, np.clip(1.0, *settings.scaling_bounds))])
+            stages, duals = [True, False], {}
+            origin = "kinematic guess; sigma fixed, then free"
+        p = np.concatenate([qref.reshape(-1), [step, mu]])
+        lbx, ubx, lbg, ubg = built.bounds
+        built.callback.deadline = start + settings.max_solve_time
+        built.callback.started, built.callback.iteration = start, 0
+        built.callback.report = self.progress
+        iterations, status, g = 0, "not started", None
+        for fix_sigma in stages:
+            lb, ub = lbx.copy(), ubx.copy()
+            if fix_sigma:
+                lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
+            solver = self._solver(built, settings, warm=bool(duals))
+            sol = solver(x0=x0, p=p, lbx=lb, ubx=ub, lbg=lbg, ubg=ubg, **duals)
+            stats = solver.stats()
+            iterations += int(stats.get("iter_count", 0))
+            status = str(stats.get("return_status", "unknown"))
+            x0, g = np.array(sol["x"]).ravel(), np.array(sol["g"]).ravel()
+            duals = {"lam_x0": np.array(sol["lam_x"]).ravel(),
+                     "lam_g0": np.array(sol["lam_g"]).ravel()}
+            if not stats.get("success", False):
+                break
+        result = build_result(tr, x0, p, g, status=status, iterations=iterations,
+                              solve_time=time.perf_counter() - start,
+                              build_time=built.build_time, origin=origin)
+        if result.success:
+            built.stored.append((step, mu, x0, duals["lam_x0"], duals["lam_g0"], qref))
+        return result

@@ -1,0 +1,237 @@
+"""DMOCC transcription of the half-cycle gait (paper section 7) as a CasADi NLP.
+
+Nodes n = 0..N, intervals n = 0..N-1 (interval n from t_n to t_{n+1}, length
+h_n = sigma_{phase(n)} * base_time_step). Phase k owns a run of intervals; the contacts it
+holds are held on each of its intervals (chain condition) and their forces act in the
+equation of every node that starts one of its intervals, so a contact's force is zero at
+the node where it is released and carries the plastic impact at the node where it is
+established (DESIGN.md section 7).
+
+Unknowns (scaled to O(1)):
+* u_n (ndof,) for the free nodes n = 0..N-2: the configuration q_n = F_d(u_n, qref_n) is
+  the nodal reparametrisation about a reference configuration of that node (the initial
+  guess or a previous plan). Every internal and joint constraint holds exactly, and each
+  equation touches only neighbouring nodes (a banded KKT system).
+* tau_n (nt,) joint torques for intervals 0..N-2 (in units of TORQUE_SCALE).
+* lambda_n, contact multipliers of nodes 1..N-1 (in units of FORCE_SCALE): the paper
+  removes them by projection (its Q matrices) and recovers them by eq. 10; keeping them as
+  unknowns gives the same discrete trajectory and makes the friction cones and unilateral
+  conditions plain inequalities on unknowns.
+* sigma, the phase scalings (sigma_1 serves phases 1 and 5).
+The periodic end is not a set of unknowns: q_{N-1}, q_N, tau_{N-1} are the mirrored
+expressions of q_0, q_1, tau_0 shifted by the step length (paper eqs. 7-9).
+
+Parameters (changeable without rebuilding): the reference configurations, the step length
+and the friction coefficient.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from gait_planner.dynamics.discrete import DiscreteMechanics
+from gait_planner.ocp.contacts import BodyContact, body_contacts, establishing_rows, stacked_rows
+from gait_planner.ocp.mirror import configuration_mirror, torque_mirror
+from gait_planner.ocp.settings import GaitSettings
+
+TORQUE_SCALE = 100.0  # N m
+FORCE_SCALE = 1000.0  # N
+
+
+class Transcription:
+    """The NLP of one (scene, settings) pair: variables, constraints and their meaning."""
+
+    def __init__(self, mech: DiscreteMechanics, settings: GaitSettings):
+        self.mech, self.mb, self.settings = mech, mech.mb, settings
+        mb, scene = self.mb, self.mb.scene
+        phases = scene.gait.phases
+        self.phase_of_interval = np.repeat(np.arange(len(phases)), settings.intervals)
+        self.N = N = int(self.phase_of_interval.size)
+        if N < 3:
+            raise ValueError(f"a half cycle needs at least 3 intervals, got {N}")
+        self.contacts = [body_contacts(mb, p.contacts) for p in phases]
+        self.rows = [stacked_rows(c, mb.k) for c in self.contacts]
+        self.A, self.shift = configuration_mirror(mb)
+        self.B = torque_mirror(mb)
+
+        nsig = scene.gait.n_scalings
+        self.U = ca.MX.sym("u", mb.ndof, N - 1)
+        self.T = ca.MX.sym("tau", mb.nt, N - 1)
+        self.S = ca.MX.sym("sigma", nsig)
+        self.lam_nodes = list(range(1, N))
+        self.lam_sizes = [self.rows[self.phase_of_interval[n]].shape[0] for n in self.lam_nodes]
+        self.L = ca.MX.sym("lambda", int(sum(self.lam_sizes)))
+        self.Qref = ca.MX.sym("qref", mb.k, N - 1)
+        self.step, self.mu = ca.MX.sym("step_length"), ca.MX.sym("mu")
+
+        q_free = mb.reparametrise.map(N - 1)(self.U, self.Qref)
+        q_end = [ca.mtimes(ca.DM(self.A), q_free[:, j]) + self.step * ca.DM(self.shift)
+                 for j in (0, 1)]
+        self.Q = ca.horzcat(q_free, *q_end)  # (k, N+1)
+        tau = TORQUE_SCALE * self.T
+        self.TAU = ca.horzcat(tau, ca.mtimes(ca.DM(self.B), tau[:, 0]))  # (nt, N)
+        select = np.zeros((N, nsig))
+        select[np.arange(N), [phases[k].scaling for k in self.phase_of_interval]] = 1.0
+        self.h = settings.base_time_step * ca.mtimes(ca.DM(select), self.S)  # (N,)
+        self.lam_of_node = {}
+        offset = 0
+        for n, size in zip(self.lam_nodes, self.lam_sizes):
+            self.lam_of_node[n] = FORCE_SCALE * self.L[offset : offset + size]
+            offset += size
+
+        self._eq, self._ineq = [], []  # (name, expression)
+        self._dynamics()
+        self._contacts()
+        self._path()
+        self.cost = self._cost()
+
+    # ---- constraint groups ----------------------------------------------------------
+
+    def _dynamics(self):
+        """Reduced discrete Euler-Lagrange equations of nodes 1..N-1, divided by
+        w_n = (h_{n-1} + h_n)/2 so that they read as forces (N)."""
+        mb, N = self.mb, self.N
+        for k, C in enumerate(self.rows):
+            nodes = [n for n in range(1, N) if self.phase_of_interval[n] == k]
+            if not nodes:
+                continue
+            q0, q1, q2 = (ca.SX.sym(s, mb.k) for s in ("q_prev", "q", "q_next"))
+            h0, h1 = ca.SX.sym("h_prev"), ca.SX.sym("h")
+            t0, t1 = ca.SX.sym("tau_prev", mb.nt), ca.SX.sym("tau", mb.nt)
+            lam = ca.SX.sym("lambda", C.shape[0])
+            w = 0.5 * (h0 + h1)
+            r = self.mech.discrete_euler_lagrange(q0, q1, q2, h0, h1, t0, t1)
+            if C.shape[0]:
+                r = r + w * ca.mtimes(ca.DM(C).T, lam)  # lambda: ground force on body
+            res = ca.mtimes(mb.null_space(q1).T, r) / w
+            f = ca.Function(f"dynamics_phase{k}", [q0, q1, q2, h0, h1, t0, t1, lam], [res])
+            f = f.expand().map(len(nodes))
+            idx = np.array(nodes)
+            lam_cols = ca.horzcat(*[self.lam_of_node[n] for n in nodes]) if C.shape[0] else \
+                ca.DM.zeros(0, len(nodes))
+            out = f(self.Q[:, idx - 1], self.Q[:, idx], self.Q[:, idx + 1],
+                    self.h[idx - 1].T, self.h[idx].T, self.TAU[:, idx - 1], self.TAU[:, idx],
+                    lam_cols)
+            self._eq.append((f"dynamics[{self._phase_name(k)}]", ca.vec(out)))
+
+    def _contacts(self):
+        mb, N = self.mb, self.N
+        chain = []
+        for n in range(N - 1):  # interval N-1 is the mirror image of interval 0
+            C = self.rows[self.phase_of_interval[n]]
+            if C.shape[0]:
+                chain.append(ca.mtimes(ca.DM(C), self.Q[:, n + 1] - self.Q[:, n]))
+        self._eq.append(("contact_hold", ca.vertcat(*chain)))
+        est = []
+        for n in range(1, N):
+            k_prev, k = self.phase_of_interval[n - 1], self.phase_of_interval[n]
+            if k != k_prev:
+                E = establishing_rows(mb, self.contacts[k_prev], self.contacts[k])
+                if E.shape[0]:
+                    est.append(ca.mtimes(ca.DM(E), self.Q[:, n]))
+        if est:
+            self._eq.append(("contact_establish", ca.vertcat(*est)))
+        first = self.contacts[0][0].points[0]
+        self._eq.append(("pin_x", ca.mtimes(ca.DM(mb.contact_rows(first)[0:1]), self.Q[:, 0])))
+        cones = []
+        for n in self.lam_nodes:
+            lam = self.lam_of_node[n]
+            offset = 0
+            for bc in self.contacts[self.phase_of_interval[n]]:
+                cones += self._cone(bc, lam[offset : offset + bc.n_rows])
+                offset += bc.n_rows
+        self._ineq.append(("friction_cone", ca.vertcat(*cones)))
+
+    def _cone(self, bc: BodyContact, lam) -> list:
+        """Unilateral and friction conditions (>= 0) of one body's contact force."""
+        mu, delta = self.mu, self.settings.friction_smoothing
+        planar = bc.planar
+        if planar:
+            fx, fz = lam[0], lam[1] + (lam[2] if bc.full else 0)
+            tangential = ca.sqrt(fx**2 + delta**2)
+        else:
+            fx, fy = lam[0], lam[1] + (lam[3] if bc.full else 0)
+            fz = lam[2] + (lam[4] if bc.full else 0)
+            tangential = ca.sqrt(fx**2 + fy**2 + delta**2)
+        out = [mu * fz - tangential]
+        if bc.full:
+            out += [lam[1], lam[2]] if planar else [lam[2], lam[4]]
+            if not planar:
+                half_width = self.settings.foot_half_width
+                out += [half_width * fz - lam[5], half_width * fz + lam[5]]
+        return out
+
+    def _path(self):
+        mb, N, s = self.mb, self.N, self.settings
+        ground = []
+        for n in range(1, N if s.ground_clearance else 1):
+            held = {p for bc in self.contacts[self.phase_of_interval[n - 1]] for p in bc.points}
+            held |= {p for bc in self.contacts[self.phase_of_interval[n]] for p in bc.points}
+            for c in mb.scene.contacts:
+                if c.name not in held:
+                    ground.append(ca.mtimes(ca.DM(mb.contact_rows(c.name)[-1:]), self.Q[:, n]))
+        if ground:
+            self._ineq.append(("ground_clearance", ca.vertcat(*ground)))
+        root = mb.block(mb.scene.root.body).start
+        inner = self.Q[:, 1:N]
+        if s.torso_lean_max > 0:
+            self._ineq.append(("torso_lean", ca.vec(inner[root + 11, :] - np.cos(s.torso_lean_max))))
+        if s.torso_height_min > 0:
+            self._ineq.append(("torso_height", ca.vec(inner[root + 2, :] - s.torso_height_min)))
+        if s.knee_max > 0:
+            rows = []
+            for j in mb.scene.joints:
+                if j.name.startswith("knee"):
+                    p, c = mb.block(j.parent).start, mb.block(j.child).start
+                    sin = ca.sum1(inner[p + 3 : p + 6, :] * inner[c + 9 : c + 12, :])
+                    cos = ca.sum1(inner[p + 9 : p + 12, :] * inner[c + 9 : c + 12, :])
+                    rows += [ca.vec(sin), ca.vec(cos - np.cos(s.knee_max))]
+            self._ineq.append(("knee_range", ca.vertcat(*rows)))
+
+    def _cost(self):
+        """J over the half cycle t_0..t_{N-1} (intervals 0..N-2), plus the torque
+        regulariser; returns the MX cost and stores the named parts."""
+        N, s = self.N, self.settings
+        M = ca.DM(self.mb.mass_diagonal)
+        dq = self.Q[:, 1:N] - self.Q[:, 0 : N - 1]
+        h = self.h[0 : N - 1].T
+        kinetic = ca.sum2(0.5 * ca.sum1(dq * (M * dq)) / h)
+        torque = ca.sum2(ca.sum1(self.TAU[:, 0 : N - 1] ** 2) * h)
+        self.cost_parts = {"kinetic_energy": kinetic, "torque_squared": torque}
+        main = self.cost_parts[s.cost]
+        return main + (s.torque_regularisation * torque if s.cost != "torque_squared" else 0)
+
+    def _phase_name(self, k: int) -> str:
+        return self.mb.scene.gait.phases[k].name
+
+    # ---- NLP assembly -----------------------------------------------------------------
+
+    @property
+    def x(self):
+        return ca.vertcat(ca.vec(self.U), ca.vec(self.T), self.L, self.S)
+
+    @property
+    def p(self):
+        return ca.vertcat(ca.vec(self.Qref), self.step, self.mu)
+
+    def constraint_groups(self):
+        """[(name, size, is_equality)] in the order of g."""
+        return [(n, int(e.shape[0]), True) for n, e in self._eq] + \
+               [(n, int(e.shape[0]), False) for n, e in self._ineq]
+
+    @property
+    def g(self):
+        return ca.vertcat(*[e for _, e in self._eq], *[e for _, e in self._ineq])
+
+    def bounds(self):
+        """(lbx, ubx, lbg, ubg) as numpy arrays."""
+        n_eq = sum(int(e.shape[0]) for _, e in self._eq)
+        n_in = sum(int(e.shape[0]) for _, e in self._ineq)
+        nx = int(self.x.shape[0])
+        lbx, ubx = np.full(nx, -np.inf), np.full(nx, np.inf)
+        nsig = int(self.S.shape[0])
+        lbx[-nsig:], ubx[-nsig:] = self.settings.scaling_bounds
+        lbg = np.concatenate([np.zeros(n_eq), np.zeros(n_in)])
+        ubg = np.concatenate([np.zeros(n_eq), np.full(n_in, np.inf)])
+        return lbx, ubx, lbg, ubg
