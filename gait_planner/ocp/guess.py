@@ -19,8 +19,8 @@ from gait_planner.model.angles import configuration
 from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
 
 LIFT = 0.05  # m, swing lift of a free contact point at the middle of its gap
-DIP = 0.03  # m, root lowered below the scene pose
-_W_CONTACT, _W_ROOT, _W_UPRIGHT, _W_SMALL = 1.0, 0.3, 0.3, 1e-3
+DIP = 0.07  # m, root lowered below the scene pose (legs must span a step)
+_W_CONTACT, _W_ROOT, _W_UPRIGHT, _W_SMALL = 1.0, 0.1, 0.3, 1e-3
 
 
 def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[str, np.ndarray]:
@@ -42,28 +42,40 @@ def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[
         body = mirror.get(c.body, c.body)
         return next(d.name for d in mb.scene.contacts if d.body == body and d.point == c.point)
 
-    targets = {}
+    samples = {}
     for c in mb.scene.contacts:
-        samples = {}
+        own = {}
         for n in held[c.name]:
-            samples[n] = samples[n + 1] = ground[c.name]
+            own[n] = own[n + 1] = ground[c.name]
         other = partner(c.name)
         for n in held[other]:
             image = S @ ground[other]
             for m in (n, n + 1):
-                samples[m - (N - 1)] = image - step * np.array([1.0, 0, 0])
-                samples[m + (N - 1)] = image + step * np.array([1.0, 0, 0])
-        nodes = np.array(sorted(samples))
-        pts = np.array([samples[n] for n in nodes])
+                own[m - (N - 1)] = image - step * np.array([1.0, 0, 0])
+                own[m + (N - 1)] = image + step * np.array([1.0, 0, 0])
+        samples[c.name] = own
+
+    targets = {}
+    for c in mb.scene.contacts:
+        own = samples[c.name]
+        nodes = np.array(sorted(own))
+        siblings = [d.name for d in mb.scene.contacts if d.body == c.body and d.name != c.name]
+        body_nodes = np.array(sorted(set(nodes).union(*(samples[d] for d in siblings))))
         path = np.zeros((N + 1, 3))
         for n in range(N + 1):
-            j = np.searchsorted(nodes, n)
-            if j < nodes.size and nodes[j] == n:
-                path[n] = pts[j]
+            if n in own:
+                path[n] = own[n]
                 continue
-            a, b = max(j - 1, 0), min(j, nodes.size - 1)
-            frac = (n - nodes[a]) / max(nodes[b] - nodes[a], 1)
-            path[n] = (1 - frac) * pts[a] + frac * pts[b]
+            before, after = nodes[nodes < n].max(), nodes[nodes > n].min()
+            if n in body_nodes:  # another point of the body is on the ground: small lift,
+                # next to where this point left (or will touch) the ground
+                on_ground_since = all(m in body_nodes for m in range(before, n))
+                nearest = before if on_ground_since else after
+                path[n] = own[nearest] + np.array([0.0, 0.0, 0.5 * LIFT])
+                continue
+            a, b = body_nodes[body_nodes < n].max(), body_nodes[body_nodes > n].min()
+            frac = (n - a) / (b - a)
+            path[n] = (1 - frac) * own[before] + frac * own[after]
             path[n, 2] += LIFT * np.sin(np.pi * frac)
         targets[c.name] = path
     return targets
@@ -100,14 +112,33 @@ def kinematic_guess(tr: Transcription, step: float) -> np.ndarray:
         root_target = np.array([np.mean([p[0] for p in pts]) + offset,
                                 q_pose[root + 1], q_pose[root + 2] - DIP])
         t = np.concatenate(pts + [root_target])
-        for _ in range(30):
-            rv, J = gn(x, t)
-            dx = np.linalg.lstsq(np.array(J), -np.array(rv).ravel(), rcond=None)[0]
-            x = x + dx
-            if np.abs(dx).max() < 1e-10:
-                break
+        x = _levenberg_marquardt(gn, x, t)
         out[n] = np.array(mb.reparametrise(x, qref)).ravel()
     return out
+
+
+def _levenberg_marquardt(f: ca.Function, x: np.ndarray, t: np.ndarray,
+                         iterations: int = 100) -> np.ndarray:
+    """Minimise |r(x, t)|^2 from x; f returns (r, dr/dx). Damped, monotone steps."""
+    damping = 1e-3
+    r, J = (np.array(v) for v in f(x, t))
+    cost = float(r.ravel() @ r.ravel())
+    for _ in range(iterations):
+        J, r = np.array(J), np.array(r).ravel()
+        A = J.T @ J
+        dx = -np.linalg.solve(A + damping * np.diag(np.diag(A) + 1e-9), J.T @ r)
+        r_new, J_new = (np.array(v) for v in f(x + dx, t))
+        cost_new = float(r_new.ravel() @ r_new.ravel())
+        if cost_new < cost:
+            x, r, J, cost = x + dx, r_new, J_new, cost_new
+            damping = max(damping / 3, 1e-9)
+            if np.abs(dx).max() < 1e-10:
+                break
+        else:
+            damping *= 4
+            if damping > 1e8:
+                break
+    return x
 
 
 def initial_multipliers(tr: Transcription) -> np.ndarray:

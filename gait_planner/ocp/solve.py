@@ -100,7 +100,12 @@ class Planner:
             start = time.perf_counter()
             tr = Transcription(DiscreteMechanics(Multibody(scene)), s)
             bounds = tr.bounds()
-            nlp = {"x": tr.x, "p": tr.p, "f": tr.cost, "g": tr.g}
+            # The MX graph of mapped per-node Functions is expanded into one SX graph: IPOPT
+            # then evaluates exact sparse derivatives without per-call overhead.
+            fg = ca.Function("fg", [tr.x, tr.p], [tr.cost, tr.g]).expand()
+            x, p = ca.SX.sym("x", tr.x.shape[0]), ca.SX.sym("p", tr.p.shape[0])
+            f, g = fg(x, p)
+            nlp = {"x": x, "p": p, "f": f, "g": g}
             cb = _IterationCallback(int(tr.x.shape[0]), int(tr.g.shape[0]), bounds[2], bounds[3])
             self._built[key] = _Built(tr, nlp, bounds, cb, time.perf_counter() - start)
         return self._built[key]
