@@ -51,7 +51,8 @@ class PlanResult:
         active_contacts: (N+1,) names of the contacts held at each node.
         contact_forces: contact name -> (N+1, 3) ground force on the body, N, world frame;
             zero where the contact is not active.
-        generalized_force: (N+1, k) f+_{n-1} + f-_n (N, director form; zero on phi).
+        generalized_force: (N+1, k) f+_{n-1} + f-_n (N s: discrete forces are impulses
+            over half intervals; director form, zero on phi).
         kinetic_energy, potential_energy: (N+1,) J.
         phase_scaling: sigma, (n_sigma,).
         cost_value: J of `cost_name` over the half cycle (J s for kinetic_energy).

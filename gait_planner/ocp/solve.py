@@ -78,7 +78,7 @@ class _Built:
     bounds: tuple
     callback: _IterationCallback
     build_time: float
-    solvers: dict = dataclasses.field(default_factory=dict)
+    solver: ca.Function | None = None
     stored: list = dataclasses.field(default_factory=list)  # (step, mu, x, lam_x, lam_g, qref)
 
 
@@ -110,8 +110,11 @@ class Planner:
             self._built[key] = _Built(tr, nlp, bounds, cb, time.perf_counter() - start)
         return self._built[key]
 
-    def _solver(self, built: _Built, s: GaitSettings, warm: bool) -> ca.Function:
-        if warm not in built.solvers:
+    def _solver(self, built: _Built, s: GaitSettings) -> ca.Function:
+        """One IPOPT instance per problem (its exact Hessian takes most of the build time).
+        It starts from the multipliers it is given (zero for a cold start, the stored
+        plan's for a warm start): warm_start_init_point with a small initial barrier."""
+        if built.solver is None:
             start = time.perf_counter()
             opts = {
                 "print_time": False,
@@ -123,23 +126,24 @@ class Planner:
                 "ipopt.constr_viol_tol": s.constraint_tolerance,
                 "ipopt.max_iter": s.max_iterations,
                 "ipopt.mu_strategy": "adaptive",
+                "ipopt.warm_start_init_point": "yes",
             }
-            if warm:
-                opts.update({"ipopt.warm_start_init_point": "yes",
-                             "ipopt.mu_init": 1e-6,
-                             "ipopt.warm_start_bound_push": 1e-9,
-                             "ipopt.warm_start_mult_bound_push": 1e-9})
-            built.solvers[warm] = ca.nlpsol("gait", "ipopt", built.nlp, opts)
+            built.solver = ca.nlpsol("gait", "ipopt", built.nlp, opts)
             built.build_time += time.perf_counter() - start
-        return built.solvers[warm]
+        return built.solver
 
     def plan(self, scene: Scene, settings: GaitSettings, *, warm_start: bool = True) -> PlanResult:
-        """Solve one half cycle; a numerical failure is a result with a reason."""
-        start = time.perf_counter()
+        """Solve one half cycle; a numerical failure is a result with a reason.
+
+        The time limit (settings.max_solve_time) covers the guess and the solve; building a
+        problem the planner has not seen before comes on top (stats.build_time).
+        """
         try:
             built = self._build(scene, settings)
+            solver = self._solver(built, settings)
         except (ValueError, RuntimeError) as err:
             return failed_result(scene, settings, f"could not build the problem: {err}")
+        start = time.perf_counter()
         tr, step, mu = built.tr, settings.step_length, settings.friction_coefficient
         nsig = int(tr.S.shape[0])
         if warm_start and built.stored:
@@ -151,7 +155,8 @@ class Planner:
             qref = kinematic_guess(tr, step)[: tr.N - 1]
             x0 = np.concatenate([np.zeros(tr.U.numel() + tr.T.numel()), initial_multipliers(tr),
                                  np.full(nsig, np.clip(1.0, *settings.scaling_bounds))])
-            stages, duals = [True, False], {}
+            stages = [True, False]
+            duals = {"lam_x0": np.zeros(x0.size), "lam_g0": np.zeros(int(tr.g.shape[0]))}
             origin = "kinematic guess; sigma fixed, then free"
         p = np.concatenate([qref.reshape(-1), [step, mu]])
         lbx, ubx, lbg, ubg = built.bounds
@@ -163,7 +168,6 @@ class Planner:
             lb, ub = lbx.copy(), ubx.copy()
             if fix_sigma:
                 lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
-            solver = self._solver(built, settings, warm=bool(duals))
             sol = solver(x0=x0, p=p, lbx=lb, ubx=ub, lbg=lbg, ubg=ubg, **duals)
             stats = solver.stats()
             iterations += int(stats.get("iter_count", 0))

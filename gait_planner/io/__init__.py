@@ -1,0 +1,40 @@
+"""Adapters from a `PlanResult` to ROS messages, an MCAP recording, a URDF and rerun.
+
+* `gait_planner.io.messages`: message layouts as plain dicts (+ `fill_message` for rclpy);
+* `gait_planner.io.urdf`: `scene_to_urdf` and the frame scheme /tf follows;
+* `gait_planner.io.mcap_writer`: `write_plan_mcap` (ROS 2 profile, atomic);
+* `gait_planner.io.mcap_reader`: `read_plan_mcap` -> `RecordedPlan` (independent of the writer);
+* `gait_planner.io.rerun_view`: `log_plan`, `save_rrd`, `show`.
+
+The names below are imported lazily, so ``import gait_planner.io.messages`` (the ROS node)
+loads neither mcap nor rerun.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_EXPORTS = {
+    "fill_message": "messages",
+    "plan_response_fields": "messages",
+    "scene_to_urdf": "urdf",
+    "write_plan_mcap": "mcap_writer",
+    "read_plan_mcap": "mcap_reader",
+    "RecordedPlan": "mcap_reader",
+    "log_plan": "rerun_view",
+    "save_rrd": "rerun_view",
+    "show": "rerun_view",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(list(globals()) + __all__)

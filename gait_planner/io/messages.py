@@ -1,0 +1,378 @@
+"""A `PlanResult` as ROS message layouts: plain nested dicts and lists, no ROS import.
+
+The one place that converts a plan into messages. The MCAP writer serialises these dicts
+(mcap_ros2 encodes dicts), and the ROS node copies them into rclpy messages with
+`fill_message`. Field names are exactly those of the .msg/.srv definitions (DESIGN.md
+section 7); builtin_interfaces/Time and Duration are ``{"sec": int, "nanosec": int}``;
+arrays are lists of Python floats/ints/strs.
+
+Conventions:
+
+* Time: node n has ``time = t_n - t_0`` and ``header.stamp = start + (t_n - t_0)`` (ns,
+  rounded); the ``frame_id`` of world-frame data is ``"world"``.
+* Joint angles and their names: `gait_planner.model.angles` (spherical joints: pitch, roll,
+  yaw with R_rel = Ry(pitch) Rx(roll) Rz(yaw); revolute: right-handed about the axis).
+* Effort (JointTrajectory points and JointState): the planner's joint torques `tau`, N m,
+  in the order of the joint angle names. tau is piecewise constant on the intervals: node
+  n carries tau of the interval [t_n, t_{n+1}] starting there; the last node N, which starts
+  no interval, repeats the last interval's torque tau[N-1].
+  A revolute joint's effort is its torque about the joint axis (right-handed, the same sense
+  as its angle). A spherical joint's three efforts are NOT torques about its Cardan axes:
+  they are the components (m.d1_p, m.d2_p, m.d3_p) of the joint couple m along the PARENT
+  body's directors d1, d2, d3 (m acts +m on the child, -m on the parent). They sit in the
+  slots named ``<joint>_pitch``, ``<joint>_roll``, ``<joint>_yaw`` by position only; e.g.
+  the ``hip_r_pitch`` slot holds the couple about the torso's d1 (forward) axis. The torque
+  conjugate to a Cardan angle is the projection of m on that angle's current axis (pitch:
+  d2_p; roll: Ry(pitch) e1 in parent components; yaw: the child's d3).
+* Contact forces (ContactForces): only the contacts active at the node, in the order of
+  ``active_contacts``; points are the contact points' world positions phi + X_i d_i from q;
+  forces are ``result.contact_forces[name][n]``, the force of the ground on the foot (N,
+  world), published as the planner split them. For full contact (heel and forefoot of one
+  foot both active) the two forces sum to the net ground force on that foot; how that net
+  force is divided between the two points is the planner's convention (documented with the
+  contact multipliers in gait_planner.ocp) and the couple of the ground about the heel-toe
+  line, which two point forces on that line cannot carry, is not part of these messages.
+* /tf: per node one TFMessage: ``world -> <root>`` (the root's COM and directors) and one
+  transform per moving URDF joint (origin translation, rotation about the axis by the joint
+  angle); /tf_static: the contact frames. Frames are those of `gait_planner.io.urdf`.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import re
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from gait_planner.io.urdf import WORLD_FRAME, KinematicTree, kinematic_tree, scene_to_urdf
+from gait_planner.model.angles import angle_names
+from gait_planner.result import PlanResult
+
+__all__ = ["check_result", "contact_forces", "contact_points", "fill_message", "joint_states",
+           "joint_trajectory", "multibody_states", "node_efforts", "plan_response_fields",
+           "quaternion_msg", "robot_description", "node_stamps_ns", "tf_messages", "tf_static",
+           "time_msg", "WORLD_FRAME"]
+
+NS_PER_S = 1_000_000_000
+
+
+# ---------------------------------------------------------------------------- helpers
+
+
+def time_msg(ns: int) -> dict[str, int]:
+    """builtin_interfaces/Time (or Duration) of a non-negative time in ns."""
+    ns = int(ns)
+    if ns < 0:
+        raise ValueError(f"times before 1970 (or negative durations) are not used here: {ns} ns")
+    return {"sec": ns // NS_PER_S, "nanosec": ns % NS_PER_S}
+
+
+def node_stamps_ns(result: PlanResult, start_ns: int) -> list[int]:
+    """Stamps (ns) of the nodes: start + (t_n - t_0), rounded to the nanosecond."""
+    t = np.asarray(result.times, dtype=float)
+    return [int(start_ns) + int(round((tn - t[0]) * NS_PER_S)) for tn in t]
+
+
+def _header(ns: int, frame_id: str) -> dict[str, Any]:
+    return {"stamp": time_msg(ns), "frame_id": frame_id}
+
+
+def _floats(values) -> list[float]:
+    return [float(v) for v in np.asarray(values, dtype=float).ravel()]
+
+
+def _frames(q_row: np.ndarray, nb: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(phi, D) per body of one configuration row, D = [d1 d2 d3] (columns)."""
+    return [(q_row[12 * i:12 * i + 3], q_row[12 * i + 3:12 * i + 12].reshape(3, 3).T)
+            for i in range(nb)]
+
+
+def quaternion_msg(R: np.ndarray) -> dict[str, float]:
+    """geometry_msgs/Quaternion (unit, w >= 0) of a rotation matrix (Shepperd's method)."""
+    m = np.asarray(R, dtype=float)
+    trace = np.trace(m)
+    diagonal = np.diag(m)
+    k = int(np.argmax(np.r_[trace, diagonal]))
+    if k == 0:
+        w = 0.5 * math.sqrt(max(1.0 + trace, 0.0))
+        s = 0.25 / w
+        x, y, z = (m[2, 1] - m[1, 2]) * s, (m[0, 2] - m[2, 0]) * s, (m[1, 0] - m[0, 1]) * s
+    else:
+        i = k - 1
+        j, l = (i + 1) % 3, (i + 2) % 3
+        v = np.zeros(3)
+        v[i] = 0.5 * math.sqrt(max(1.0 + m[i, i] - m[j, j] - m[l, l], 0.0))
+        s = 0.25 / v[i]
+        v[j] = (m[j, i] + m[i, j]) * s
+        v[l] = (m[l, i] + m[i, l]) * s
+        w = (m[l, j] - m[j, l]) * s
+        x, y, z = v
+    norm = math.sqrt(w * w + x * x + y * y + z * z)
+    sign = -1.0 if w < 0 else 1.0
+    return {"x": sign * x / norm, "y": sign * y / norm, "z": sign * z / norm, "w": sign * w / norm}
+
+
+def _axis_quaternion(axis, angle: float) -> dict[str, float]:
+    a = np.asarray(axis, dtype=float)
+    a = a / np.linalg.norm(a)
+    s = math.sin(0.5 * angle)
+    return {"x": float(a[0] * s), "y": float(a[1] * s), "z": float(a[2] * s),
+            "w": float(math.cos(0.5 * angle))}
+
+
+def _vector3(v) -> dict[str, float]:
+    return {"x": float(v[0]), "y": float(v[1]), "z": float(v[2])}
+
+
+def node_efforts(result: PlanResult) -> np.ndarray:
+    """(N+1, nt) torques per node: tau[n] for n < N, tau[N-1] repeated at node N."""
+    tau = np.asarray(result.tau, dtype=float)
+    n_nodes = result.n_nodes
+    if tau.shape[0] == 0:
+        return np.zeros((n_nodes, len(result.joint_angle_names)))
+    return tau[np.minimum(np.arange(n_nodes), tau.shape[0] - 1)]
+
+
+# ---------------------------------------------------------------------------- validation
+
+
+def check_result(result: PlanResult, *, finite: bool = True) -> None:
+    """Raise ValueError (one sentence) unless `result`'s arrays have consistent shapes,
+    strictly increasing times and, with `finite`, no NaN or infinity."""
+    scene = result.scene
+    n, nb = result.n_nodes, len(scene.bodies)
+    names = tuple(result.joint_angle_names)
+    na = len(names)
+
+    def fail(what: str) -> None:
+        raise ValueError(f"plan result (scene {scene.name!r}) cannot be converted: {what}")
+
+    if n < 1:
+        fail("it has no time nodes")
+    if names != angle_names(scene):
+        fail(f"joint_angle_names {names} differ from the scene's {angle_names(scene)}")
+    shapes = {"times": (n,), "q": (n, 12 * nb), "tau": (n - 1, na), "joint_angles": (n, na),
+              "joint_velocities": (n, na), "generalized_force": (n, 12 * nb),
+              "kinetic_energy": (n,), "potential_energy": (n,)}
+    for field, shape in shapes.items():
+        value = np.asarray(getattr(result, field), dtype=float)
+        if value.shape != shape:
+            fail(f"{field} has shape {value.shape}, expected {shape}")
+        if finite and not np.all(np.isfinite(value)):
+            fail(f"{field} contains NaN or infinite values")
+    if n > 1 and not np.all(np.diff(result.times) > 0):
+        fail("times are not strictly increasing")
+    if len(result.phases) != n or len(result.active_contacts) != n:
+        fail(f"phases ({len(result.phases)}) and active_contacts "
+             f"({len(result.active_contacts)}) must have one entry per node ({n})")
+    known = {c.name for c in scene.contacts}
+    for node, active in enumerate(result.active_contacts):
+        for name in active:
+            if name not in known:
+                fail(f"node {node} lists unknown contact {name!r}")
+            if name not in result.contact_forces:
+                fail(f"contact {name!r} is active at node {node} but has no contact_forces")
+    for name, forces in result.contact_forces.items():
+        forces = np.asarray(forces, dtype=float)
+        if forces.shape != (n, 3):
+            fail(f"contact_forces[{name!r}] has shape {forces.shape}, expected {(n, 3)}")
+        if finite and not np.all(np.isfinite(forces)):
+            fail(f"contact_forces[{name!r}] contains NaN or infinite values")
+
+
+# ---------------------------------------------------------------------------- messages
+
+
+def joint_trajectory(result: PlanResult, stamp_ns: int = 0) -> dict[str, Any]:
+    """trajectory_msgs/JointTrajectory: one point per node (module docstring for effort);
+    header.stamp = `stamp_ns` is the reference time of every time_from_start."""
+    t = np.asarray(result.times, dtype=float)
+    effort = node_efforts(result)
+    points = [
+        {
+            "positions": _floats(result.joint_angles[n]),
+            "velocities": _floats(result.joint_velocities[n]),
+            "accelerations": [],
+            "effort": _floats(effort[n]),
+            "time_from_start": time_msg(int(round((t[n] - t[0]) * NS_PER_S))),
+        }
+        for n in range(result.n_nodes)
+    ]
+    return {"header": _header(stamp_ns, ""), "joint_names": list(result.joint_angle_names),
+            "points": points}
+
+
+def multibody_states(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
+    """gait_planner_msgs/MultibodyState per node."""
+    stamps = node_stamps_ns(result, start_ns)
+    t = np.asarray(result.times, dtype=float)
+    bodies = list(result.body_names)
+    return [
+        {
+            "header": _header(stamps[n], WORLD_FRAME),
+            "node": n,
+            "time": float(t[n] - t[0]),
+            "phase": str(result.phases[n]),
+            "active_contacts": list(result.active_contacts[n]),
+            "body_names": bodies,
+            "q": _floats(result.q[n]),
+            "generalized_force": _floats(result.generalized_force[n]),
+            "kinetic_energy": float(result.kinetic_energy[n]),
+            "potential_energy": float(result.potential_energy[n]),
+        }
+        for n in range(result.n_nodes)
+    ]
+
+
+def contact_points(result: PlanResult, node: int, names: Sequence[str]) -> list[np.ndarray]:
+    """World positions phi + X_i d_i of the named contact points at `node`."""
+    scene = result.scene
+    frames = _frames(np.asarray(result.q[node], dtype=float), len(scene.bodies))
+    out = []
+    for name in names:
+        contact = scene.contact(name)
+        phi, D = frames[scene.body_index(contact.body)]
+        out.append(phi + D @ np.asarray(scene.body(contact.body).points[contact.point]))
+    return out
+
+
+def contact_forces(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
+    """gait_planner_msgs/ContactForces per node, active contacts only (module docstring)."""
+    stamps = node_stamps_ns(result, start_ns)
+    t = np.asarray(result.times, dtype=float)
+    messages = []
+    for n in range(result.n_nodes):
+        names = list(result.active_contacts[n])
+        messages.append({
+            "header": _header(stamps[n], WORLD_FRAME),
+            "node": n,
+            "time": float(t[n] - t[0]),
+            "contact_names": names,
+            "points": [_vector3(p) for p in contact_points(result, n, names)],
+            "forces": [_vector3(np.asarray(result.contact_forces[c], dtype=float)[n])
+                       for c in names],
+        })
+    return messages
+
+
+def joint_states(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
+    """sensor_msgs/JointState per node: angles, rates and efforts (module docstring)."""
+    stamps = node_stamps_ns(result, start_ns)
+    effort = node_efforts(result)
+    return [
+        {
+            "header": _header(stamps[n], ""),
+            "name": list(result.joint_angle_names),
+            "position": _floats(result.joint_angles[n]),
+            "velocity": _floats(result.joint_velocities[n]),
+            "effort": _floats(effort[n]),
+        }
+        for n in range(result.n_nodes)
+    ]
+
+
+def _transform(ns: int, parent: str, child: str, translation, rotation: dict) -> dict[str, Any]:
+    return {"header": _header(ns, parent), "child_frame_id": child,
+            "transform": {"translation": _vector3(translation), "rotation": rotation}}
+
+
+def tf_messages(result: PlanResult, start_ns: int,
+                tree: KinematicTree | None = None) -> list[dict[str, Any]]:
+    """tf2_msgs/TFMessage per node: world -> root and every moving URDF joint."""
+    scene = result.scene
+    tree = tree or kinematic_tree(scene)
+    stamps = node_stamps_ns(result, start_ns)
+    root = scene.body_index(tree.root)
+    messages = []
+    for n in range(result.n_nodes):
+        q = np.asarray(result.q[n], dtype=float)
+        D = q[12 * root + 3:12 * root + 12].reshape(3, 3).T
+        transforms = [_transform(stamps[n], WORLD_FRAME, tree.root, q[12 * root:12 * root + 3],
+                                 quaternion_msg(D))]
+        for joint in tree.moving_joints:
+            angle = float(result.joint_angles[n][joint.angle_index])
+            transforms.append(_transform(stamps[n], joint.parent, joint.child, joint.origin,
+                                         _axis_quaternion(joint.axis, angle)))
+        messages.append({"transforms": transforms})
+    return messages
+
+
+def tf_static(result: PlanResult, stamp_ns: int = 0,
+              tree: KinematicTree | None = None) -> dict[str, Any]:
+    """tf2_msgs/TFMessage of the fixed URDF joints (contact frames), stamped `stamp_ns`."""
+    tree = tree or kinematic_tree(result.scene)
+    identity = {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
+    return {"transforms": [_transform(stamp_ns, j.parent, j.child, j.origin, dict(identity))
+                           for j in tree.fixed_joints]}
+
+
+def robot_description(result: PlanResult) -> dict[str, str]:
+    """std_msgs/String holding the URDF of the plan's scene (`gait_planner.io.urdf`)."""
+    return {"data": scene_to_urdf(result.scene)}
+
+
+def plan_response_fields(result: PlanResult, mcap_path: str | None,
+                         stamp_ns: int = 0) -> dict[str, Any]:
+    """The fields of gait_planner_msgs/srv/PlanGait's response for `result`."""
+    stats = result.stats
+    return {
+        "success": bool(result.success),
+        "message": str(result.message),
+        "solver_status": str(stats.status),
+        "cost": float(result.cost_value),
+        "step_length": float(result.step_length),
+        "duration": float(result.duration),
+        "phase_scaling": _floats(result.phase_scaling),
+        "solve_time": float(stats.solve_time),
+        "iterations": int(stats.iterations),
+        "max_constraint_violation": float(stats.max_constraint_violation),
+        "max_dynamics_residual": float(stats.max_dynamics_residual),
+        "max_friction_violation": float(stats.max_friction_violation),
+        "trajectory": joint_trajectory(result, stamp_ns),
+        "mcap_path": str(mcap_path or ""),
+    }
+
+
+# ---------------------------------------------------------------------------- rclpy messages
+
+_SEQUENCE = re.compile(r"^sequence<([\w]+)/([\w]+)(?:, ?\d+)?>$|^([\w]+)/([\w]+)\[\d*\]$")
+
+
+def _element_class(msg: Any, field: str) -> type:
+    """The message class of the elements of the message-array field `field` of `msg`."""
+    spec = msg.get_fields_and_field_types()[field]
+    match = _SEQUENCE.match(spec)
+    if not match:
+        raise TypeError(f"{type(msg).__name__}.{field} ({spec}) is not an array of messages")
+    package, name = (match.group(1), match.group(2)) if match.group(1) else match.group(3, 4)
+    return getattr(importlib.import_module(f"{package}.msg"), name)
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def fill_message(msg: Any, data: Mapping[str, Any]) -> Any:
+    """Copy the nested dict `data` (the layouts of this module) into the rclpy message `msg`
+    and return `msg`. Nested messages are filled in place, arrays of messages are built
+    from their element class (imported lazily); unknown field names raise AttributeError."""
+    fields = msg.get_fields_and_field_types()
+    for key, value in data.items():
+        if key not in fields:
+            raise AttributeError(f"{type(msg).__name__} has no field {key!r} "
+                                 f"(fields: {', '.join(fields)})")
+        value = _plain(value)
+        if isinstance(value, Mapping):
+            fill_message(getattr(msg, key), value)
+        elif isinstance(value, (list, tuple)) and value and isinstance(value[0], Mapping):
+            cls = _element_class(msg, key)
+            setattr(msg, key, [fill_message(cls(), item) for item in value])
+        else:
+            setattr(msg, key, value)
+    return msg

@@ -1,0 +1,204 @@
+"""A plan in rerun (rerun-sdk 0.41): the moving walker, contact forces and time series.
+
+Entities (timeline ``time``: s from the start of the half cycle, duration type; timeline
+``node``: the node index):
+
+* ``world``: z up; ``world/ground``: a grid on z = 0.
+* ``world/walker/<body>``: the body's drawing primitive (`gait_planner.io.urdf.body_shapes`,
+  box or cylinder, in body coordinates), placed per node by a Transform3D (the COM phi and
+  the directors [d1 d2 d3] from q); ``world/skeleton``: line segments COM -> joint point ->
+  COM along every joint and heel -> forefoot on every foot; ``world/com``: body COMs.
+* ``world/contacts/points`` and ``world/contacts/forces``: the active contact points and
+  the ground forces on them as arrows, `FORCE_SCALE` m per N (1 mm/N).
+* ``plots/joint_angle/<angle>`` (rad), ``plots/joint_torque/<angle>`` (N m, the effort
+  convention of `gait_planner.io.messages`: tau of the interval starting at the node),
+  ``plots/contact_force/<contact>/{x,y,z}`` (N, zero while inactive),
+  ``plots/energy/{kinetic,potential,total}`` (J) as Scalars.
+* ``plan``: a text summary (cost, duration, step length, sigma, solver statistics).
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import sys
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+
+from gait_planner.io.messages import contact_points, node_efforts, quaternion_msg
+from gait_planner.io.urdf import body_shapes
+from gait_planner.result import PlanResult
+
+__all__ = ["FORCE_SCALE", "APPLICATION_ID", "log_plan", "save_rrd", "show"]
+
+APPLICATION_ID = "gait_planner"
+FORCE_SCALE = 1e-3  # m of arrow per N of force
+_GROUND_HALF_SIZE, _GROUND_STEP = 1.5, 0.25  # m
+_CONTACT_COLOR = (20, 160, 60)
+_SKELETON_COLOR = (40, 40, 40)
+
+
+def _rgb(color) -> tuple[int, int, int]:
+    return tuple(int(round(255 * c)) for c in color[:3])  # type: ignore[return-value]
+
+
+def _poses(result: PlanResult) -> tuple[np.ndarray, np.ndarray]:
+    """(N+1, nb, 3) COMs and (N+1, nb, 3, 3) director matrices D = [d1 d2 d3]."""
+    q = np.asarray(result.q, dtype=float).reshape(result.n_nodes, -1, 12)
+    return q[:, :, :3], np.transpose(q[:, :, 3:].reshape(result.n_nodes, -1, 3, 3), (0, 1, 3, 2))
+
+
+def _log_static(result: PlanResult, rec: rr.RecordingStream) -> None:
+    rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    ticks = np.arange(-_GROUND_HALF_SIZE, _GROUND_HALF_SIZE + 1e-9, _GROUND_STEP)
+    h = _GROUND_HALF_SIZE
+    lines = [[[x, -h, 0.0], [x, h, 0.0]] for x in ticks] + [[[-h, y, 0.0], [h, y, 0.0]]
+                                                              for y in ticks]
+    rec.log("world/ground", rr.LineStrips3D(lines, radii=0.001, colors=(150, 150, 150)),
+            static=True)
+    for name, shape in body_shapes(result.scene).items():
+        color = _rgb(shape.color)
+        if shape.kind == "box":
+            geometry = rr.Boxes3D(sizes=[shape.size], centers=[shape.centre], colors=[color],
+                                  fill_mode="solid")
+        else:
+            geometry = rr.Cylinders3D(lengths=[shape.size[2]], radii=[shape.size[0]],
+                                      centers=[shape.centre], colors=[color], fill_mode="solid")
+        rec.log(f"world/walker/{name}", geometry, static=True)
+    stats = result.stats
+    sigma = ", ".join(f"{s:.4f}" for s in result.phase_scaling)
+    summary = (
+        f"# {result.scene.name}: {'success' if result.success else 'FAILED'}\n\n"
+        f"{result.message}\n\n"
+        f"| | |\n|---|---|\n| cost ({result.cost_name}) | {result.cost_value:.6g} |\n"
+        f"| step length | {result.step_length:.4f} m |\n| duration | {result.duration:.4f} s |\n"
+        f"| phase scaling | {sigma} |\n| friction coefficient | {result.friction_coefficient} |\n"
+        f"| nodes | {result.n_nodes} |\n| solver | {stats.status}, {stats.iterations} "
+        f"iterations, {stats.solve_time:.2f} s |\n"
+        f"| max constraint violation | {stats.max_constraint_violation:.3g} m |\n"
+        f"| max dynamics residual | {stats.max_dynamics_residual:.3g} |\n")
+    rec.log("plan", rr.TextDocument(summary, media_type=rr.MediaType.MARKDOWN), static=True)
+
+
+def _skeleton(result: PlanResult, phi: np.ndarray, D: np.ndarray) -> list[np.ndarray]:
+    scene = result.scene
+    index = {b.name: i for i, b in enumerate(scene.bodies)}
+    strips = []
+    for joint in scene.joints:
+        p, c = index[joint.parent], index[joint.child]
+        point = phi[p] + D[p] @ np.asarray(scene.body(joint.parent).points[joint.parent_point])
+        strips.append(np.array([phi[p], point, phi[c]]))
+    feet: dict[str, list[np.ndarray]] = {}
+    for contact in scene.contacts:
+        b = index[contact.body]
+        feet.setdefault(contact.body, []).append(
+            phi[b] + D[b] @ np.asarray(scene.body(contact.body).points[contact.point]))
+    strips += [np.array(points) for points in feet.values() if len(points) > 1]
+    return strips
+
+
+def _log_motion(result: PlanResult, rec: rr.RecordingStream) -> None:
+    phi, D = _poses(result)
+    t = np.asarray(result.times, dtype=float) - float(result.times[0])
+    for i, body in enumerate(result.body_names):
+        quaternions = [[v["x"], v["y"], v["z"], v["w"]]
+                       for v in (quaternion_msg(D[n, i]) for n in range(result.n_nodes))]
+        rec.send_columns(f"world/walker/{body}",
+                         indexes=[rr.TimeColumn("time", duration=t),
+                                  rr.TimeColumn("node", sequence=np.arange(result.n_nodes))],
+                         columns=rr.Transform3D.columns(translation=phi[:, i],
+                                                        quaternion=quaternions))
+    for n in range(result.n_nodes):
+        rec.set_time("time", duration=float(t[n]))
+        rec.set_time("node", sequence=n)
+        rec.log("world/skeleton", rr.LineStrips3D(_skeleton(result, phi[n], D[n]), radii=0.006,
+                                                  colors=_SKELETON_COLOR))
+        rec.log("world/com", rr.Points3D(phi[n], radii=0.015, colors=_SKELETON_COLOR,
+                                         labels=list(result.body_names), show_labels=False))
+        names = list(result.active_contacts[n])
+        points = np.array(contact_points(result, n, names)).reshape(-1, 3)
+        forces = np.array([np.asarray(result.contact_forces[c], dtype=float)[n]
+                           for c in names]).reshape(-1, 3)
+        labels = [f"{c}: {np.linalg.norm(f):.0f} N" for c, f in zip(names, forces)]
+        rec.log("world/contacts/points", rr.Points3D(points, radii=0.012, colors=_CONTACT_COLOR,
+                                                     labels=names, show_labels=False))
+        rec.log("world/contacts/forces", rr.Arrows3D(origins=points, vectors=forces * FORCE_SCALE,
+                                                     colors=_CONTACT_COLOR, labels=labels))
+
+
+def _series(rec: rr.RecordingStream, path: str, t: np.ndarray, values: np.ndarray) -> None:
+    rec.send_columns(path, indexes=[rr.TimeColumn("time", duration=t)],
+                     columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=float)))
+
+
+def _log_series(result: PlanResult, rec: rr.RecordingStream) -> None:
+    t = np.asarray(result.times, dtype=float) - float(result.times[0])
+    angles = np.asarray(result.joint_angles, dtype=float)
+    torques = node_efforts(result)
+    for k, name in enumerate(result.joint_angle_names):
+        _series(rec, f"plots/joint_angle/{name}", t, angles[:, k])
+        _series(rec, f"plots/joint_torque/{name}", t, torques[:, k])
+    for contact in result.scene.contacts:
+        forces = np.asarray(result.contact_forces.get(contact.name, np.zeros((len(t), 3))))
+        for axis, column in zip("xyz", forces.T):
+            _series(rec, f"plots/contact_force/{contact.name}/{axis}", t, column)
+    kinetic = np.asarray(result.kinetic_energy, dtype=float)
+    potential = np.asarray(result.potential_energy, dtype=float)
+    for name, values in (("kinetic", kinetic), ("potential", potential),
+                         ("total", kinetic + potential)):
+        _series(rec, f"plots/energy/{name}", t, values)
+
+
+def log_plan(result: PlanResult, recording: rr.RecordingStream) -> None:
+    """Log `result` to `recording` (module docstring for the entities)."""
+    _log_static(result, recording)
+    _log_motion(result, recording)
+    _log_series(result, recording)
+
+
+def _recording(result: PlanResult) -> rr.RecordingStream:
+    rec = rr.RecordingStream(APPLICATION_ID)
+    rec.send_recording_name(f"{result.scene.name} {result.cost_name} "
+                            f"step {result.step_length:.4f} m")
+    return rec
+
+
+def save_rrd(result: PlanResult, path: str | os.PathLike) -> Path:
+    """Write `result` as a rerun recording (.rrd) to `path`, atomically (a temporary file
+    in the same folder is renamed when complete); return the absolute path."""
+    target = Path(path).expanduser().resolve()
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.{secrets.token_hex(6)}.tmp")
+    rec = _recording(result)
+    try:
+        try:
+            rec.save(tmp)
+            log_plan(result, rec)
+            rec.flush()
+        finally:
+            rec.disconnect()  # closes the file sink: footer written, nothing more to come
+        if not tmp.is_file() or tmp.stat().st_size == 0:
+            raise OSError(f"rerun wrote nothing to {tmp}")
+        os.replace(tmp, target)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return target
+
+
+def show(result: PlanResult) -> rr.RecordingStream:
+    """Spawn a rerun viewer (the `rerun` executable of rerun-sdk) and stream `result` to it.
+
+    Raises RuntimeError when no viewer can be shown (a Linux machine without a display);
+    use `save_rrd` and open the file elsewhere (``rerun plan.rrd``) instead.
+    """
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
+                                                 or os.environ.get("WAYLAND_DISPLAY")):
+        raise RuntimeError("no display (DISPLAY/WAYLAND_DISPLAY unset) to show a rerun viewer "
+                           "on; save the plan with save_rrd() and open it with `rerun FILE.rrd`")
+    rec = _recording(result)
+    rec.spawn()
+    log_plan(result, rec)
+    rec.flush()
+    return rec

@@ -1,0 +1,261 @@
+"""The walker as a URDF, and the frame scheme that /tf, /tf_static and rerun share.
+
+`scene_to_urdf(scene)` writes a URDF with primitive geometry; `kinematic_tree(scene)` is the
+single description of its links and joints, used by `gait_planner.io.messages` to fill /tf
+and /tf_static, so the URDF and the transforms can never disagree.
+
+Frame scheme (world x forward, y left, z up):
+
+* Every body has a link of the same name whose axes are the body's directors (d1, d2, d3).
+  The root body's link origin is its centre of mass; it hangs from frame ``world`` by a
+  floating transform published on /tf (the URDF has no world link, as usual for mobile
+  robots). Every other body's link origin is its joint point with its parent (the joint's
+  ``child_point``), so the link frame sits at ``phi + D rho_child`` with rotation
+  ``D = [d1 d2 d3]``; its centre of mass is at ``-rho_child`` in link coordinates.
+* A spherical joint ``j`` (R_rel = Ry(pitch) Rx(roll) Rz(yaw), `gait_planner.model.angles`)
+  becomes three revolute URDF joints named after its angles: ``j_pitch`` about y from the
+  parent link to the massless link ``j_pitch_link``, whose origin is the joint point in the
+  parent link; ``j_roll`` about x to the massless link ``j_roll_link``; ``j_yaw`` about z to the
+  child body's link. Both intermediate links sit at the joint point, so the composed rotation
+  is exactly R_rel and /tf is exact for any angles.
+* A revolute joint becomes one revolute URDF joint named like the joint (= its angle name),
+  about the scene's body-fixed axis.
+* Every contact point is a massless link named like the contact (e.g. ``foot_r_heel``),
+  fixed to its body's link (a fixed joint ``<contact>_fixed``, published on /tf_static).
+
+All moving joints are ``continuous`` (the scene declares no limits; the roll angles stay in
+[-pi/2, pi/2] by the angle convention). Geometry is for drawing only: bodies with two or
+more contact points (feet) are boxes spanning their points (breadth `foot_breadth`); other
+bodies are cylinders of the body's length along d3, starting at its lowest point, with the
+radius of a solid cylinder of the body's mass and axial moment J3 (r = sqrt(2 J3 / m),
+capped).
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+import numpy as np
+
+from gait_planner.model.angles import configuration
+from gait_planner.model.scene import Body, JointType, Scene
+
+__all__ = ["BodyShape", "KinematicJoint", "KinematicTree", "body_shapes", "kinematic_tree",
+           "scene_to_urdf", "FOOT_BREADTH", "WORLD_FRAME"]
+
+WORLD_FRAME = "world"
+FOOT_BREADTH = 0.0915  # m, paper Table 2; drawing only (the scenes carry no breadth)
+_SPHERICAL_AXES = ((0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, 1.0))  # pitch, roll, yaw
+_MAX_RADIUS_FRACTION = 0.25  # cylinder radius at most this fraction of the body's length
+_MIN_SIZE = 0.01  # m, smallest drawn extent
+_COLORS = {"right": (0.85, 0.25, 0.2, 1.0), "left": (0.2, 0.4, 0.85, 1.0),
+           "centre": (0.6, 0.6, 0.6, 1.0)}
+
+
+@dataclass(frozen=True)
+class KinematicJoint:
+    """One URDF joint: the transform parent -> child is Trans(origin) Rot(axis, angle).
+
+    `angle_index` indexes `PlanResult.joint_angles` columns (= the joint angle names);
+    None for fixed joints (contact frames), whose rotation is the identity.
+    """
+
+    name: str
+    parent: str
+    child: str
+    origin: tuple[float, float, float]
+    axis: tuple[float, float, float] | None
+    angle_index: int | None
+
+    @property
+    def fixed(self) -> bool:
+        return self.axis is None
+
+
+@dataclass(frozen=True)
+class KinematicTree:
+    """Links and joints of the walker's URDF.
+
+    Attributes:
+        root: the root body's link (child of `WORLD_FRAME` via /tf).
+        link_offsets: body name -> body-fixed position (from its COM, director components)
+            of its link origin: zero for the root, the parent-joint point otherwise.
+        joints: moving joints in the order of the joint angles, then the fixed joints.
+        massless_links: intermediate and contact links (no inertia).
+    """
+
+    root: str
+    link_offsets: dict[str, np.ndarray]
+    joints: tuple[KinematicJoint, ...]
+    massless_links: tuple[str, ...]
+
+    @property
+    def moving_joints(self) -> tuple[KinematicJoint, ...]:
+        return tuple(j for j in self.joints if not j.fixed)
+
+    @property
+    def fixed_joints(self) -> tuple[KinematicJoint, ...]:
+        return tuple(j for j in self.joints if j.fixed)
+
+
+def _vec(v) -> tuple[float, float, float]:
+    return tuple(float(x) for x in v)  # type: ignore[return-value]
+
+
+def kinematic_tree(scene: Scene) -> KinematicTree:
+    """The URDF's links and joints for `scene` (see the module docstring)."""
+    offsets = {scene.root.body: np.zeros(3)}
+    for joint in scene.joints:
+        offsets[joint.child] = np.array(scene.body(joint.child).points[joint.child_point])
+    joints: list[KinematicJoint] = []
+    massless: list[str] = []
+    index = 0
+    for joint in scene.joints:
+        parent_point = np.array(scene.body(joint.parent).points[joint.parent_point])
+        origin = _vec(parent_point - offsets[joint.parent])
+        if joint.type is JointType.SPHERICAL:
+            links = [f"{name}_link" for name in joint.angle_names[:2]] + [joint.child]
+            parent = joint.parent
+            for k, (name, axis, child) in enumerate(zip(joint.angle_names, _SPHERICAL_AXES,
+                                                        links)):
+                joints.append(KinematicJoint(name, parent, child,
+                                             origin if k == 0 else (0.0, 0.0, 0.0),
+                                             axis, index))
+                parent, index = child, index + 1
+            massless += links[:2]
+        else:
+            joints.append(KinematicJoint(joint.angle_names[0], joint.parent, joint.child,
+                                         origin, _vec(joint.axis), index))
+            index += 1
+    for contact in scene.contacts:
+        point = np.array(scene.body(contact.body).points[contact.point])
+        joints.append(KinematicJoint(f"{contact.name}_fixed", contact.body, contact.name,
+                                     _vec(point - offsets[contact.body]), None, None))
+        massless.append(contact.name)
+    names = [b.name for b in scene.bodies] + massless + [WORLD_FRAME]
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise ValueError(f"scene {scene.name!r}: URDF link names clash: {duplicates} "
+                         f"(bodies, '<angle>_link' frames, contacts and {WORLD_FRAME!r} "
+                         f"must all differ)")
+    return KinematicTree(scene.root.body, offsets, tuple(joints), tuple(massless))
+
+
+# ---------------------------------------------------------------------------- geometry
+
+
+@dataclass(frozen=True)
+class BodyShape:
+    """A drawing primitive of one body, in body-fixed coordinates (from the COM).
+
+    kind "box": `size` = full extents along (d1, d2, d3); kind "cylinder": `size` =
+    (radius, radius, length), axis along d3. `centre` is the primitive's centre.
+    """
+
+    kind: str
+    size: tuple[float, float, float]
+    centre: tuple[float, float, float]
+    side: str  # "right", "left" or "centre" (y of the COM in the scene's initial pose)
+
+    @property
+    def color(self) -> tuple[float, float, float, float]:
+        return _COLORS[self.side]
+
+
+def _side(scene: Scene) -> dict[str, str]:
+    q = configuration(scene)
+    sides = {}
+    for i, body in enumerate(scene.bodies):
+        y = q[12 * i + 1] - q[1 + 12 * scene.body_index(scene.root.body)]
+        sides[body.name] = "right" if y < -1e-6 else "left" if y > 1e-6 else "centre"
+    return sides
+
+
+def _shape(body: Body, is_foot: bool, side: str, foot_breadth: float) -> BodyShape:
+    points = np.array(list(body.points.values()) or [[0.0, 0.0, 0.0]], dtype=float)
+    low, high = points.min(axis=0), points.max(axis=0)
+    if is_foot:
+        size = np.maximum(high - low, _MIN_SIZE)
+        size[1] = foot_breadth
+        centre = 0.5 * (low + high)
+        centre[1] = 0.0
+        return BodyShape("box", _vec(size), _vec(centre), side)
+    length = body.length if body.length > 0 else max(high[2] - low[2], _MIN_SIZE)
+    radius = math.sqrt(2.0 * body.inertia[2] / body.mass)
+    radius = max(min(radius, _MAX_RADIUS_FRACTION * length), 0.5 * _MIN_SIZE)
+    return BodyShape("cylinder", (radius, radius, length), (0.0, 0.0, low[2] + 0.5 * length),
+                     side)
+
+
+def body_shapes(scene: Scene, *, foot_breadth: float = FOOT_BREADTH) -> dict[str, BodyShape]:
+    """Drawing primitive of every body (module docstring), body name -> `BodyShape`."""
+    contacts = [c.body for c in scene.contacts]
+    sides = _side(scene)
+    return {b.name: _shape(b, contacts.count(b.name) >= 2, sides[b.name], foot_breadth)
+            for b in scene.bodies}
+
+
+# ---------------------------------------------------------------------------- URDF text
+
+
+def _num(x: float) -> str:
+    return repr(float(x)) if x != 0 else "0"
+
+
+def _xyz(v) -> str:
+    return " ".join(_num(x) for x in v)
+
+
+def _origin(parent: ET.Element, xyz) -> None:
+    ET.SubElement(parent, "origin", xyz=_xyz(xyz), rpy="0 0 0")
+
+
+def _body_link(robot: ET.Element, body: Body, offset: np.ndarray, shape: BodyShape) -> None:
+    link = ET.SubElement(robot, "link", name=body.name)
+    inertial = ET.SubElement(link, "inertial")
+    _origin(inertial, -offset)  # the COM in link coordinates; axes = principal axes
+    ET.SubElement(inertial, "mass", value=_num(body.mass))
+    j1, j2, j3 = body.inertia
+    ET.SubElement(inertial, "inertia", ixx=_num(j1), ixy="0", ixz="0", iyy=_num(j2), iyz="0",
+                  izz=_num(j3))
+    if not body.is_realisable:
+        inertial.insert(0, ET.Comment(
+            f" principal moments {tuple(body.inertia)} violate J_i <= J_j + J_k (scene data "
+            f"kept as given; physics engines may reject them) "))
+    visual = ET.SubElement(link, "visual")
+    _origin(visual, np.array(shape.centre) - offset)
+    geometry = ET.SubElement(visual, "geometry")
+    if shape.kind == "box":
+        ET.SubElement(geometry, "box", size=_xyz(shape.size))
+    else:
+        ET.SubElement(geometry, "cylinder", radius=_num(shape.size[0]), length=_num(shape.size[2]))
+    material = ET.SubElement(visual, "material", name=shape.side)
+    ET.SubElement(material, "color", rgba=_xyz(shape.color))
+
+
+def scene_to_urdf(scene: Scene, *, foot_breadth: float = FOOT_BREADTH) -> str:
+    """The URDF (XML text) of `scene`: one link per body, massless links for spherical
+    joints and contact points, joints named after the joint angles (module docstring)."""
+    tree = kinematic_tree(scene)
+    shapes = body_shapes(scene, foot_breadth=foot_breadth)
+    robot = ET.Element("robot", name=scene.name)
+    robot.append(ET.Comment(
+        f" generated by gait_planner.io.urdf from scene {scene.name!r}; link frames: directors "
+        f"(d1, d2, d3) at the COM for the root, at the parent-joint point otherwise; the root "
+        f"hangs from frame {WORLD_FRAME!r} by a transform on /tf "))
+    for body in scene.bodies:
+        _body_link(robot, body, tree.link_offsets[body.name], shapes[body.name])
+    for name in tree.massless_links:
+        ET.SubElement(robot, "link", name=name)
+    for joint in tree.joints:
+        element = ET.SubElement(robot, "joint", name=joint.name,
+                                type="fixed" if joint.fixed else "continuous")
+        ET.SubElement(element, "parent", link=joint.parent)
+        ET.SubElement(element, "child", link=joint.child)
+        _origin(element, joint.origin)
+        if not joint.fixed:
+            ET.SubElement(element, "axis", xyz=_xyz(joint.axis))
+    ET.indent(robot, space="  ")
+    return '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode") + "\n"

@@ -1,0 +1,112 @@
+"""One plan request from start to files: validate, plan, record (MCAP + rerun .rrd).
+
+Shared by the command line and the ROS node; knows nothing of ROS. A request that cannot
+be planned raises `RequestError` with a sentence naming what is wrong; a plan that does not
+converge is a `PlanResult` with success False (nothing is recorded for it).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from gait_planner.model.loader import SceneError, load_scene
+from gait_planner.ocp.settings import SettingsError, settings_for
+from gait_planner.ocp.solve import Planner
+from gait_planner.result import PlanResult
+
+_OUTPUT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,127}")
+
+
+class RequestError(ValueError):
+    """A request that cannot be planned as asked; the message says why."""
+
+
+@dataclass(frozen=True)
+class PlanRequest:
+    """A plan request; None (or empty) fields take the scene's values."""
+
+    scene: str
+    step_length: float | None = None
+    cost: str | None = None
+    friction_coefficient: float | None = None
+    intervals_per_phase: int | None = None
+    max_solve_time: float | None = None
+    output_name: str = ""
+    cold_start: bool = False
+
+
+@dataclass(frozen=True)
+class Outcome:
+    result: PlanResult
+    mcap_path: Path | None
+    rrd_path: Path | None
+
+
+def _finite(name: str, value: float | None) -> None:
+    if value is not None and not math.isfinite(value):
+        raise RequestError(f"{name} must be a finite number, got {value}")
+
+
+def output_stem(request: PlanRequest, scene_name: str) -> str:
+    """The file stem for a request: its output_name, checked to be a bare file name
+    (no folders: files stay in the output folder), or scene + step length + time."""
+    if request.output_name:
+        name = request.output_name.removesuffix(".mcap")
+        if not _OUTPUT_NAME.fullmatch(name) or ".." in name:
+            raise RequestError(
+                f"output_name must be a bare file name of letters, digits, '_', '-', '.' "
+                f"(no folders), got {request.output_name!r}")
+        return name
+    return f"{scene_name}_{time.strftime('%Y%m%d-%H%M%S')}"
+
+
+def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Path, *,
+                    rrd: bool = True) -> Outcome:
+    """Plan `request`; on success write <output_dir>/<stem>.mcap (and .rrd)."""
+    for name in ("step_length", "friction_coefficient", "max_solve_time"):
+        _finite(name, getattr(request, name))
+    try:
+        scene = load_scene(request.scene)
+        settings = settings_for(
+            scene, step_length=request.step_length, cost=request.cost or None,
+            friction_coefficient=request.friction_coefficient,
+            intervals_per_phase=request.intervals_per_phase,
+            max_solve_time=request.max_solve_time)
+    except (SceneError, SettingsError) as err:
+        raise RequestError(str(err)) from None
+    stem = output_stem(request, scene.name)
+    folder = Path(output_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    result = planner.plan(scene, settings, warm_start=not request.cold_start)
+    if not result.success:
+        return Outcome(result, None, None)
+    from gait_planner.io.mcap_writer import write_plan_mcap
+
+    mcap = write_plan_mcap(result, folder / f"{stem}.mcap", allowed_dirs=[folder])
+    rrd_path = None
+    if rrd:
+        from gait_planner.io.rerun_view import save_rrd
+
+        rrd_path = save_rrd(result, folder / f"{stem}.rrd")
+    return Outcome(result, mcap, rrd_path)
+
+
+def summary(outcome: Outcome) -> dict:
+    """The JSON summary of a plan (command line and logs)."""
+    r, s = outcome.result, outcome.result.stats
+    return {
+        "success": r.success, "message": r.message, "scene": r.scene.name,
+        "cost": r.cost_name, "cost_value": r.cost_value, "duration": r.duration,
+        "step_length": r.step_length, "friction_coefficient": r.friction_coefficient,
+        "phase_scaling": [float(x) for x in r.phase_scaling], "iterations": s.iterations,
+        "solve_time_s": s.solve_time, "build_time_s": s.build_time,
+        "max_constraint_violation": s.max_constraint_violation,
+        "max_dynamics_residual": s.max_dynamics_residual,
+        "max_friction_violation": s.max_friction_violation,
+        "nodes": r.n_nodes, "mcap": str(outcome.mcap_path or ""),
+        "rrd": str(outcome.rrd_path or ""),
+    }
