@@ -12,18 +12,16 @@ Conventions:
   rounded); the ``frame_id`` of world-frame data is ``"world"``.
 * Joint angles and their names: `gait_planner.model.angles` (spherical joints: pitch, roll,
   yaw with R_rel = Ry(pitch) Rx(roll) Rz(yaw); revolute: right-handed about the axis).
-* Effort (JointTrajectory points and JointState): the planner's joint torques `tau`, N m,
-  in the order of the joint angle names. tau is piecewise constant on the intervals: node
-  n carries tau of the interval [t_n, t_{n+1}] starting there; the last node N, which starts
-  no interval, repeats the last interval's torque tau[N-1].
-  A revolute joint's effort is its torque about the joint axis (right-handed, the same sense
-  as its angle). A spherical joint's three efforts are NOT torques about its Cardan axes:
-  they are the components (m.d1_p, m.d2_p, m.d3_p) of the joint couple m along the PARENT
-  body's directors d1, d2, d3 (m acts +m on the child, -m on the parent). They sit in the
-  slots named ``<joint>_pitch``, ``<joint>_roll``, ``<joint>_yaw`` by position only; e.g.
-  the ``hip_r_pitch`` slot holds the couple about the torso's d1 (forward) axis. The torque
-  conjugate to a Cardan angle is the projection of m on that angle's current axis (pitch:
-  d2_p; roll: Ry(pitch) e1 in parent components; yaw: the child's d3).
+* Effort (JointTrajectory points and JointState): N m, in the order of the joint angle
+  names, the torque conjugate to each joint angle (effort . angle rate = joint power), so a
+  controller can use it with the positions as given. tau is piecewise constant on the
+  intervals: node n carries the torque of the interval [t_n, t_{n+1}] starting there,
+  expressed with the angles at node n; the last node N repeats tau[N-1]. A revolute
+  joint's effort is its torque about the axis; a spherical joint's three efforts are the
+  projections of its couple on the pitch axis (the parent's d2), the once-pitched roll axis
+  and the child's yaw axis d3 (`gait_planner.model.angles.conjugate_torques`). The
+  planner's raw torques (couple components along the parent's directors) are in
+  `PlanResult.tau`.
 * Contact forces (ContactForces): only the contacts active at the node, in the order of
   ``active_contacts``; points are the contact points' world positions phi + X_i d_i from q;
   forces are ``result.contact_forces[name][n]``, the force of the ground on the foot (N,
@@ -47,7 +45,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from gait_planner.io.urdf import WORLD_FRAME, KinematicTree, kinematic_tree, scene_to_urdf
-from gait_planner.model.angles import angle_names
+from gait_planner.model.angles import angle_names, conjugate_torques
 from gait_planner.result import PlanResult
 
 __all__ = ["check_result", "contact_forces", "contact_points", "fill_message", "joint_states",
@@ -127,12 +125,15 @@ def _vector3(v) -> dict[str, float]:
 
 
 def node_efforts(result: PlanResult) -> np.ndarray:
-    """(N+1, nt) torques per node: tau[n] for n < N, tau[N-1] repeated at node N."""
+    """(N+1, na) efforts per node: the torques conjugate to the joint angles
+    (`gait_planner.model.angles.conjugate_torques`) of tau[n], the torque of the interval
+    starting at node n; node N repeats tau[N-1]."""
     tau = np.asarray(result.tau, dtype=float)
     n_nodes = result.n_nodes
     if tau.shape[0] == 0:
         return np.zeros((n_nodes, len(result.joint_angle_names)))
-    return tau[np.minimum(np.arange(n_nodes), tau.shape[0] - 1)]
+    per_node = tau[np.minimum(np.arange(n_nodes), tau.shape[0] - 1)]
+    return conjugate_torques(result.scene, result.joint_angles, per_node)
 
 
 # ---------------------------------------------------------------------------- validation

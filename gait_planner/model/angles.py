@@ -10,8 +10,9 @@ upright pose, where all triads equal the world axes (x forward, y left, z up).
   (ab/adduction, inversion/eversion), then yaw about the child's own d3 (axial rotation).
   Positive angles are right-handed rotations: a positive hip pitch swings the foot backward.
   The sequence is singular at roll = +-90 deg (gimbal lock). There `joint_angles` returns
-  yaw = 0 and puts the whole rotation about the remaining axis into pitch; the angles then
-  still reproduce R_rel exactly (tested), but they jump, so no optimiser works in them.
+  yaw = 0 and puts the whole rotation about the remaining axis into pitch; at and next to
+  it the angles still reproduce R_rel to round-off (tested), but pitch and yaw jump, so no
+  optimiser works in them there.
 * Revolute joint (knee): one angle, right-handed about the joint axis (knees: about d2, so a
   bent knee has a positive angle).
 * Root orientation (for /tf only): R = Rz(yaw) Ry(pitch) Rx(roll).
@@ -24,8 +25,8 @@ import numpy as np
 from gait_planner.model.rotations import rot_axis, rot_x, rot_y, rot_z
 from gait_planner.model.scene import InitialPose, JointType, Scene
 
-# |sin(roll)| above this counts as gimbal lock (roll within ~1e-6 rad of 90 deg).
-_GIMBAL_LOCK = 1.0 - 1e-12
+# cos(middle angle) at or below this counts as gimbal lock (within ~1e-15 rad of 90 deg).
+_GIMBAL_LOCK = 4 * np.finfo(float).eps
 
 
 def angle_names(scene: Scene) -> tuple[str, ...]:
@@ -38,16 +39,21 @@ def spherical_rotation(pitch: float, roll: float, yaw: float) -> np.ndarray:
 
 
 def spherical_angles(R: np.ndarray) -> tuple[float, float, float]:
-    """(pitch, roll, yaw) of R = Ry(pitch) Rx(roll) Rz(yaw); roll in [-pi/2, pi/2]."""
-    s_roll = float(np.clip(-R[1, 2], -1.0, 1.0))
-    roll = float(np.arcsin(s_roll))
-    if abs(s_roll) < _GIMBAL_LOCK:
+    """(pitch, roll, yaw) of R = Ry(pitch) Rx(roll) Rz(yaw); roll in [-pi/2, pi/2].
+
+    roll = atan2(-R12, cos(roll)) is accurate to round-off everywhere (arcsin(-R12) is not
+    near +-90 deg); yaw is taken from the remainder Rx(roll)^T Ry(pitch)^T R = Rz(yaw), so the
+    three angles rebuild R to round-off even next to the gimbal lock, where pitch and yaw
+    separately are ill-determined.
+    """
+    c_roll = float(np.hypot(R[0, 2], R[2, 2]))
+    roll = float(np.arctan2(-R[1, 2], c_roll))
+    if c_roll > _GIMBAL_LOCK:
         pitch = float(np.arctan2(R[0, 2], R[2, 2]))
-        yaw = float(np.arctan2(R[1, 0], R[1, 1]))
     else:  # gimbal lock: only pitch -/+ yaw is defined; put it all into pitch
-        yaw = 0.0
         pitch = float(np.arctan2(-R[2, 0], R[0, 0]))
-    return pitch, roll, yaw
+    rest = rot_x(roll).T @ rot_y(pitch).T @ R
+    return pitch, roll, float(np.arctan2(rest[1, 0], rest[0, 0]))
 
 
 def revolute_angle(R: np.ndarray, axis) -> float:
@@ -81,9 +87,19 @@ def joint_angles(scene: Scene, q: np.ndarray) -> np.ndarray:
 
 
 def root_angles(R: np.ndarray) -> tuple[float, float, float]:
-    """(yaw, pitch, roll) of R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    pitch = float(np.arcsin(np.clip(-R[2, 0], -1.0, 1.0)))
-    return float(np.arctan2(R[1, 0], R[0, 0])), pitch, float(np.arctan2(R[2, 1], R[2, 2]))
+    """(yaw, pitch, roll) of R = Rz(yaw) Ry(pitch) Rx(roll); pitch in [-pi/2, pi/2].
+
+    As `spherical_angles`: accurate pitch from atan2, roll from the remainder, so the angles
+    rebuild R to round-off; at the gimbal lock (pitch = +-90 deg) roll is 0.
+    """
+    c_pitch = float(np.hypot(R[0, 0], R[1, 0]))
+    pitch = float(np.arctan2(-R[2, 0], c_pitch))
+    if c_pitch > _GIMBAL_LOCK:
+        yaw = float(np.arctan2(R[1, 0], R[0, 0]))
+    else:  # gimbal lock: only yaw -/+ roll is defined; put it all into yaw
+        yaw = float(np.arctan2(-R[0, 1], R[1, 1]))
+    rest = rot_y(pitch).T @ rot_z(yaw).T @ R
+    return yaw, pitch, float(np.arctan2(rest[2, 1], rest[1, 1]))
 
 
 def configuration(scene: Scene, pose: InitialPose | None = None) -> np.ndarray:
@@ -111,3 +127,28 @@ def configuration(scene: Scene, pose: InitialPose | None = None) -> np.ndarray:
         phi, D = frames[b.name]
         q[12 * i : 12 * i + 12] = np.concatenate([phi, D.T.reshape(-1)])
     return q
+
+
+def conjugate_torques(scene: Scene, angles: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Torques conjugate to the joint angles (N m): tau_angle . angle_rate = power.
+
+    `tau` holds the planner's joint torques (spherical: the couple's components along the
+    parent's directors; revolute: about the axis); `angles` the joint angles at the same
+    node. For R_rel = Ry(p) Rx(r) Rz(y) the relative angular velocity in parent components
+    is e_y p' + Ry(p) e_x r' + Ry(p) Rx(r) e_z y', so the conjugate torques are the couple's
+    projections on those three axes. Shapes (na,) or (n, na) for both inputs.
+    """
+    angles, tau = np.asarray(angles, float), np.asarray(tau, float)
+    if angles.ndim == 2:
+        return np.array([conjugate_torques(scene, a, t) for a, t in zip(angles, tau)])
+    out = tau.copy()
+    i = 0
+    for joint in scene.joints:
+        if joint.type is JointType.SPHERICAL:
+            pitch, roll = angles[i], angles[i + 1]
+            m = tau[i : i + 3]
+            axes = (np.array([0.0, 1.0, 0.0]), rot_y(pitch) @ np.array([1.0, 0.0, 0.0]),
+                    rot_y(pitch) @ rot_x(roll) @ np.array([0.0, 0.0, 1.0]))
+            out[i : i + 3] = [m @ a for a in axes]
+        i += joint.dof
+    return out

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from gait_planner.io import messages
+from gait_planner.model.angles import conjugate_torques
 from gait_planner.io.ros_definitions import STANDARD_DEFINITIONS
 
 from io_msgdef import fields, msg_fields, share_msg_text, srv_response_fields
@@ -75,10 +76,39 @@ def test_joint_trajectory_one_point_per_node_and_effort_convention(result):
         assert point["accelerations"] == []
         assert np.array_equal(point["positions"], result.joint_angles[n])
         assert np.array_equal(point["velocities"], result.joint_velocities[n])
-        # tau of the interval starting at the node; the last node repeats the last interval
-        assert np.array_equal(point["effort"], result.tau[min(n, len(result.tau) - 1)])
+        # conjugate torques of tau of the interval starting at the node; the last node
+        # repeats the last interval
+        tau = result.tau[min(n, len(result.tau) - 1)]
+        expected = conjugate_torques(result.scene, result.joint_angles[n], tau)
+        assert np.array_equal(point["effort"], expected)
         t = point["time_from_start"]
         assert t["sec"] * NS + t["nanosec"] == round((result.times[n] - result.times[0]) * NS)
+
+
+def test_efforts_are_conjugate_to_the_joint_angles(result):
+    """effort . angle rate equals the joint power tau . omega_rel of the raw couples."""
+    from gait_planner.model.angles import spherical_rotation
+
+    rng = np.random.default_rng(3)
+    efforts = messages.node_efforts(result)
+    for n in range(result.n_nodes - 1):
+        angles, rates = result.joint_angles[n], rng.normal(size=efforts.shape[1])
+        tau = result.tau[n]
+        power, i = 0.0, 0
+        for joint in result.scene.joints:
+            if joint.dof == 3:
+                p, r, y = angles[i : i + 3]
+                eps = 1e-6  # omega_rel by central differences along the rates, parent frame
+                R0 = spherical_rotation(p, r, y)
+                R1 = spherical_rotation(*(angles[i : i + 3] + eps * rates[i : i + 3]))
+                Rm = spherical_rotation(*(angles[i : i + 3] - eps * rates[i : i + 3]))
+                W = (R1 - Rm) @ R0.T / (2 * eps)
+                omega = np.array([W[2, 1], W[0, 2], W[1, 0]])
+                power += tau[i : i + 3] @ omega
+            else:
+                power += tau[i] * rates[i]
+            i += joint.dof
+        assert efforts[n] @ rates == pytest.approx(power, rel=1e-8, abs=1e-8)
 
 
 def test_joint_states_match_trajectory(result):
@@ -181,7 +211,7 @@ def test_fill_message_builds_rclpy_messages(result):
     traj = messages.fill_message(JointTrajectory(), messages.joint_trajectory(result, START_NS))
     assert list(traj.joint_names) == list(result.joint_angle_names)
     assert len(traj.points) == result.n_nodes
-    assert np.array_equal(traj.points[3].effort, result.tau[3])
+    assert np.array_equal(traj.points[3].effort, messages.node_efforts(result)[3])
     last = traj.points[-1].time_from_start
     assert last.sec * NS + last.nanosec == round((result.times[-1] - result.times[0]) * NS)
     assert traj.header.stamp.sec == START_NS // NS
