@@ -35,15 +35,20 @@ TOPIC_STATE = "/gait_planner/state"
 TOPIC_FORCES = "/gait_planner/contact_forces"
 
 
+def _given(value: float) -> float | None:
+    """None for "not given" (<= 0); NaN and infinities pass on to be refused."""
+    return None if value <= 0 else value
+
+
 def request_from_msg(req, default_scene: str, default_time: float) -> PlanRequest:
     """PlanGait.Request -> PlanRequest (<= 0 or empty fields: the scene's values)."""
     return PlanRequest(
         scene=req.scene or default_scene,
-        step_length=req.step_length if req.step_length > 0 else None,
+        step_length=_given(req.step_length),
         cost=req.cost or None,
-        friction_coefficient=req.friction_coefficient if req.friction_coefficient > 0 else None,
+        friction_coefficient=_given(req.friction_coefficient),
         intervals_per_phase=req.intervals_per_phase if req.intervals_per_phase > 0 else None,
-        max_solve_time=req.max_solve_time if req.max_solve_time > 0 else default_time,
+        max_solve_time=_given(req.max_solve_time) or default_time,
         output_name=req.output_name,
         cold_start=req.cold_start,
     )

@@ -1,0 +1,83 @@
+"""The real node: a PlanGait request plans (compass: ~1 s), records and publishes; bad
+requests are answered with success = False and the node keeps serving."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from trajectory_msgs.msg import JointTrajectory
+
+from gait_planner.ros.node import (SERVICE, TOPIC_FORCES, TOPIC_STATE, TOPIC_TRAJECTORY,
+                                   GaitPlannerNode)
+from gait_planner_msgs.msg import ContactForces, MultibodyState
+from gait_planner_msgs.srv import PlanGait
+
+pytestmark = pytest.mark.timeout(300)
+
+
+@pytest.fixture
+def setup(ros_context, make_node, executor, tmp_path):
+    server = GaitPlannerNode(context=ros_context, parameter_overrides=[
+        Parameter("output_dir", value=str(tmp_path)),
+        Parameter("default_scene", value="compass")])
+    client_node = make_node("plan_client")
+    received = {"trajectory": [], "state": [], "forces": []}
+    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    client_node.create_subscription(JointTrajectory, TOPIC_TRAJECTORY,
+                                    received["trajectory"].append, 10)
+    client_node.create_subscription(MultibodyState, TOPIC_STATE, received["state"].append, qos)
+    client_node.create_subscription(ContactForces, TOPIC_FORCES, received["forces"].append, qos)
+    executor.add_node(server)
+    executor.add_node(client_node)
+    client = client_node.create_client(PlanGait, SERVICE)
+    yield client, received, tmp_path
+    server.destroy_node()
+
+
+def _call(client, spin_until, **fields) -> PlanGait.Response:
+    assert spin_until(lambda: client.service_is_ready(), timeout=20)
+    future = client.call_async(PlanGait.Request(**fields))
+    assert spin_until(future.done, timeout=240), "no answer from the node"
+    return future.result()
+
+
+def test_plan_request_plans_records_and_publishes(setup, spin_until):
+    client, received, folder = setup
+    res = _call(client, spin_until, output_name="first")
+    assert res.success, res.message
+    assert res.solver_status == "Solve_Succeeded"
+    assert Path(res.mcap_path) == folder / "first.mcap" and Path(res.mcap_path).is_file()
+    nodes = len(res.trajectory.points)
+    assert nodes > 3 and len(res.phase_scaling) == 1
+    assert res.max_constraint_violation < 1e-9 and res.max_dynamics_residual < 1e-6
+    assert math.isclose(res.step_length, 0.3)
+    assert spin_until(lambda: len(received["state"]) == nodes
+                      and len(received["forces"]) == nodes and received["trajectory"])
+    assert [m.node for m in received["state"]] == list(range(nodes))
+    assert received["trajectory"][0].joint_names == ["hip"]
+
+    # a changed step length re-plans warm from the stored plan
+    warm = _call(client, spin_until, step_length=0.32, output_name="second")
+    assert warm.success, warm.message
+    assert warm.iterations < res.iterations
+
+
+@pytest.mark.parametrize("fields, words", [
+    ({"scene": "../etc/passwd"}, "bare names"),
+    ({"scene": "no_such_scene"}, "available"),
+    ({"output_name": "../outside"}, "output_name"),
+    ({"cost": "speed"}, "unknown cost"),
+    ({"step_length": float("nan")}, "finite"),
+])
+def test_bad_requests_are_refused_and_the_node_keeps_serving(setup, spin_until, fields, words):
+    client, _, folder = setup
+    res = _call(client, spin_until, **fields)
+    assert not res.success
+    assert words in res.message
+    assert not list(folder.glob("*.mcap"))
+    again = _call(client, spin_until, output_name="after_refusal")
+    assert again.success, again.message
