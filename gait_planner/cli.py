@@ -19,6 +19,8 @@ import sys
 from importlib import metadata
 from typing import Callable, NoReturn, Sequence
 
+from gait_planner.dynamics.commands import add_simulate_parser
+
 PROG = "gait-planner"
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
@@ -187,7 +189,7 @@ def _call(args: argparse.Namespace) -> int:
 
 
 COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
-    _add_run, _add_plan, _add_node, _add_call)
+    _add_run, _add_plan, _add_node, _add_call, add_simulate_parser)
 
 
 # --- entry point -------------------------------------------------------------------------

@@ -26,6 +26,7 @@ class SolverStats:
     iterations: int
     solve_time: float  # s, wall clock of the NLP solve alone
     build_time: float = 0.0  # s, building the transcription (cached builds cost ~0)
+    evaluation_time: float = 0.0  # s of solve_time spent evaluating functions/derivatives
     max_constraint_violation: float = float("nan")  # largest |g| of holonomic constraints, m
     max_dynamics_residual: float = float("nan")  # largest relative full DEL residual
     max_friction_violation: float = float("nan")  # largest cone violation, N

@@ -1,8 +1,14 @@
-"""Free-floating motion (no contact) from a scene's initial pose, and its error report.
+"""Free-floating motion from a scene's initial pose, and its error report.
 
 Backs ``gait-planner simulate``, the structure-preservation tests and the benchmarks: the
 walker starts in its scene pose with seeded random generalised velocities (so the limbs
-really swing) and, optionally, seeded random smooth internal joint torques.
+really swing) and, optionally, seeded random smooth internal joint torques. Optionally one
+contact point is pinned (held at its initial position): with gravity the walker then swings
+about it like a multiple pendulum, a bounded motion whose energy error must stay bounded.
+
+Conserved quantities: a free root conserves all components of the linear and angular
+momentum without gravity and without pin; a planar root only L_x, L_z and J_y (the planar
+constraints phi_y = const, d2 = e_y exert forces along y and moments about x and z).
 """
 
 from __future__ import annotations
@@ -38,6 +44,22 @@ def random_velocity(mb: Multibody, q0: np.ndarray, rng: np.random.Generator) -> 
     return nu
 
 
+def pinned_velocity(mb: Multibody, q0: np.ndarray, nu: np.ndarray, contact: str) -> np.ndarray:
+    """nu (ndof,) with the root's translational velocity changed so that the contact point
+    `contact` is at rest (the pinned motion starts consistent with its constraint)."""
+    translation = [0, 1, 2] if mb.root_dof == 6 else [0, 1]
+    CP = mb.contact_rows(contact) @ np.array(mb.null_space(q0))
+    nu = np.array(nu, dtype=float)
+    nu[translation] -= np.linalg.solve(CP[:, translation], CP @ nu)
+    return nu
+
+
+def conserved_components(mb: Multibody) -> tuple[list[int], list[int]]:
+    """Indices of the linear and angular momentum components conserved without gravity,
+    pin and external torque: all for a free root; (x, z) and (y) for a planar root."""
+    return ([0, 1, 2], [0, 1, 2]) if mb.root_dof == 6 else ([0, 2], [1])
+
+
 def random_torques(mb: Multibody, rng: np.random.Generator) -> Callable[[float], np.ndarray]:
     """Smooth random internal torques tau(t) (nt,), N m: per component a sum of three
     sinusoids (0.5-5 rad/s), amplitude TORQUE_ACCELERATION times the child's largest
@@ -62,6 +84,7 @@ class FreeMotionReport:
     torques: str
     seed: int
     energy_error_max: float  # max |E_n - E_0| / max T (dimensionless)
+    # conserved components only (`conserved_components`); not conserved with a pin
     linear_momentum_error_max: float  # max |L_n - L_0|, kg m/s
     angular_momentum_error_max: float  # max |J_n - J_0|, kg m^2/s
     linear_momentum_scale: float  # max_n sum_bodies |p_phi|: what round-off is relative to
@@ -100,30 +123,40 @@ def momentum_scales(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
 
 
 def run_free_motion(scene: Scene, *, steps: int, dt: float, gravity: bool = True,
-                    torques: str = "zero", seed: int = 0) -> tuple[Trajectory, FreeMotionReport]:
+                    torques: str = "zero", seed: int = 0,
+                    pin: str | None = None) -> tuple[Trajectory, FreeMotionReport]:
     """Simulate `steps` steps of size `dt` (s) and measure the structure-preservation errors.
 
-    torques: "zero" (passive) or "random" (`random_torques`). Without gravity the linear and
-    angular momentum must be conserved to round-off; with gravity the energy error of a
-    passive run must stay bounded.
+    torques: "zero" (passive) or "random" (`random_torques`). pin: a contact name of the
+    scene held at its initial position (its multipliers are in the trajectory), or None.
+    Without gravity and pin the (conserved components of the) linear and angular momentum
+    must be conserved to round-off; the energy error of a passive run must stay bounded.
     """
     if torques not in ("zero", "random"):
         raise ValueError(f"torques must be 'zero' or 'random', got {torques!r}")
     if steps < 1 or not np.isfinite(dt) or dt <= 0:
         raise ValueError(f"need steps >= 1 and a finite dt > 0, got steps={steps}, dt={dt}")
+    contacts = [c.name for c in scene.contacts]
+    if pin is not None and pin not in contacts:
+        raise ValueError(f"scene {scene.name!r} has no contact {pin!r} (it has: "
+                         f"{', '.join(contacts) or 'none'})")
     scene = dataclasses.replace(scene, gravity=scene.gravity if gravity else 0.0)
     mb = Multibody(scene)
     mech = DiscreteMechanics(mb)
-    sim = Simulator(mech)
+    sim = Simulator(mech, contacts=(pin,) if pin else ())
     rng = np.random.default_rng(seed)
     q0 = configuration(scene)
     nu0 = random_velocity(mb, q0, rng)
+    if pin:
+        nu0 = pinned_velocity(mb, q0, nu0, pin)
     tau = random_torques(mb, rng) if torques == "random" else None
     start = time.perf_counter()
     traj = sim.run(q0, nu0, np.full(steps, dt), tau)
     wall = time.perf_counter() - start
     T, E = energies(mech, traj)
     L, J = momenta(mech, traj)
+    lin, ang = conserved_components(mb)
+    L, J = L[:, lin], J[:, ang]
     scale_L, scale_J = momentum_scales(traj)
     g = np.array(mb.constraints.map(steps + 1)(traj.q.T))
     report = FreeMotionReport(

@@ -56,6 +56,7 @@ class Simulator:
         C = (np.vstack([mb.contact_rows(c) for c in contacts]) if contacts
              else np.zeros((0, mb.k)))
         nc = self.nc = C.shape[0]
+        self.contacts, self._contact_rows = tuple(contacts), C
         u, lam = ca.SX.sym("u", mb.ndof), ca.SX.sym("lambda", nc)
         q, p = ca.SX.sym("q", mb.k), ca.SX.sym("p", mb.k)
         h, w, tau = ca.SX.sym("h"), ca.SX.sym("w"), ca.SX.sym("tau", mb.nt)
@@ -65,9 +66,41 @@ class Simulator:
         res = ca.vertcat(ca.mtimes(mb.null_space(q).T, force), ca.mtimes(ca.DM(C), q_next - q))
         x = ca.vertcat(u, lam)
         self._newton = ca.Function(
-            "newton_step", [x, q, p, h, w, tau], [res, ca.jacobian(res, x)]
+            "newton_step", [x, q, p, h, w, tau], [res, ca.densify(ca.jacobian(res, x))],
+            ["x", "q", "p", "h", "w", "tau"], ["r", "J"],
+        ).expand()
+        p_next = (mech.discrete_lagrangian_d2(q, q_next, h)
+                  + 0.5 * h * ca.mtimes(mb.actuation(q_next), tau))
+        self._advance = ca.Function(
+            "advance", [u, q, h, tau], [q_next, p_next], ["u", "q", "h", "tau"],
+            ["q_next", "p_next"],
         ).expand()
         self._mass_max = float(np.abs(mb.mass_diagonal).max())
+        # Numeric evaluation through CasADi's buffer interface: the arguments and results
+        # are numpy arrays bound once, so a Newton iteration converts nothing (measured in
+        # benchmarks/REPORT.md). Not thread-safe: one Simulator per thread.
+        n = mb.ndof + nc
+        self._in = {"x": np.zeros(n), "q": np.zeros(mb.k), "p": np.zeros(mb.k),
+                    "h": np.zeros(1), "w": np.zeros(1), "tau": np.zeros(mb.nt)}
+        self._res, self._jac_flat = np.zeros(n), np.zeros(n * n)
+        self._jac = self._jac_flat.reshape(n, n, order="F")  # a view: CasADi is column-major
+        self._newton_eval = self._bind(
+            self._newton, [self._in[k] for k in ("x", "q", "p", "h", "w", "tau")],
+            [self._res, self._jac_flat])
+        self._q_next, self._p_next = np.zeros(mb.k), np.zeros(mb.k)
+        self._advance_eval = self._bind(
+            self._advance, [self._in["x"][: mb.ndof], self._in["q"], self._in["h"],
+                            self._in["tau"]], [self._q_next, self._p_next])
+
+    @staticmethod
+    def _bind(function: ca.Function, args: list[np.ndarray], results: list[np.ndarray]):
+        """A no-argument callable evaluating `function` from `args` into `results`."""
+        buffer, evaluate = function.buffer()
+        for i, a in enumerate(args):
+            buffer.set_arg(i, memoryview(a))
+        for i, r in enumerate(results):
+            buffer.set_res(i, memoryview(r))
+        return lambda: (buffer, evaluate())  # keeps the buffer alive with the callable
 
     def initial_momentum(self, q0: np.ndarray, nu0: np.ndarray) -> np.ndarray:
         """p_0 = M P(q_0) nu_0 (k,)."""
@@ -76,21 +109,26 @@ class Simulator:
     def step(self, q: np.ndarray, p: np.ndarray, h: float, w: float, tau: np.ndarray,
              guess: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
         """One step: returns (x = (u, lambda), q_next, Newton iterations)."""
-        x = guess.copy()
+        x, res, jac = self._in["x"], self._res, self._jac
+        x[:] = guess
+        self._in["q"][:], self._in["p"][:], self._in["tau"][:] = q, p, tau
+        self._in["h"][0], self._in["w"][0] = h, w
         # Converged when the residual is below tolerance relative to the momentum, or at
         # its round-off floor (M (q_next - q)/h loses eps |q| |M| / h), or when Newton's
         # update no longer changes x.
         floor = 4 * np.finfo(float).eps * self._mass_max * max(1.0, np.abs(q).max()) / h
         tol = max(self.tolerance * max(1.0, float(np.abs(p).max())), floor)
         for it in range(1, self.max_iterations + 1):
-            res, jac = self._newton(x, q, p, h, w, tau)
-            res = np.array(res).ravel()
+            self._newton_eval()
             if not np.all(np.isfinite(res)):
                 raise SimulationError("the residual is not finite")
             if np.abs(res).max() <= tol:
                 break
-            dx = np.linalg.solve(np.array(jac), res)
-            x = x - dx
+            try:
+                dx = np.linalg.solve(jac, res)
+            except np.linalg.LinAlgError:
+                raise SimulationError("the Newton matrix is singular") from None
+            x -= dx
             if np.abs(dx).max() <= 4 * np.finfo(float).eps * max(1.0, np.abs(x).max()):
                 break
         else:
@@ -98,8 +136,19 @@ class Simulator:
                 f"Newton's method did not converge in {self.max_iterations} iterations "
                 f"(residual {np.abs(res).max():.3e}, step h = {h})"
             )
-        q_next = np.array(self.mb.reparametrise(x[: self.mb.ndof], q)).ravel()
-        return x, q_next, it - 1
+        self._advance_eval()
+        return x.copy(), self._q_next.copy(), it - 1
+
+    def largest_rotation(self, q0: np.ndarray, q1: np.ndarray) -> tuple[str, float]:
+        """The body whose triad turns most from q0 to q1, and the angle (deg)."""
+        angles = []
+        for i in range(self.mb.nb):
+            D0 = q0[12 * i + 3 : 12 * i + 12].reshape(3, 3)  # rows d1, d2, d3
+            D1 = q1[12 * i + 3 : 12 * i + 12].reshape(3, 3)
+            cos = np.clip(0.5 * (np.trace(D0 @ D1.T) - 1.0), -1.0, 1.0)
+            angles.append(float(np.degrees(np.arccos(cos))))
+        i = int(np.argmax(angles))
+        return self.mb.body_names[i], angles[i]
 
     def run(self, q0: np.ndarray, nu0: np.ndarray, time_steps: Sequence[float],
             torques: Callable[[float], np.ndarray] | None = None) -> Trajectory:
@@ -108,7 +157,14 @@ class Simulator:
         torques(t) gives the joint torques (nt,) held constant on [t_n, t_{n+1}] (evaluated
         at the interval midpoint); None means passive motion.
         """
-        mb, mech = self.mb, self.mech
+        mb = self.mb
+        if self.nc:
+            rank = np.linalg.matrix_rank(self._contact_rows @ np.array(mb.null_space(q0)))
+            if rank < self.nc:
+                raise SimulationError(
+                    f"the held contact points ({', '.join(self.contacts)}) give {self.nc} "
+                    f"constraints of which only {rank} are independent (e.g. two points of "
+                    "one foot); hold fewer points")
         hs = np.asarray(time_steps, dtype=float)
         n = hs.size
         times = np.concatenate([[0.0], np.cumsum(hs)])
@@ -127,7 +183,28 @@ class Simulator:
             try:
                 x, q[i + 1], iters[i] = self.step(q[i], p[i], h, w, tau, x)
             except SimulationError as err:
-                raise SimulationError(f"step {i} (t = {times[i]:.6g} s): {err}") from None
+                hint = self._diagnosis(q[i - 1], q[i]) if i > 0 else ""
+                raise SimulationError(f"step {i} (t = {times[i]:.6g} s): {err}{hint}") from None
             us[i], lams[i], taus[i] = x[: mb.ndof], x[mb.ndof :], tau
-            p[i + 1] = mech.momentum(q[i], q[i + 1], h, tau)
+            p[i + 1] = self._p_next  # D2 L_d(q_i, q_i+1) + f+_i, evaluated by `step`
         return Trajectory(times, q, p, us, taus, lams, iters)
+
+    def _diagnosis(self, q_prev: np.ndarray, q: np.ndarray) -> str:
+        """Why a step may have no solution: the fastest body of the previous step.
+
+        The trapezoidal discrete Lagrangian's momentum of a body turning by theta per step
+        grows like sin(theta)/h and peaks at theta = 90 deg: a body whose (incoming)
+        momentum exceeds that peak has no next configuration. The equations fold there
+        (Newton stalls at a singular Jacobian; a homotopy from the previous increment turns
+        back before reaching the step): the step is too large for the motion, and only a
+        smaller h helps (benchmarks/REPORT.md, "dt = 0.05").
+        """
+        body, angle = self.largest_rotation(q_prev, q)
+        text = f"; in the previous step {body} turned by {angle:.0f} deg"
+        if angle > 30.0:
+            text += (" (the discrete equations have no solution once a body would turn by "
+                     "about 90 deg in one step): reduce the time step")
+        else:
+            text += (" (fast or stiff motion, e.g. a light body between a pinned point and "
+                     "a heavy load, needs a smaller time step)")
+        return text

@@ -13,7 +13,7 @@ from gait_planner.result import PlanResult, SolverStats
 
 STATUS_WORDS = {
     "Solve_Succeeded": "converged",
-    "Solved_To_Acceptable_Level": "stopped at an acceptable but not optimal point",
+    "Solved_To_Acceptable_Level": "converged to the acceptable optimality tolerance 1e-6",
     "Infeasible_Problem_Detected": "the constraints cannot be satisfied (locally infeasible)",
     "Restoration_Failed": "no feasible point found (restoration failed)",
     "Maximum_Iterations_Exceeded": "iteration limit reached",
@@ -27,6 +27,9 @@ STATUS_WORDS = {
 }
 # a converged solve must also meet these (the checks of recordings judge 1e-8 m)
 CONSTRAINT_LIMIT = 1e-8
+# IPOPT statuses that count as solved: optimal to tol, or to acceptable_tol (1e-6) when the
+# scaled optimality error stalls above tol; both with constraints at constr_viol_tol
+SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
 def violations(tr: Transcription, g: np.ndarray) -> dict[str, float]:
@@ -61,7 +64,7 @@ def _mirror_forces(tr: Transcription, forces: dict[str, np.ndarray], src: int, d
 
 def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray, *,
                  status: str, iterations: int, solve_time: float, build_time: float,
-                 origin: str) -> PlanResult:
+                 evaluation_time: float, origin: str) -> PlanResult:
     mb, mech, s, N = tr.mb, tr.mech, tr.settings, tr.N
     scene = mb.scene
     Q, TAU, h, kinetic, torque = (np.array(v) for v in _extractor(tr)(x, p))
@@ -102,7 +105,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
                        and k in ("contact_hold", "contact_establish", "pin_x")))
     dynamics = max((v for k, v in viol.items() if k.startswith("dynamics")), default=0.0)
     worst = max(viol, key=viol.get) if viol else ""
-    success = status == "Solve_Succeeded" and max(viol.values(), default=0.0) <= CONSTRAINT_LIMIT
+    success = status in SOLVED and max(viol.values(), default=0.0) <= CONSTRAINT_LIMIT
     words = STATUS_WORDS.get(status, status)
     message = f"IPOPT: {words} ({status}) after {iterations} iterations"
     if not success:
@@ -110,6 +113,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
     cost_value = float((kinetic if s.cost == "kinetic_energy" else torque).item())
     stats = SolverStats(
         status=status, iterations=iterations, solve_time=solve_time, build_time=build_time,
+        evaluation_time=evaluation_time,
         max_constraint_violation=float(constraint), max_dynamics_residual=float(dynamics),
         max_friction_violation=float(viol.get("friction_cone", 0.0)), most_violated=worst,
     )

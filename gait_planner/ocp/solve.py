@@ -124,6 +124,9 @@ class Planner:
                 "ipopt.linear_solver": "mumps",
                 "ipopt.tol": s.tolerance,
                 "ipopt.constr_viol_tol": s.constraint_tolerance,
+                # IPOPT's "acceptable" stop keeps the tight constraint tolerance: only the
+                # optimality error is relaxed (to 1e-6, IPOPT's default acceptable_tol)
+                "ipopt.acceptable_constr_viol_tol": s.constraint_tolerance,
                 "ipopt.max_iter": s.max_iterations,
                 "ipopt.mu_strategy": "adaptive",
                 "ipopt.warm_start_init_point": "yes",
@@ -163,7 +166,7 @@ class Planner:
         built.callback.deadline = start + settings.max_solve_time
         built.callback.started, built.callback.iteration = start, 0
         built.callback.report = self.progress
-        iterations, status, g = 0, "not started", None
+        iterations, status, g, evaluation = 0, "not started", None, 0.0
         for fix_sigma in stages:
             lb, ub = lbx.copy(), ubx.copy()
             if fix_sigma:
@@ -171,6 +174,7 @@ class Planner:
             sol = solver(x0=x0, p=p, lbx=lb, ubx=ub, lbg=lbg, ubg=ubg, **duals)
             stats = solver.stats()
             iterations += int(stats.get("iter_count", 0))
+            evaluation += sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_"))
             status = str(stats.get("return_status", "unknown"))
             x0, g = np.array(sol["x"]).ravel(), np.array(sol["g"]).ravel()
             duals = {"lam_x0": np.array(sol["lam_x"]).ravel(),
@@ -179,7 +183,8 @@ class Planner:
                 break
         result = build_result(tr, x0, p, g, status=status, iterations=iterations,
                               solve_time=time.perf_counter() - start,
-                              build_time=built.build_time, origin=origin)
+                              build_time=built.build_time, evaluation_time=evaluation,
+                              origin=origin)
         if result.success:
             built.stored.append((step, mu, x0, duals["lam_x0"], duals["lam_g0"], qref))
         return result

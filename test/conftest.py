@@ -1,0 +1,62 @@
+"""Shared test setup: strict numerics, the `slow` marker, and cached models per scene.
+
+* Floating-point trouble raises: every test runs under ``numpy.errstate(all="raise")``
+  (division by zero, overflow and invalid operations become FloatingPointError; underflow,
+  which is harmless round-off to zero, is ignored).
+* ``@pytest.mark.slow`` marks tests that take more than a few seconds; they still run by
+  default (and in CI); ``-m "not slow"`` skips them for a quick check.
+* The `model` fixture returns a cached factory ``model(name) -> Model`` (scene, Multibody,
+  DiscreteMechanics), so each scene's CasADi Functions are built once per session.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Callable, Iterator, NamedTuple
+
+import numpy as np
+import pytest
+
+from gait_planner.dynamics.discrete import DiscreteMechanics
+from gait_planner.model.loader import load_scene
+from gait_planner.model.multibody import Multibody
+from gait_planner.model.scene import Scene
+
+SCENES = ("compass", "walker2d", "walker3d")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers", "slow: takes more than a few seconds (still part of the default run)"
+    )
+
+
+@pytest.fixture(autouse=True)
+def strict_numerics() -> Iterator[None]:
+    with np.errstate(all="raise", under="ignore"):
+        yield
+
+
+class Model(NamedTuple):
+    scene: Scene
+    mb: Multibody
+    mech: DiscreteMechanics
+
+
+@functools.cache
+def _model(name: str) -> Model:
+    scene = load_scene(name)
+    mb = Multibody(scene)
+    return Model(scene, mb, DiscreteMechanics(mb))
+
+
+@pytest.fixture(scope="session")
+def model() -> Callable[[str], Model]:
+    """Factory: model("walker3d") -> Model(scene, mb, mech), cached for the session."""
+    return _model
+
+
+@pytest.fixture(scope="session", params=SCENES)
+def any_model(request: pytest.FixtureRequest) -> Model:
+    """Each scene of `SCENES` in turn."""
+    return _model(request.param)
