@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass
 
 from gait_planner.model.scene import Scene
+from gait_planner.ocp.posture import JointLimitError, check_joint_limits
 
 COSTS = ("kinetic_energy", "torque_squared")
 
@@ -27,8 +28,9 @@ class GaitSettings:
     torque_regularisation weight on sum h |tau|^2 (J s per (N m)^2 s, i.e. 1/(N s)) added to
     any cost; friction_smoothing delta (N) of mu f_z - sqrt(f_x^2 + f_y^2 + delta^2) >= 0;
     torso_lean_max rad (torso d3 within this angle of vertical; 0 = off);
-    torso_height_min m (torso centre-of-mass height; 0 = off); knee_max rad (knees in
-    [0, knee_max]; 0 = off); foot_half_width m (|roll moment| <= half width * normal force of a full
+    torso_height_min m (torso centre-of-mass height; 0 = off); joint_limits ((angle name,
+    lower rad, upper rad), ...) from the scene's ``joint_limits: {name: [lo, hi]}`` in degrees
+    (`gait_planner.ocp.posture`); foot_half_width m (|roll moment| <= half width * normal force of a full
     contact; the paper's foot breadth is 0.0915 m); ground_clearance: free contact points stay at
     or above the ground (off for the rigid-legged compass, which must scuff at mid-stance);
     max_iterations, max_solve_time s (IPOPT); tolerance (IPOPT tol);
@@ -45,7 +47,7 @@ class GaitSettings:
     friction_smoothing: float = 1.0
     torso_lean_max: float = 0.0
     torso_height_min: float = 0.0
-    knee_max: float = 0.0
+    joint_limits: tuple[tuple[str, float, float], ...] = ()
     foot_half_width: float = 0.04575
     ground_clearance: bool = True
     max_iterations: int = 3000
@@ -79,7 +81,7 @@ class GaitSettings:
         if self.max_solve_time <= 0:
             bad("max_solve_time", f"must be positive (s), got {self.max_solve_time}")
         for name in ("torque_regularisation", "friction_smoothing", "torso_lean_max",
-                     "torso_height_min", "knee_max", "foot_half_width"):
+                     "torso_height_min", "foot_half_width"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")
 
@@ -105,6 +107,11 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
             f"unknown gait option(s) {sorted(unknown)}; known: {sorted(_OPTION_NAMES)}"
         )
     options.update(overrides)
+    if "joint_limits" in options and not isinstance(options["joint_limits"], tuple):
+        try:
+            options["joint_limits"] = check_joint_limits(scene, options["joint_limits"])
+        except JointLimitError as err:
+            raise SettingsError(str(err)) from None
     if max_solve_time is not None:
         options["max_solve_time"] = max_solve_time
     intervals = tuple(p.intervals for p in gait.phases)

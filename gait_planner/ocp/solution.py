@@ -133,6 +133,8 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
             "base_time_step": repr(s.base_time_step),
             "scaling_bounds": ",".join(repr(b) for b in s.scaling_bounds),
             "torque_regularisation": repr(s.torque_regularisation),
+            "joint_limits_deg": ",".join(f"{name}:{np.degrees(lo):.6g}:{np.degrees(hi):.6g}"
+                                         for name, lo, hi in s.joint_limits),
             "torque_squared": repr(float(torque.item())),
             "kinetic_energy": repr(float(kinetic.item())),
         },

@@ -32,6 +32,7 @@ import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.ocp.contacts import BodyContact, body_contacts, establishing_rows, stacked_rows
+from gait_planner.ocp.posture import joint_limit_margins
 from gait_planner.ocp.mirror import configuration_mirror, torque_mirror
 from gait_planner.ocp.settings import GaitSettings
 
@@ -90,7 +91,10 @@ class Transcription:
 
     def _dynamics(self):
         """Reduced discrete Euler-Lagrange equations of nodes 1..N-1, divided by
-        w_n = (h_{n-1} + h_n)/2 so that they read as forces (N)."""
+        w_n = (h_{n-1} + h_n)/2 so that they read as forces, in units of FORCE_SCALE: the
+        rows are O(1) like the others, so IPOPT's absolute constraint tolerance (1e-10)
+        means 1e-7 N here, reachable in floating point (in plain newtons it stalled at
+        ~2e-10 for hundreds of iterations)."""
         mb, N = self.mb, self.N
         for k, C in enumerate(self.rows):
             nodes = [n for n in range(1, N) if self.phase_of_interval[n] == k]
@@ -104,7 +108,7 @@ class Transcription:
             r = self.mech.discrete_euler_lagrange(q0, q1, q2, h0, h1, t0, t1)
             if C.shape[0]:
                 r = r + w * ca.mtimes(ca.DM(C).T, lam)  # lambda: ground force on body
-            res = ca.mtimes(mb.null_space(q1).T, r) / w
+            res = ca.mtimes(mb.null_space(q1).T, r) / (w * FORCE_SCALE)
             f = ca.Function(f"dynamics_phase{k}", [q0, q1, q2, h0, h1, t0, t1, lam], [res])
             f = f.expand().map(len(nodes))
             idx = np.array(nodes)
@@ -179,15 +183,9 @@ class Transcription:
             self._ineq.append(("torso_lean", ca.vec(inner[root + 11, :] - np.cos(s.torso_lean_max))))
         if s.torso_height_min > 0:
             self._ineq.append(("torso_height", ca.vec(inner[root + 2, :] - s.torso_height_min)))
-        if s.knee_max > 0:
-            rows = []
-            for j in mb.scene.joints:
-                if j.name.startswith("knee"):
-                    p, c = mb.block(j.parent).start, mb.block(j.child).start
-                    sin = ca.sum1(inner[p + 3 : p + 6, :] * inner[c + 9 : c + 12, :])
-                    cos = ca.sum1(inner[p + 9 : p + 12, :] * inner[c + 9 : c + 12, :])
-                    rows += [ca.vec(sin), ca.vec(cos - np.cos(s.knee_max))]
-            self._ineq.append(("knee_range", ca.vertcat(*rows)))
+        if s.joint_limits:
+            margins = joint_limit_margins(mb, s.joint_limits).map(N - 1)(inner)
+            self._ineq.append(("joint_limits", ca.vec(margins)))
 
     def _cost(self):
         """J over the half cycle t_0..t_{N-1} (intervals 0..N-2), plus the torque

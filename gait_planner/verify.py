@@ -1,0 +1,932 @@
+"""Independent check of a recorded gait plan: does the MCAP file hold a valid half cycle?
+
+`verify_recording(path)` reads the recording with `gait_planner.io.mcap_reader` (which shares
+no code with the writer), rebuilds the mechanics from the scene file attached to it (plain
+YAML, parsed here) and re-derives everything in numpy. It deliberately imports nothing of
+`gait_planner.model.multibody`, `gait_planner.dynamics` or `gait_planner.ocp`: constraints,
+their Jacobian, the mass matrix, gravity, the discrete Euler-Lagrange equations and the
+mirror map are written again from DESIGN.md sections 1-3 and 5-7, so an error in the
+transcription cannot hide itself. `verify_result(result)` records a `PlanResult` with the
+real writer into a temporary file and verifies that file (tests always go through the
+recording). ``python -m gait_planner.verify RUN.mcap`` prints the report (exit status 0 if
+every check passed, 1 if one failed, 2 if the file cannot be read).
+
+Conventions (DESIGN.md section 7, the planner's documented conventions):
+nodes 0..N, interval n from t_n to t_{n+1}, h_n = t_{n+1} - t_n. ``active_contacts[n]``
+(n < N) are the points held on interval n: they do not move from q_n to q_{n+1}, sit at
+z = 0, and their published forces (ground on foot, N, world) act in the equation of node n.
+Nodes N-1, N are the mirror images of nodes 0, 1 about y = 0 shifted by ``step_length`` in
+x; duration and cost span t_0 .. t_{N-1}.
+
+Checks and method (limits in `LIMITS`):
+
+* Holonomic constraints at every node: internal (6 per body: 1/2(d_i.d_i - 1), d_i.d_j),
+  joints (spherical: 3 gap rows; revolute: gap + 2 alignment rows n_p.(D_c a),
+  n_p.(D_c b) with a, b completing the axis n to an orthonormal basis), planar root
+  (phi_y = y0 of the scene's initial pose, d2.e_x = d2.e_z = 0).
+* Contacts: over every held interval a held point does not move and sits at z = 0; a
+  body in full contact (both its points held) does not move at all and, in 3D, lies flat
+  (d2_z = 0); the published contact points equal phi + X_i d_i; no contact point of the
+  scene is below the ground at any node (not a failure for scenes whose gait options set
+  ``ground_clearance: false``, e.g. the rigid-legged compass, which must scuff: reported).
+* Discrete Euler-Lagrange equations at nodes n = 1..N-1, in full (k rows), with the
+  recorded q, times, generalized_force and contact forces:
+      b = D2 L_d(q_{n-1}, q_n, h_{n-1}) + D1 L_d(q_n, q_{n+1}, h_n) + gen_n
+          + w_n sum_points C_p^T F_p,   w_n = (h_{n-1} + h_n)/2,
+  where a ground force F on body point X adds F to the body's phi rows and X_i F to its
+  d_i rows. Unknown: the internal/joint/planar multipliers, and for every 3D full contact
+  the moment about the heel-toe line, which two point forces cannot carry and which is not
+  published; the planner applies it as a generalised force on the z-component of the
+  foot's d2 (w_n e_{d2z} M_roll). These unknowns are fitted by linear least squares,
+  b + w_n E M_roll = G^T(q_n) y, and the residual is judged relative to
+  max(|D2 L_d|, |D1 L_d|, |gen_n|, |contact term|) (2-norms). M_roll is reported, with the
+  lateral centre-of-pressure offset |M_roll| / F_z it implies.
+* Actuation is internal and made of joint couples: generalized_force is zero on phi and of
+  the pure-couple form f_{d_i} = 1/2 m_b x d_i with m_b = sum_i d_i x f_{d_i} (the body's
+  couple); the body couples sum to zero (no net moment). Joint couples are recovered
+  exactly from the body couples on the tree, leaves first: m_j = m_child(j) +
+  sum of the couples of the joints below child(j) (a joint acts +m_j on its child and -m_j
+  on its parent). A revolute joint's couple must be parallel to its axis D_p n. The
+  recorded efforts must produce these couples. JointTrajectory effort[n] is the torque of
+  interval n (the last node repeats that of interval N-1) conjugate to the joint angles at
+  node n (gait_planner.io.messages): revolute, about the axis; spherical, the couple's
+  projections on the parent's d2 (pitch), the roll axis (d2_p x d3_c normalised) and the
+  child's d3 (yaw), so the world couple follows from a 3x3 solve at q_n. The planner's
+  torque tau_n (parent-director components) is constant on the interval, and the check is
+  m_j(n) = D_p(q_n) (h_{n-1} tau_{n-1} + h_n tau_n)/2 (node 0 and N: one half interval).
+* Contact forces push (F_z of every point >= 0) and lie in the Coulomb cone
+  sqrt(F_x^2 + F_y^2) <= mu F_z of the body's net force (full contact: heel + forefoot),
+  mu = metadata ``friction_coefficient``.
+* Periodicity: q_{N-1}, q_N equal the mirror images of q_0, q_1 shifted by the step
+  length (phi' = S phi, d1' = S d1, d2' = -S d2, d3' = S d3 in the partner body,
+  S = diag(1, -1, 1)); the contact forces of nodes 0, N are the mirror images (S F) of
+  those of nodes N-1, 1; the joint couple of interval N-1 is the mirror image of that of
+  interval 0 (a couple m mirrors to -S m, or to +S m when the mirror swaps the joint's
+  parent and child).
+* Time and cost: times strictly increasing, interval lengths = base_time_step * sigma of
+  their phase (when the metadata states base_time_step), sigma within the scaling
+  bounds, duration = t_{N-1} - t_0, cost recomputed from q, times and efforts
+  (kinetic_energy = sum_{n<N-1} h_n 1/2 v_n^T M v_n, torque_squared =
+  sum_{n<N-1} h_n |tau_n|^2 with the planner's torques tau_n recovered from the efforts),
+  potential energy = sum m g phi_z. sigma may exceed its bounds by LIMITS["scaling"]
+  (IPOPT relaxes bounds by up to its bound_relax_factor).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import yaml
+
+from gait_planner.io.mcap_reader import RecordedPlan, read_plan_mcap
+
+__all__ = ["LIMITS", "SceneData", "Mechanics", "VerificationReport", "parse_scene",
+           "verify_plan", "verify_recording", "verify_result", "main"]
+
+LIMITS = {
+    "constraint": 1e-9,  # m (and dimensionless for director conditions), every node
+    "contact": 1e-9,  # m, held points: drift over an interval and height
+    "ground": 1e-9,  # m, lowest contact point
+    "dynamics": 1e-8,  # relative full discrete Euler-Lagrange residual
+    "actuation": 1e-9,  # relative: phi entries, couple form, net moment, axis, efforts
+    "force": 1e-9,  # relative to max(1 N, |F|): unilateral and friction cone
+    "periodicity": 1e-8,  # m
+    "periodic_force": 1e-9,  # relative
+    "cost": 1e-9,  # relative
+    "time": 1e-9,  # relative (interval lengths, duration)
+    "scaling": 1e-9,  # relative excess of sigma over its bounds (IPOPT relaxes bounds)
+    "energy": 1e-9,  # relative, potential energy
+}
+
+_S = np.array([1.0, -1.0, 1.0])
+
+
+# ----------------------------------------------------------------------------- the scene
+
+
+@dataclass(frozen=True)
+class BodyData:
+    name: str
+    mass: float
+    inertia: tuple[float, float, float]
+    points: dict[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class JointData:
+    name: str
+    type: str  # "spherical" | "revolute"
+    parent: str
+    parent_point: np.ndarray
+    child: str
+    child_point: np.ndarray
+    axis: np.ndarray | None  # unit, body-fixed (revolute)
+
+
+@dataclass(frozen=True)
+class SceneData:
+    """What the checks need from the scene file (plain data; joints in tree order)."""
+
+    name: str
+    gravity: float
+    bodies: tuple[BodyData, ...]
+    joints: tuple[JointData, ...]
+    root: str
+    planar: bool
+    root_y: float
+    contacts: dict[str, tuple[str, str]]  # contact -> (body, point)
+    mirror: dict[str, str]  # body -> partner body (symmetric, total)
+    phases: dict[str, tuple[int, tuple[str, ...]]]  # phase -> (scaling index, contacts)
+    scaling_bounds: tuple[float, float] | None
+    base_time_step: float | None
+    options: dict[str, Any]
+
+    def body_index(self, name: str) -> int:
+        return [b.name for b in self.bodies].index(name)
+
+
+def parse_scene(text: str) -> SceneData:
+    """The scene attached to a recording, from its YAML text (plain `yaml.safe_load`)."""
+    data = yaml.safe_load(text)
+    if not isinstance(data, dict):
+        raise ValueError("the attached scene is not a YAML mapping")
+    bodies = tuple(
+        BodyData(str(b["name"]), float(b["mass"]), tuple(float(j) for j in b["inertia"]),
+                 {str(p): np.asarray(v, dtype=float) for p, v in (b.get("points") or {}).items()})
+        for b in data["bodies"])
+    by_name = {b.name: b for b in bodies}
+    joints = []
+    for j in data["joints"]:
+        axis = None
+        if j["type"] == "revolute":
+            axis = np.asarray(j["axis"], dtype=float)
+            axis = axis / np.linalg.norm(axis)
+        elif j["type"] != "spherical":
+            raise ValueError(f"joint {j['name']!r}: unknown type {j['type']!r}")
+        joints.append(JointData(
+            str(j["name"]), str(j["type"]), str(j["parent"]),
+            by_name[j["parent"]].points[j["parent_point"]], str(j["child"]),
+            by_name[j["child"]].points[j["child_point"]], axis))
+    root = str(data["root"]["body"])
+    ordered, stack = [], [j for j in joints if j.parent == root][::-1]
+    while stack:  # depth first from the root: parents before children
+        joint = stack.pop()
+        ordered.append(joint)
+        stack.extend([j for j in joints if j.parent == joint.child][::-1])
+    if len(ordered) != len(joints):
+        raise ValueError("the scene's joints do not form one tree on the root")
+    contacts = {str(c["name"]): (str(c["body"]), str(c["point"])) for c in data["contacts"]}
+    gait = data.get("gait") or {}
+    mirror = {b.name: b.name for b in bodies}
+    for a, b in (gait.get("mirror") or {}).items():
+        mirror[str(a)], mirror[str(b)] = str(b), str(a)
+    phases = {str(p["name"]): (int(p["scaling"]), tuple(str(c) for c in p["contacts"]))
+              for p in gait.get("phases") or ()}
+    bounds = gait.get("scaling_bounds")
+    return SceneData(
+        name=str(data["name"]), gravity=float(data.get("gravity", 9.81)), bodies=bodies,
+        joints=tuple(ordered), root=root, planar=data["root"]["type"] == "planar",
+        root_y=float(data["initial_pose"]["root_position"][1]), contacts=contacts,
+        mirror=mirror, phases=phases,
+        scaling_bounds=tuple(float(b) for b in bounds) if bounds else None,
+        base_time_step=float(gait["base_time_step"]) if "base_time_step" in gait else None,
+        options=dict(gait.get("options") or {}))
+
+
+# ----------------------------------------------------------------------------- mechanics
+
+
+def _perpendicular(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors a, b with (n, a, b) orthonormal (Gram-Schmidt on the world axes)."""
+    helper = np.eye(3)[int(np.argmin(np.abs(n)))]
+    a = helper - (helper @ n) * n
+    a = a / np.linalg.norm(a)
+    return a, np.cross(n, a)
+
+
+class Mechanics:
+    """Director-coordinate mechanics of a `SceneData`, in numpy (DESIGN.md sections 1-3).
+
+    q (k,) = per body (phi, d1, d2, d3), bodies in scene order. Every function accepts
+    real or complex q (complex-step differentiation of `constraint_values`)."""
+
+    def __init__(self, scene: SceneData):
+        self.scene = scene
+        self.nb = len(scene.bodies)
+        self.k = 12 * self.nb
+        diag = []
+        for b in scene.bodies:
+            half = 0.5 * sum(b.inertia)
+            diag += [b.mass] * 3 + [half - j for j in b.inertia for _ in range(3)]
+        self.mass_diagonal = np.array(diag)
+        self.gravity_gradient = np.zeros(self.k)
+        for i, b in enumerate(scene.bodies):
+            self.gravity_gradient[12 * i + 2] = b.mass * scene.gravity
+        self.frames = {}
+        for joint in scene.joints:
+            if joint.axis is not None:
+                self.frames[joint.name] = _perpendicular(joint.axis)
+        groups = [("internal", 6 * self.nb)]
+        groups += [(f"joint {j.name}", 3 if j.type == "spherical" else 5) for j in scene.joints]
+        if scene.planar:
+            groups.append(("planar root", 3))
+        self.groups = groups
+        self.m = sum(size for _, size in groups)
+
+    # layout
+    def start(self, body: str) -> int:
+        return 12 * self.scene.body_index(body)
+
+    def phi(self, q, body):
+        s = self.start(body)
+        return q[..., s:s + 3]
+
+    def director(self, q, body, i):
+        s = self.start(body) + 3 + 3 * i
+        return q[..., s:s + 3]
+
+    def directors(self, q, body):
+        """(.., 3, 3) with columns d1, d2, d3."""
+        s = self.start(body)
+        return np.stack([q[..., s + 3:s + 6], q[..., s + 6:s + 9], q[..., s + 9:s + 12]], axis=-1)
+
+    def point_matrix(self, body: str, X: np.ndarray) -> np.ndarray:
+        """C (3, k): world position C q = phi + X_i d_i of body point X."""
+        C = np.zeros((3, self.k))
+        s = self.start(body)
+        C[:, s:s + 3] = np.eye(3)
+        for i in range(3):
+            C[:, s + 3 + 3 * i:s + 6 + 3 * i] = X[i] * np.eye(3)
+        return C
+
+    def contact_matrix(self, name: str) -> np.ndarray:
+        body, point = self.scene.contacts[name]
+        return self.point_matrix(body, self.scene.bodies[self.scene.body_index(body)].points[point])
+
+    # constraints
+    def constraint_values(self, q: np.ndarray) -> np.ndarray:
+        """g(q) (m,) in the order of `groups`."""
+        rows = []
+        for b in self.scene.bodies:
+            d = [self.director(q, b.name, i) for i in range(3)]
+            rows += [0.5 * (d[0] @ d[0] - 1), 0.5 * (d[1] @ d[1] - 1), 0.5 * (d[2] @ d[2] - 1),
+                     d[0] @ d[1], d[0] @ d[2], d[1] @ d[2]]
+        for j in self.scene.joints:
+            Dp, Dc = self.directors(q, j.parent), self.directors(q, j.child)
+            gap = self.phi(q, j.parent) + Dp @ j.parent_point - self.phi(q, j.child) \
+                - Dc @ j.child_point
+            rows += list(gap)
+            if j.axis is not None:
+                a, b = self.frames[j.name]
+                n_world = Dp @ j.axis
+                rows += [n_world @ (Dc @ a), n_world @ (Dc @ b)]
+        if self.scene.planar:
+            d2 = self.director(q, self.scene.root, 1)
+            rows += [self.phi(q, self.scene.root)[1] - self.scene.root_y, d2[0], d2[2]]
+        return np.array(rows)
+
+    def constraint_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """G(q) = dg/dq (m, k), analytic."""
+        G = np.zeros((self.m, self.k))
+        r = 0
+        for b in self.scene.bodies:
+            s = self.start(b.name)
+            d = [q[s + 3 + 3 * i:s + 6 + 3 * i] for i in range(3)]
+            for i in range(3):
+                G[r + i, s + 3 + 3 * i:s + 6 + 3 * i] = d[i]
+            for row, (i, j) in enumerate(((0, 1), (0, 2), (1, 2)), start=r + 3):
+                G[row, s + 3 + 3 * i:s + 6 + 3 * i] = d[j]
+                G[row, s + 3 + 3 * j:s + 6 + 3 * j] = d[i]
+            r += 6
+        for j in self.scene.joints:
+            sp, sc = self.start(j.parent), self.start(j.child)
+            G[r:r + 3, sp:sp + 3] += np.eye(3)
+            G[r:r + 3, sc:sc + 3] -= np.eye(3)
+            for i in range(3):
+                G[r:r + 3, sp + 3 + 3 * i:sp + 6 + 3 * i] += j.parent_point[i] * np.eye(3)
+                G[r:r + 3, sc + 3 + 3 * i:sc + 6 + 3 * i] -= j.child_point[i] * np.eye(3)
+            r += 3
+            if j.axis is not None:
+                Dp, Dc = self.directors(q, j.parent), self.directors(q, j.child)
+                n_world = Dp @ j.axis
+                for vec in self.frames[j.name]:
+                    c_world = Dc @ vec
+                    for i in range(3):
+                        G[r, sp + 3 + 3 * i:sp + 6 + 3 * i] += j.axis[i] * c_world
+                        G[r, sc + 3 + 3 * i:sc + 6 + 3 * i] += vec[i] * n_world
+                    r += 1
+        if self.scene.planar:
+            s = self.start(self.scene.root)
+            G[r, s + 1] = 1.0
+            G[r + 1, s + 6] = 1.0
+            G[r + 2, s + 8] = 1.0
+            r += 3
+        assert r == self.m
+        return G
+
+    # dynamics
+    def d1_ld(self, q0, q1, h):
+        return -self.mass_diagonal * (q1 - q0) / h - 0.5 * h * self.gravity_gradient
+
+    def d2_ld(self, q0, q1, h):
+        return self.mass_diagonal * (q1 - q0) / h - 0.5 * h * self.gravity_gradient
+
+    def potential_energy(self, q):
+        return q @ self.gravity_gradient
+
+    # mirror
+    def mirror(self, q: np.ndarray, step: float) -> np.ndarray:
+        """mirror(q) + step e_x: each body's image in its partner body."""
+        out = np.zeros_like(q)
+        for b in self.scene.bodies:
+            src, dst = self.start(b.name), self.start(self.scene.mirror[b.name])
+            for j, sign in enumerate((1.0, 1.0, -1.0, 1.0)):
+                out[dst + 3 * j:dst + 3 * j + 3] = sign * _S * q[src + 3 * j:src + 3 * j + 3]
+            out[dst] += step
+        return out
+
+
+# ----------------------------------------------------------------------------- the report
+
+
+@dataclass(frozen=True)
+class VerificationReport:
+    """Every measured number of one recording's checks; `failures` holds one sentence per
+    failed check (empty: `ok`), `notes` what was measured but not judged.
+
+    Units: m for positions, N for forces, N s for generalised forces (impulses), N m for
+    moments, J s for the kinetic-energy cost; "relative" numbers are dimensionless."""
+
+    path: str
+    scene: str
+    cost_name: str
+    n_nodes: int
+    planner_success: bool
+    max_internal_violation: float
+    max_joint_violation: float
+    max_planar_violation: float
+    max_contact_drift: float  # held point (and full-contact body) motion over an interval
+    max_contact_height: float  # |z| of held points
+    max_full_contact_roll: float  # |d2_z| of bodies in 3D full contact
+    max_contact_point_error: float  # published points vs phi + X_i d_i
+    min_contact_point_height: float  # lowest contact point, any node
+    max_dynamics_residual: float  # relative
+    worst_dynamics_node: int
+    max_dynamics_residual_absolute: float  # N s
+    max_roll_moment: float  # N m
+    max_roll_offset: float  # m, |M_roll| / F_z of full contacts
+    max_actuation_phi: float  # relative
+    max_couple_form_error: float  # relative
+    max_net_moment: float  # relative
+    max_revolute_off_axis: float  # relative
+    max_effort_mismatch: float  # relative
+    min_normal_force: float  # N, smallest F_z of an active point
+    max_friction_ratio: float  # max sqrt(Fx^2 + Fy^2) / (mu F_z)
+    max_friction_excess: float  # N, max sqrt(Fx^2 + Fy^2) - mu F_z
+    friction_coefficient: float
+    max_periodicity_error: float  # m
+    max_periodic_force_error: float  # relative
+    max_periodic_torque_error: float  # relative
+    cost_recorded: float
+    cost_recomputed: float
+    cost_relative_error: float
+    duration_recorded: float
+    duration_recomputed: float
+    max_interval_error: float  # relative, h_n vs base_time_step * sigma
+    max_scaling_bound_excess: float  # relative; <= 0: sigma within its bounds
+    max_potential_energy_error: float  # relative
+    failures: tuple[str, ...]
+    notes: tuple[str, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        return not self.failures
+
+    def summary(self) -> str:
+        lines = [f"{self.path}: scene {self.scene}, cost {self.cost_name}, {self.n_nodes} nodes: "
+                 + ("all checks passed" if self.ok else f"{len(self.failures)} check(s) FAILED")]
+        for f in dataclasses.fields(self):
+            if f.name in ("path", "scene", "cost_name", "n_nodes", "failures", "notes"):
+                continue
+            value = getattr(self, f.name)
+            text = f"{value:.6g}" if isinstance(value, float) else str(value)
+            lines.append(f"  {f.name:32s} {text}")
+        lines += [f"  note: {n}" for n in self.notes]
+        lines += [f"  FAILED: {f}" for f in self.failures]
+        return "\n".join(lines)
+
+    __str__ = summary
+
+
+def _norm(v) -> float:
+    return float(np.linalg.norm(v))
+
+
+def _safe_ratio(a: float, b: float) -> float:
+    return a / b if b > 0 else (0.0 if a == 0 else math.inf)
+
+
+def _metadata_float(meta: dict, key: str) -> float:
+    try:
+        return float(meta[key])
+    except (KeyError, ValueError):
+        return math.nan
+
+
+def verify_recording(path: str | Path) -> VerificationReport:
+    """Read the MCAP recording at `path` and check it (module docstring)."""
+    return verify_plan(read_plan_mcap(path))
+
+
+def verify_plan(rec: RecordedPlan) -> VerificationReport:
+    """Check an already decoded recording (module docstring)."""
+    scene = parse_scene(rec.scene_text)
+    mech = Mechanics(scene)
+    meta = rec.metadata
+    failures: list[str] = []
+    notes: list[str] = []
+    L = LIMITS
+
+    def fail(text: str) -> None:
+        failures.append(text)
+
+    q = np.asarray(rec.q, dtype=float)
+    times = np.asarray(rec.times, dtype=float)
+    n_nodes = q.shape[0]
+    N = n_nodes - 1
+    body_names = tuple(b.name for b in scene.bodies)
+    if tuple(rec.body_names) != body_names:
+        raise ValueError(f"{rec.path}: recorded bodies {rec.body_names} differ from the "
+                         f"attached scene's {body_names}")
+    if q.shape != (n_nodes, mech.k) or N < 3:
+        raise ValueError(f"{rec.path}: q has shape {q.shape}; expected (N+1, {mech.k}), N >= 3")
+    gen = np.asarray(rec.generalized_force, dtype=float)
+    planner_success = meta.get("success", "true") == "true"
+    if not planner_success:
+        fail(f"the planner reported failure: {meta.get('message', '')}")
+    h = np.diff(times)
+    if not np.all(h > 0):
+        fail(f"times are not strictly increasing (first bad interval "
+             f"{int(np.argmin(h > 0))})")
+        h = np.where(h > 0, h, np.nan)
+    if not np.array_equal(rec.nodes, np.arange(n_nodes)):
+        fail("the state messages are not numbered 0..N in order")
+
+    # ---- holonomic constraints
+    groups = mech.groups
+    g = np.array([mech.constraint_values(qn) for qn in q])
+    sizes = np.cumsum([0] + [s for _, s in groups])
+    worst = {name: (float(np.abs(g[:, a:b]).max()), int(np.abs(g[:, a:b]).max(axis=1).argmax()))
+             for (name, _), a, b in zip(groups, sizes, sizes[1:])}
+    internal = worst["internal"][0]
+    joint_names = [name for name, _ in groups if name.startswith("joint ")]
+    joint = max((worst[n][0] for n in joint_names), default=0.0)
+    planar = worst.get("planar root", (0.0, 0))[0]
+    for name, (value, node) in worst.items():
+        if value > L["constraint"]:
+            fail(f"{name} constraints are violated by {value:.3e} at node {node} "
+                 f"(limit {L['constraint']:.0e})")
+
+    # ---- contacts
+    held = [tuple(rec.active_contacts[n]) for n in range(N)]  # interval n
+    C = {name: mech.contact_matrix(name) for name in scene.contacts}
+    unknown = {c for cs in rec.active_contacts for c in cs} - set(C)
+    if unknown:
+        raise ValueError(f"{rec.path}: active contacts {sorted(unknown)} are not in the scene")
+    drift = height = roll = 0.0
+    drift_at = height_at = roll_at = None
+    for n in range(N):
+        bodies_points: dict[str, list[str]] = {}
+        for c in held[n]:
+            bodies_points.setdefault(scene.contacts[c][0], []).append(c)
+            x0, x1 = C[c] @ q[n], C[c] @ q[n + 1]
+            if _norm(x1 - x0) > drift:
+                drift, drift_at = _norm(x1 - x0), (c, n)
+            for node, x in ((n, x0), (n + 1, x1)):
+                if abs(x[2]) > height:
+                    height, height_at = abs(x[2]), (c, node)
+        for body, points in bodies_points.items():
+            if len(points) < 2:
+                continue
+            s = mech.start(body)
+            move = float(np.abs(q[n + 1, s:s + 12] - q[n, s:s + 12]).max())
+            if move > drift:
+                drift, drift_at = move, (f"{body} (full contact)", n)
+            if not scene.planar:
+                for node in (n, n + 1):
+                    if abs(q[node, s + 8]) > roll:
+                        roll, roll_at = abs(q[node, s + 8]), (body, node)
+    if drift > L["contact"]:
+        fail(f"held contact {drift_at[0]} moves by {drift:.3e} m over interval {drift_at[1]} "
+             f"(limit {L['contact']:.0e} m)")
+    if height > L["contact"]:
+        fail(f"held contact {height_at[0]} is {height:.3e} m off the ground at node "
+             f"{height_at[1]} (limit {L['contact']:.0e} m)")
+    if roll > L["contact"]:
+        fail(f"{roll_at[0]} in full contact is not flat at node {roll_at[1]}: d2_z = {roll:.3e} "
+             f"(limit {L['contact']:.0e})")
+    point_error = 0.0
+    for n in range(n_nodes):
+        names = tuple(rec.contact_names[n])
+        if set(names) != set(rec.active_contacts[n]):
+            fail(f"node {n}: contact_forces lists {names}, the state message "
+                 f"{tuple(rec.active_contacts[n])}")
+        for c, x in zip(names, rec.contact_points[n]):
+            point_error = max(point_error, _norm(x - C[c] @ q[n]))
+    if point_error > L["contact"]:
+        fail(f"published contact points differ from phi + X_i d_i by {point_error:.3e} m")
+    z_all = np.array([[(C[c] @ q[n])[2] for c in C] for n in range(n_nodes)])
+    lowest = float(z_all.min())
+    if lowest < -L["ground"]:
+        n, i = np.unravel_index(int(z_all.argmin()), z_all.shape)
+        text = (f"contact point {list(C)[i]} is {-lowest:.3e} m below the ground at node {n}")
+        if scene.options.get("ground_clearance", True) is False:
+            notes.append(text + " (the scene sets ground_clearance: false)")
+        else:
+            fail(text + f" (limit {L['ground']:.0e} m)")
+
+    # ---- forces
+    mu = _metadata_float(meta, "friction_coefficient")
+    forces = [dict(zip(rec.contact_names[n], np.asarray(rec.contact_force_vectors[n])))
+              for n in range(n_nodes)]
+    min_fz, ratio, excess = math.inf, 0.0, -math.inf
+    force_fail = None
+    for n in range(n_nodes):
+        net: dict[str, np.ndarray] = {}
+        for c, F in forces[n].items():
+            if F[2] < min_fz:
+                min_fz = float(F[2])
+            if F[2] < -L["force"] * max(1.0, _norm(F)) and force_fail is None:
+                force_fail = f"contact {c} pulls on the ground at node {n}: F_z = {F[2]:.6g} N"
+            body = scene.contacts[c][0]
+            net[body] = net.get(body, np.zeros(3)) + F
+        for body, F in net.items():
+            tangential = math.hypot(F[0], F[1])
+            ratio = max(ratio, _safe_ratio(tangential, mu * F[2]) if F[2] > 0 else
+                        (math.inf if tangential > 0 else 0.0))
+            over = tangential - mu * F[2]
+            excess = max(excess, over)
+            if over > L["force"] * max(1.0, _norm(F)):
+                fail(f"the ground force on {body} at node {n} leaves the friction cone: "
+                     f"|F_t| = {tangential:.6g} N > mu F_z = {mu * F[2]:.6g} N (mu = {mu:g})")
+    if force_fail:
+        fail(force_fail)
+    if min_fz == math.inf:
+        min_fz = math.nan
+
+    # ---- discrete Euler-Lagrange equations
+    roll_bodies = []  # per node: bodies in 3D full contact
+    worst_res, worst_abs, worst_node = 0.0, 0.0, -1
+    max_roll, max_offset = 0.0, 0.0
+    for n in range(1, N):
+        w = 0.5 * (h[n - 1] + h[n])
+        d2 = mech.d2_ld(q[n - 1], q[n], h[n - 1])
+        d1 = mech.d1_ld(q[n], q[n + 1], h[n])
+        contact = np.zeros(mech.k)
+        per_body: dict[str, list[str]] = {}
+        for c, F in forces[n].items():
+            contact += w * C[c].T @ F
+            per_body.setdefault(scene.contacts[c][0], []).append(c)
+        full = [b for b, pts in per_body.items() if len(pts) == 2 and not scene.planar]
+        roll_bodies.append(full)
+        E = np.zeros((mech.k, len(full)))
+        for i, body in enumerate(full):
+            E[mech.start(body) + 8, i] = 1.0  # z component of d2
+        b = d2 + d1 + gen[n] + contact
+        A = np.hstack([mech.constraint_jacobian(q[n]).T, -w * E])
+        x, *_ = np.linalg.lstsq(A, b, rcond=None)
+        res = b - A @ x
+        moments = x[mech.m:]
+        contact_total = contact + w * E @ moments
+        scale = max(_norm(d2), _norm(d1), _norm(gen[n]), _norm(contact_total))
+        rel = _safe_ratio(_norm(res), scale)
+        if rel > worst_res or worst_node < 0:
+            worst_res, worst_node = rel, n
+        worst_abs = max(worst_abs, _norm(res))
+        for body, m_roll in zip(full, moments):
+            max_roll = max(max_roll, abs(float(m_roll)))
+            fz = sum(forces[n][c][2] for c in per_body[body])
+            max_offset = max(max_offset, _safe_ratio(abs(float(m_roll)), fz))
+    if worst_res > L["dynamics"]:
+        fail(f"the discrete Euler-Lagrange equation of node {worst_node} has a relative "
+             f"residual {worst_res:.3e} (limit {L['dynamics']:.0e}) with least-squares "
+             f"multipliers")
+
+    # ---- actuation
+    gen_scale = float(np.abs(gen).max()) or 1.0
+    phi_rows = np.concatenate([np.arange(12 * i, 12 * i + 3) for i in range(mech.nb)])
+    act_phi = float(np.abs(gen[:, phi_rows]).max()) / gen_scale
+    if act_phi > L["actuation"]:
+        fail(f"generalized_force has phi entries of {act_phi:.3e} (relative; limit "
+             f"{L['actuation']:.0e}): actuation is not internal")
+    couples = np.zeros((n_nodes, mech.nb, 3))  # body couples m_b = sum_i d_i x f_di
+    form = 0.0
+    for n in range(n_nodes):
+        for bi, body in enumerate(body_names):
+            s = 12 * bi
+            D = [q[n, s + 3 + 3 * i:s + 6 + 3 * i] for i in range(3)]
+            f = [gen[n, s + 3 + 3 * i:s + 6 + 3 * i] for i in range(3)]
+            m = sum(np.cross(D[i], f[i]) for i in range(3))
+            couples[n, bi] = m
+            form = max(form, max(_norm(f[i] - 0.5 * np.cross(m, D[i])) for i in range(3)))
+    form /= gen_scale
+    if form > L["actuation"]:
+        fail(f"generalized_force is not made of couples 1/2 m x d_i: off by {form:.3e} "
+             f"(relative; limit {L['actuation']:.0e})")
+    couple_scale = float(np.abs(couples).max()) or 1.0
+    net = float(np.abs(couples.sum(axis=1)).max()) / couple_scale
+    if net > L["actuation"]:
+        node = int(np.abs(couples.sum(axis=1)).max(axis=1).argmax())
+        fail(f"the actuation has a net moment at node {node}: {net:.3e} of the largest body "
+             f"couple (limit {L['actuation']:.0e})")
+    joint_couples = _joint_couples(scene, couples)  # (N+1, nj, 3)
+    off_axis, mismatch = 0.0, 0.0
+    off_at = mismatch_at = None
+    for n in range(n_nodes):
+        for ji, j in enumerate(scene.joints):
+            if j.axis is not None:
+                axis = mech.directors(q[n], j.parent) @ j.axis
+                m = joint_couples[n, ji]
+                off = _norm(m - (m @ axis) * axis) / couple_scale
+                if off > off_axis:
+                    off_axis, off_at = off, (j.name, n)
+    if off_axis > L["actuation"]:
+        fail(f"the couple of revolute joint {off_at[0]} at node {off_at[1]} is not along its "
+             f"axis: off by {off_axis:.3e} (relative; limit {L['actuation']:.0e})")
+    effort = np.asarray(rec.effort, dtype=float)
+    slots = _effort_slots(scene, tuple(rec.joint_names))
+    torques = None  # (N, nj, 3): the couple of interval n in its parent's directors
+    if isinstance(slots, str):
+        fail(slots)
+    elif effort.shape != (n_nodes, len(rec.joint_names)):
+        fail(f"JointTrajectory effort has shape {effort.shape}, expected "
+             f"({n_nodes}, {len(rec.joint_names)})")
+    else:
+        effort_couples = _effort_couples(scene, mech, q, effort, slots)  # (N+1, nj, 3)
+        torques = np.array([[mech.directors(q[n], j.parent).T @ effort_couples[n, ji]
+                             for ji, j in enumerate(scene.joints)] for n in range(N)])
+        for n in range(n_nodes):
+            for ji, j in enumerate(scene.joints):
+                Dp = mech.directors(q[n], j.parent)
+                expected = np.zeros(3)
+                if n > 0:
+                    expected += 0.5 * h[n - 1] * (Dp @ torques[n - 1, ji])
+                if n < N:
+                    expected += 0.5 * h[n] * (Dp @ torques[n, ji])
+                error = _norm(joint_couples[n, ji] - expected) / couple_scale
+                if n == N:  # the last node repeats the torque of interval N-1
+                    error = max(error, 0.5 * h[N - 1] * _norm(
+                        effort_couples[N, ji] - Dp @ torques[N - 1, ji]) / couple_scale)
+                if error > mismatch:
+                    mismatch, mismatch_at = error, (j.name, n)
+        if mismatch > L["actuation"]:
+            fail(f"the recorded efforts of joint {mismatch_at[0]} do not produce the recorded "
+                 f"generalized_force at node {mismatch_at[1]}: off by {mismatch:.3e} "
+                 f"(relative; limit {L['actuation']:.0e})")
+
+    # ---- periodicity
+    if "N-1" not in meta.get("periodicity", "N-1"):
+        notes.append(f"the recording declares periodicity {meta['periodicity']!r}; these "
+                     f"checks pair nodes N-1, N with 0, 1 (paper eqs. 7-9)")
+    step = _metadata_float(meta, "step_length")
+    period = max(float(np.abs(q[N - 1] - mech.mirror(q[0], step)).max()),
+                 float(np.abs(q[N] - mech.mirror(q[1], step)).max()))
+    if not period <= L["periodicity"]:
+        fail(f"nodes N-1, N are not the mirror images of nodes 0, 1 shifted by the step "
+             f"length {step:g} m: off by {period:.3e} m (limit {L['periodicity']:.0e} m)")
+    partner = {c: next(d for d, (bd, pd) in scene.contacts.items()
+                       if bd == scene.mirror[bc] and pd == pc)
+               for c, (bc, pc) in scene.contacts.items()}
+    force_scale = max([1.0] + [_norm(F) for fs in forces for F in fs.values()])
+    periodic_force = 0.0
+    for src, dst in ((N - 1, 0), (1, N)):
+        expected = {partner[c]: _S * F for c, F in forces[src].items()}
+        if set(expected) != set(forces[dst]):
+            fail(f"node {dst} lists contacts {sorted(forces[dst])}, the mirror image of node "
+                 f"{src} {sorted(expected)}")
+            continue
+        for c, F in expected.items():
+            periodic_force = max(periodic_force, _norm(forces[dst][c] - F) / force_scale)
+    if periodic_force > L["periodic_force"]:
+        fail(f"the contact forces of nodes 0, N are not the mirror images of those of nodes "
+             f"N-1, 1: off by {periodic_force:.3e} (relative; limit {L['periodic_force']:.0e})")
+    periodic_torque = 0.0
+    if torques is not None:
+        periodic_torque = _periodic_torque_error(scene, effort_couples, N)
+        if periodic_torque > L["actuation"]:
+            fail(f"the joint couples of interval N-1 are not the mirror images of those of "
+                 f"interval 0: off by {periodic_torque:.3e} (relative; limit "
+                 f"{L['actuation']:.0e})")
+
+    # ---- time, cost, energy
+    duration = float(times[N - 1] - times[0])
+    duration_recorded = _metadata_float(meta, "duration")
+    if not abs(duration - duration_recorded) <= L["time"] * max(1.0, abs(duration)):
+        fail(f"metadata duration {duration_recorded!r} s differs from t_(N-1) - t_0 = "
+             f"{duration!r} s")
+    cost_name = meta.get("cost", "")
+    if cost_name == "kinetic_energy":
+        v = np.diff(q, axis=0)[: N - 1] / h[: N - 1, None]
+        cost = float(np.sum(h[: N - 1] * 0.5 * np.einsum("ni,i,ni->n", v, mech.mass_diagonal,
+                                                         v)))
+    elif cost_name == "torque_squared" and torques is not None:
+        # |tau|^2 of the planner's torques (parent-director components, revolute: about
+        # the axis) = |couple|^2 of every joint
+        cost = float(np.sum(h[: N - 1] * np.sum(torques[: N - 1] ** 2, axis=(1, 2))))
+    else:
+        cost = math.nan
+        fail(f"unknown cost name {cost_name!r} in the metadata")
+    cost_recorded = _metadata_float(meta, "cost_value")
+    cost_error = abs(cost - cost_recorded) / max(abs(cost), 1e-300)
+    if not cost_error <= L["cost"]:
+        fail(f"metadata cost_value {cost_recorded!r} differs from the recomputed {cost_name} "
+             f"{cost!r} (relative {cost_error:.3e}, limit {L['cost']:.0e})")
+    excesses: list[float] = []
+    interval_error = _interval_error(scene, rec, meta, h, fail, excesses)
+    v_rec = np.asarray(rec.potential_energy, dtype=float)
+    v_own = np.array([mech.potential_energy(qn) for qn in q])
+    energy_error = float(np.abs(v_rec - v_own).max()) / max(1.0, float(np.abs(v_own).max()))
+    if energy_error > L["energy"]:
+        fail(f"recorded potential energy differs from sum m g phi_z by {energy_error:.3e} "
+             f"(relative)")
+
+    return VerificationReport(
+        path=str(rec.path), scene=scene.name, cost_name=cost_name, n_nodes=n_nodes,
+        planner_success=planner_success,
+        max_internal_violation=internal, max_joint_violation=joint,
+        max_planar_violation=planar, max_contact_drift=drift, max_contact_height=height,
+        max_full_contact_roll=roll, max_contact_point_error=point_error,
+        min_contact_point_height=lowest, max_dynamics_residual=worst_res,
+        worst_dynamics_node=worst_node, max_dynamics_residual_absolute=worst_abs,
+        max_roll_moment=max_roll, max_roll_offset=max_offset,
+        max_actuation_phi=act_phi, max_couple_form_error=form, max_net_moment=net,
+        max_revolute_off_axis=off_axis, max_effort_mismatch=mismatch,
+        min_normal_force=min_fz, max_friction_ratio=ratio, max_friction_excess=excess,
+        friction_coefficient=mu, max_periodicity_error=period,
+        max_periodic_force_error=periodic_force, max_periodic_torque_error=periodic_torque,
+        cost_recorded=cost_recorded, cost_recomputed=cost, cost_relative_error=cost_error,
+        duration_recorded=duration_recorded, duration_recomputed=duration,
+        max_interval_error=interval_error,
+        max_scaling_bound_excess=max(excesses, default=math.nan),
+        max_potential_energy_error=energy_error,
+        failures=tuple(failures), notes=tuple(notes),
+    )
+
+
+def _joint_couples(scene: SceneData, couples: np.ndarray) -> np.ndarray:
+    """Joint couples (nodes, nj, 3) from body couples (nodes, nb, 3) on the tree: a joint
+    acts +m_j on its child and -m_j on its parent, so, leaves first,
+    m_j = m_child + sum of the couples of the joints whose parent is the child."""
+    index = {j.name: i for i, j in enumerate(scene.joints)}
+    out = np.zeros((couples.shape[0], len(scene.joints), 3))
+    for j in reversed(scene.joints):  # tree order reversed: children before parents
+        m = couples[:, scene.body_index(j.child)].copy()
+        for k in scene.joints:
+            if k.parent == j.child:
+                m += out[:, index[k.name]]
+        out[:, index[j.name]] = m
+    return out
+
+
+def _effort_couples(scene: SceneData, mech: Mechanics, q: np.ndarray, effort: np.ndarray,
+                    slots: dict) -> np.ndarray:
+    """World couples (N+1, nj, 3) of the recorded efforts, node n expressed with q_n.
+
+    The recording's efforts are conjugate to the joint angles (gait_planner.io.messages):
+    revolute, the torque about the axis D_p n; spherical, the couple's projections on the
+    pitch axis d2 of the parent, the roll axis and the yaw axis d3 of the child. For
+    R_rel = Ry(pitch) Rx(roll) Rz(yaw) the roll axis Ry(pitch) e1 (parent components) is
+    normal to the other two: in world components it is (d2_p x d3_c) / cos(roll). The
+    couple follows from the 3x3 system A^T m = effort, A = [d2_p, roll axis, d3_c]."""
+    out = np.zeros((q.shape[0], len(scene.joints), 3))
+    for n in range(q.shape[0]):
+        for ji, j in enumerate(scene.joints):
+            Dp = mech.directors(q[n], j.parent)
+            e = effort[n, slots[j.name]]
+            if j.axis is not None:
+                out[n, ji] = float(e[0]) * (Dp @ j.axis)
+                continue
+            pitch_axis, yaw_axis = Dp[:, 1], mech.directors(q[n], j.child)[:, 2]
+            roll_axis = np.cross(pitch_axis, yaw_axis)
+            roll_axis = roll_axis / max(_norm(roll_axis), 1e-300)
+            A = np.column_stack([pitch_axis, roll_axis, yaw_axis])
+            out[n, ji] = np.linalg.lstsq(A.T, e, rcond=None)[0]
+    return out
+
+
+def _effort_slots(scene: SceneData, names: Sequence[str]) -> dict[str, list[int]] | str:
+    """joint -> indices of its effort components in the JointTrajectory, or a failure."""
+    slots = {}
+    for j in scene.joints:
+        wanted = [j.name] if j.axis is not None else [f"{j.name}_{a}"
+                                                      for a in ("pitch", "roll", "yaw")]
+        missing = [w for w in wanted if w not in names]
+        if missing:
+            return f"the JointTrajectory names no effort slots {missing} of joint {j.name}"
+        slots[j.name] = [list(names).index(w) for w in wanted]
+    return slots
+
+
+def _periodic_torque_error(scene: SceneData, couples: np.ndarray, N: int) -> float:
+    """Largest relative difference between the joint couples of interval N-1 (world, at
+    q_{N-1}) and the mirror images of those of interval 0 (at q_0): a couple m mirrors to
+    -S m on the partner joint, or to +S m when the mirror swaps the joint's parent and child
+    (the couple then acts on the other body)."""
+    by_bodies = {(j.parent, j.child): i for i, j in enumerate(scene.joints)}
+    scale = max(float(np.abs(couples[[0, N - 1]]).max()), 1e-300)
+    error = 0.0
+    for i, j in enumerate(scene.joints):
+        p, c = scene.mirror[j.parent], scene.mirror[j.child]
+        if (p, c) in by_bodies:
+            image, partner = -_S * couples[0, i], by_bodies[(p, c)]
+        elif (c, p) in by_bodies:
+            image, partner = _S * couples[0, i], by_bodies[(c, p)]
+        else:
+            return math.inf
+        error = max(error, _norm(couples[N - 1, partner] - image) / scale)
+    return error
+
+
+def _interval_error(scene: SceneData, rec: RecordedPlan, meta: dict, h: np.ndarray,
+                    fail, excesses: list) -> float:
+    """Interval lengths vs base_time_step * sigma of their phase; sigma within bounds."""
+    try:
+        sigma = [float(s) for s in meta["phase_scaling"].split(",") if s.strip()]
+    except (KeyError, ValueError):
+        fail("the metadata holds no readable phase_scaling")
+        return math.nan
+    bounds = scene.scaling_bounds
+    if "scaling_bounds" in meta:
+        bounds = tuple(float(b) for b in meta["scaling_bounds"].split(","))
+    if bounds:
+        excess = max(max(bounds[0] - s, s - bounds[1]) / bounds[1] for s in sigma)
+        excesses.append(excess)
+        if excess > LIMITS["scaling"]:
+            fail(f"phase scaling {sigma} leaves the bounds {bounds} by {excess:.3e} "
+                 f"(relative; limit {LIMITS['scaling']:.0e})")
+    base = _metadata_float(meta, "base_time_step")
+    if math.isnan(base):
+        base = scene.base_time_step if scene.base_time_step is not None else math.nan
+    if math.isnan(base):
+        return math.nan
+    error = 0.0
+    for n, hn in enumerate(h):
+        phase = rec.phases[n]
+        if phase not in scene.phases:
+            fail(f"node {n} is in phase {phase!r}, which the scene does not declare")
+            return math.nan
+        index, contacts = scene.phases[phase]
+        if index >= len(sigma):
+            fail(f"phase {phase!r} uses sigma_{index + 1}, the metadata gives {len(sigma)}")
+            return math.nan
+        if set(contacts) != set(rec.active_contacts[n]):
+            fail(f"node {n} (phase {phase}) lists contacts {rec.active_contacts[n]}, the "
+                 f"phase holds {contacts}")
+        error = max(error, abs(hn - base * sigma[index]) / (base * sigma[index]))
+    if error > LIMITS["time"]:
+        fail(f"interval lengths differ from base_time_step * sigma by {error:.3e} (relative)")
+    return error
+
+
+def verify_result(result) -> VerificationReport:
+    """Record `result` (a `PlanResult`) with the real MCAP writer into a temporary file
+    and verify that file. Raises ValueError for results the writer refuses (no nodes,
+    NaN ...)."""
+    from gait_planner.io.mcap_writer import write_plan_mcap  # the writer, only here
+
+    with tempfile.TemporaryDirectory(prefix="gait_verify_") as folder:
+        path = Path(folder) / f"{result.scene.name}.mcap"
+        write_plan_mcap(result, path)
+        return verify_recording(path)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m gait_planner.verify",
+        description="Independently check the MCAP recording(s) of planned gaits.")
+    parser.add_argument("recordings", nargs="+", help="MCAP files written by the planner")
+    args = parser.parse_args(argv)
+    status = 0
+    for path in args.recordings:
+        try:
+            report = verify_recording(path)
+        except (OSError, ValueError, KeyError, TypeError) as error:
+            print(f"{path}: cannot be checked: {error}", file=sys.stderr)
+            status = max(status, 2)
+            continue
+        print(report.summary())
+        if not report.ok:
+            status = max(status, 1)
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())
