@@ -135,9 +135,12 @@ def _run(args: argparse.Namespace) -> int:
     import shutil
     import subprocess
 
+    from gait_planner.io.plots import plot_recording
+
     data = _plan_and_print(args, args.out)
     if not data["success"]:
         return 1
+    print(f"figure: {plot_recording(data['mcap'], os.path.splitext(data['mcap'])[0] + '.png')}")
     print("\nthe paper (Koch & Leyendecker 2015): J = 41.2256 J s, half cycle 0.5988 s, "
           "sigma = 1.5000, 1.5000, 1.4889, 1.4724 (README: why the numbers differ)")
     viewer = shutil.which("rerun") or os.path.join(os.path.dirname(sys.executable), "rerun")
@@ -149,6 +152,32 @@ def _run(args: argparse.Namespace) -> int:
         print(f"no display: view it with `.venv/bin/rerun {shown}` (or `rerun {data['mcap']}` "
               "for the standard ROS 2 view: URDF moved by /tf)")
     return 0
+
+
+def _add_report(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "report", help="draw a recorded plan (PNG) and check it independently",
+        description="Read RUN.mcap, draw walker, joint angles, torques, ground forces and "
+        "energies into a PNG, and run the independent verifier (gait_planner.verify) on it.")
+    parser.add_argument("mcap", help="a recording written by plan/run/node")
+    parser.add_argument("--png", help="the figure (default: RUN.png beside the recording)")
+    parser.set_defaults(handler=_report)
+
+
+def _report(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from gait_planner.io.plots import plot_recording
+    from gait_planner.verify import verify_recording
+
+    source = Path(args.mcap)
+    if source.suffix != ".mcap" or not source.is_file():
+        raise CliError(f"{args.mcap!r} is not an existing .mcap file")
+    png = plot_recording(source, args.png or source.with_suffix(".png"))
+    report = verify_recording(source)
+    print(report.summary())
+    print(f"figure: {png}")
+    return 0 if report.ok else 1
 
 
 def _add_node(commands: argparse._SubParsersAction) -> None:
@@ -189,7 +218,7 @@ def _call(args: argparse.Namespace) -> int:
 
 
 COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
-    _add_run, _add_plan, _add_node, _add_call, add_simulate_parser)
+    _add_run, _add_plan, _add_report, _add_node, _add_call, add_simulate_parser)
 
 
 # --- entry point -------------------------------------------------------------------------

@@ -28,7 +28,7 @@ class SolverStats:
     build_time: float = 0.0  # s, building the transcription (cached builds cost ~0)
     evaluation_time: float = 0.0  # s of solve_time spent evaluating functions/derivatives
     max_constraint_violation: float = float("nan")  # largest |g| of holonomic constraints, m
-    max_dynamics_residual: float = float("nan")  # largest relative full DEL residual
+    max_dynamics_residual: float = float("nan")  # largest reduced DEL residual, N / N m
     max_friction_violation: float = float("nan")  # largest cone violation, N
     most_violated: str = ""  # name of the most violated constraint group on failure
 

@@ -26,7 +26,6 @@ zstd-compressed (the ``zstandard`` package, a dependency of mcap).
 from __future__ import annotations
 
 import os
-import secrets
 import time
 from dataclasses import dataclass
 from importlib import metadata as importlib_metadata
@@ -37,6 +36,7 @@ from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import CompressionType, Writer
 
 from gait_planner.io import messages
+from gait_planner.io.atomic import atomic_target
 from gait_planner.io.ros_definitions import STANDARD_DEFINITIONS, custom_definitions, schema_text
 from gait_planner.io.urdf import kinematic_tree
 from gait_planner.result import PlanResult
@@ -232,16 +232,8 @@ def write_plan_mcap(result: PlanResult, path: str | os.PathLike, start_ns: int |
         raise ValueError(f"start_ns must be >= 0, got {start_ns}")
     if not result.scene.source:
         raise ValueError(f"scene {result.scene.name!r} has no source text to attach")
-    tmp = target.with_name(f".{target.name}.{os.getpid()}.{secrets.token_hex(6)}.tmp")
-    # O_EXCL: never reuse a file; mode 0666 minus the process umask, like open()
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    try:
-        with os.fdopen(fd, "wb") as stream:
-            _write(result, stream, start_ns)
-            stream.flush()
-            os.fsync(stream.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    with atomic_target(target) as tmp, open(tmp, "wb") as stream:
+        _write(result, stream, start_ns)
+        stream.flush()
+        os.fsync(stream.fileno())
     return target

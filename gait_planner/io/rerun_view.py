@@ -20,13 +20,13 @@ Entities (timeline ``time``: s from the start of the half cycle, duration type; 
 from __future__ import annotations
 
 import os
-import secrets
 import sys
 from pathlib import Path
 
 import numpy as np
 import rerun as rr
 
+from gait_planner.io.atomic import atomic_target
 from gait_planner.io.messages import contact_points, node_efforts, quaternion_msg
 from gait_planner.io.urdf import body_shapes
 from gait_planner.result import PlanResult
@@ -169,21 +169,14 @@ def save_rrd(result: PlanResult, path: str | os.PathLike) -> Path:
     """Write `result` as a rerun recording (.rrd) to `path`, atomically (a temporary file
     in the same folder is renamed when complete); return the absolute path."""
     target = Path(path).expanduser().resolve()
-    tmp = target.with_name(f".{target.name}.{os.getpid()}.{secrets.token_hex(6)}.tmp")
     rec = _recording(result)
-    try:
+    with atomic_target(target) as tmp:
         try:
             rec.save(tmp)
             log_plan(result, rec)
             rec.flush()
         finally:
             rec.disconnect()  # closes the file sink: footer written, nothing more to come
-        if not tmp.is_file() or tmp.stat().st_size == 0:
-            raise OSError(f"rerun wrote nothing to {tmp}")
-        os.replace(tmp, target)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
     return target
 
 

@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.model.rotations import exp_so3
-from gait_planner.model.scene import Joint, JointType, RootType, Scene
+from gait_planner.model.scene import JointType, RootType, Scene
 
 E_X, E_Y, E_Z = (ca.DM([1.0, 0.0, 0.0]), ca.DM([0.0, 1.0, 0.0]), ca.DM([0.0, 0.0, 1.0]))
 

@@ -103,7 +103,8 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
     constraint = max(max(float(np.abs(np.array(mb.constraints(qn))).max()) for qn in q),
                      *(v for k, v in viol.items() if not k.startswith("dynamics")
                        and k in ("contact_hold", "contact_establish", "pin_x")))
-    dynamics = max((v for k, v in viol.items() if k.startswith("dynamics")), default=0.0)
+    dynamics = FORCE_SCALE * max((v for k, v in viol.items() if k.startswith("dynamics")),
+                                 default=0.0)
     worst = max(viol, key=viol.get) if viol else ""
     success = status in SOLVED and max(viol.values(), default=0.0) <= CONSTRAINT_LIMIT
     words = STATUS_WORDS.get(status, status)

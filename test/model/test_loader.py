@@ -125,7 +125,15 @@ def test_walker3d_matches_the_paper():
     assert gait.n_scalings == 4
     assert (gait.step_length, gait.base_time_step) == (0.6338, 0.01)
     assert gait.scaling_bounds == (0.5, 1.5)
-    assert (gait.friction_coefficient, gait.cost, dict(gait.options)) == (0.8, "kinetic_energy", {})
+    assert (gait.friction_coefficient, gait.cost) == (0.8, "kinetic_energy")
+    # the posture the paper does not state: declared path constraints, mirror-symmetric
+    assert gait.options["torso_lean_max"] == 0.0873
+    limits = gait.options["joint_limits"]
+    assert len(limits) == 14
+    for name, bounds in limits.items():
+        side, other = ("_r_", "_l_") if "_r_" in name or name.endswith("_r") else ("_l_", "_r_")
+        partner = (name + "_").replace(side, other)[:-1]
+        assert tuple(limits[partner]) == tuple(bounds)
     pairs = {"torso": "torso", "thigh_r": "thigh_l", "calf_r": "calf_l", "foot_r": "foot_l"}
     assert dict(gait.mirror) == {**pairs, **{v: k for k, v in pairs.items()}}
 

@@ -1,0 +1,93 @@
+"""Limits and the report of the independent verifier."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+LIMITS = {
+    "constraint": 1e-9,  # m (and dimensionless for director conditions), every node
+    "contact": 1e-9,  # m, held points: drift over an interval and height
+    "ground": 1e-9,  # m, lowest contact point
+    "dynamics": 1e-8,  # relative full discrete Euler-Lagrange residual
+    "actuation": 1e-9,  # relative: phi entries, couple form, net moment, axis, efforts
+    "force": 1e-9,  # relative to max(1 N, |F|): unilateral and friction cone
+    "periodicity": 1e-8,  # m
+    "periodic_force": 1e-9,  # relative
+    "cost": 1e-9,  # relative
+    "time": 1e-9,  # relative (interval lengths, duration)
+    "scaling": 1e-9,  # relative excess of sigma over its bounds (IPOPT relaxes bounds)
+    "energy": 1e-9,  # relative, potential energy
+}
+
+
+# ----------------------------------------------------------------------------- the report
+
+
+@dataclass(frozen=True)
+class VerificationReport:
+    """Every measured number of one recording's checks; `failures` holds one sentence per
+    failed check (empty: `ok`), `notes` what was measured but not judged.
+
+    Units: m for positions, N for forces, N s for generalised forces (impulses), N m for
+    moments, J s for the kinetic-energy cost; "relative" numbers are dimensionless."""
+
+    path: str
+    scene: str
+    cost_name: str
+    n_nodes: int
+    planner_success: bool
+    max_internal_violation: float
+    max_joint_violation: float
+    max_planar_violation: float
+    max_contact_drift: float  # held point (and full-contact body) motion over an interval
+    max_contact_height: float  # |z| of held points
+    max_full_contact_roll: float  # |d2_z| of bodies in 3D full contact
+    max_contact_point_error: float  # published points vs phi + X_i d_i
+    min_contact_point_height: float  # lowest contact point, any node
+    max_dynamics_residual: float  # relative
+    worst_dynamics_node: int
+    max_dynamics_residual_absolute: float  # N s
+    max_roll_moment: float  # N m
+    max_roll_offset: float  # m, |M_roll| / F_z of full contacts
+    max_actuation_phi: float  # relative
+    max_couple_form_error: float  # relative
+    max_net_moment: float  # relative
+    max_revolute_off_axis: float  # relative
+    max_effort_mismatch: float  # relative
+    min_normal_force: float  # N, smallest F_z of an active point
+    max_friction_ratio: float  # max sqrt(Fx^2 + Fy^2) / (mu F_z)
+    max_friction_excess: float  # N, max sqrt(Fx^2 + Fy^2) - mu F_z
+    friction_coefficient: float
+    max_periodicity_error: float  # m
+    max_periodic_force_error: float  # relative
+    max_periodic_torque_error: float  # relative
+    cost_recorded: float
+    cost_recomputed: float
+    cost_relative_error: float
+    duration_recorded: float
+    duration_recomputed: float
+    max_interval_error: float  # relative, h_n vs base_time_step * sigma
+    max_scaling_bound_excess: float  # relative; <= 0: sigma within its bounds
+    max_potential_energy_error: float  # relative
+    failures: tuple[str, ...]
+    notes: tuple[str, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        return not self.failures
+
+    def summary(self) -> str:
+        lines = [f"{self.path}: scene {self.scene}, cost {self.cost_name}, {self.n_nodes} nodes: "
+                 + ("all checks passed" if self.ok else f"{len(self.failures)} check(s) FAILED")]
+        for f in dataclasses.fields(self):
+            if f.name in ("path", "scene", "cost_name", "n_nodes", "failures", "notes"):
+                continue
+            value = getattr(self, f.name)
+            text = f"{value:.6g}" if isinstance(value, float) else str(value)
+            lines.append(f"  {f.name:32s} {text}")
+        lines += [f"  note: {n}" for n in self.notes]
+        lines += [f"  FAILED: {f}" for f in self.failures]
+        return "\n".join(lines)
+
+    __str__ = summary
