@@ -1,14 +1,23 @@
 """Sweep the settings the paper does not give (nodes per phase, base time step) for its
 gait: walker3d, step length 0.6338 m, minimal kinetic energy. Prints one row per setting.
 
-Usage: .venv/bin/python benchmarks/paper_sweep.py [--intervals 6 8 10] [--dt 0.01 0.0125]
-Each row is a cold solve (build + solve, about 1.5-3 min for walker3d on 2 cores).
+Usage:
+  .venv/bin/python benchmarks/paper_sweep.py [--intervals 6 8 10] [--dt 0.01 0.0125]
+  .venv/bin/python benchmarks/paper_sweep.py --intervals 4 6 8 12 16 --half-cycle 0.39
+
+With --half-cycle T the base time step is T / (5 * intervals - 1): the half cycle spans
+nodes 0..N-1 (paper eqs. 7-9), so at sigma = 1 it lasts T for every row, and each row
+discretises the same problem more finely: speed against discretisation error. The
+error column is |J - J_finest| / J_finest against the row with the most intervals, and the
+observed order is log(e_i / e_j) / log(h_i / h_j) between neighbouring rows.
+Each row is a cold solve in a new Planner (build + solve; 1-3 min for walker3d on 2 cores).
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import time
 
 from gait_planner.model.loader import load_scene
@@ -18,21 +27,38 @@ from gait_planner.ocp.solve import Planner
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scene", default="walker3d")
     parser.add_argument("--intervals", type=int, nargs="+", default=[6, 8, 10])
     parser.add_argument("--dt", type=float, nargs="+", default=[0.01])
+    parser.add_argument("--half-cycle", type=float,
+                        help="s at sigma = 1; base time step = this / (intervals in all phases - 1)")
     args = parser.parse_args()
-    scene = load_scene("walker3d")
-    print(f"# walker3d sweep, {time.strftime('%Y-%m-%d %H:%M')}; paper: J = 41.2256 J s, "
-          "T = 0.5988 s, sigma = 1.5, 1.5, 1.4889, 1.4724")
-    print("| intervals/phase | base dt s | success | J (J s) | 2 J | T (s) | sigma | iterations |")
-    print("|---|---|---|---|---|---|---|---|")
+    scene = load_scene(args.scene)
+    print(f"# {args.scene} sweep, {time.strftime('%Y-%m-%d %H:%M')}; paper (walker3d): "
+          "J = 41.2256 J s, T = 0.5988 s, sigma = 1.5, 1.5, 1.4889, 1.4724")
+    rows = []
     for n in args.intervals:
-        for dt in args.dt:
+        phases = len(scene.gait.phases)
+        for dt in ([args.half_cycle / (phases * n - 1)] if args.half_cycle else args.dt):
             s = dataclasses.replace(settings_for(scene, intervals_per_phase=n), base_time_step=dt)
             r = Planner().plan(scene, s)
-            sigma = ", ".join(f"{x:.4f}" for x in r.phase_scaling)
-            print(f"| {n} | {dt} | {r.success} | {r.cost_value:.4f} | {2 * r.cost_value:.4f} | "
-                  f"{r.duration:.4f} | {sigma} | {r.stats.iterations} |", flush=True)
+            rows.append((n, dt, r))
+            print(f"# done: {n} intervals, dt {dt:.5g}: {r.message}", flush=True)
+    finest = max(rows, key=lambda row: row[0])[2].cost_value
+    print("| intervals/phase | base dt s | success | J (J s) | 2 J | T (s) | sigma | iterations "
+          "| build s | solve s | rel. error of J | order |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    previous = None
+    for n, dt, r in rows:
+        sigma = ", ".join(f"{x:.4f}" for x in r.phase_scaling)
+        error = abs(r.cost_value - finest) / abs(finest)
+        order = ""
+        if args.half_cycle and previous and error > 0 and previous[1] > 0:
+            order = f"{math.log(previous[1] / error) / math.log(previous[0] / dt):.2f}"
+        previous = (dt, error)
+        print(f"| {n} | {dt:.5g} | {r.success} | {r.cost_value:.4f} | {2 * r.cost_value:.4f} | "
+              f"{r.duration:.4f} | {sigma} | {r.stats.iterations} | {r.stats.build_time:.1f} | "
+              f"{r.stats.solve_time:.1f} | {error:.2e} | {order} |", flush=True)
 
 
 if __name__ == "__main__":
