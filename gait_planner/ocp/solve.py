@@ -26,6 +26,13 @@ from gait_planner.result import PlanResult
 
 Progress = Callable[[int, float, float, float], None]  # iteration, cost, violation, seconds
 
+# IPOPT options of the solver variants beyond the common ones (`Planner._solver`)
+VARIANTS = {
+    "cold": {},
+    "warm": {f"ipopt.warm_start_{push}": 1e-9
+             for push in ("bound_push", "mult_bound_push", "slack_bound_push")},
+}
+
 
 class _IterationCallback(ca.Callback):
     """Called by IPOPT every iteration: reports progress, stops at the deadline."""
@@ -78,8 +85,7 @@ class _Built:
     bounds: tuple
     callback: _IterationCallback
     build_time: float
-    solver: ca.Function | None = None
-    warm_solver: ca.Function | None = None
+    solvers: dict = dataclasses.field(default_factory=dict)  # variant -> IPOPT instance
     stored: list = dataclasses.field(default_factory=list)  # (step, mu, x, lam_x, lam_g, qref)
 
 
@@ -111,29 +117,33 @@ class Planner:
             self._built[key] = _Built(tr, nlp, bounds, cb, time.perf_counter() - start)
         return self._built[key]
 
-    def _solver(self, built: _Built, s: GaitSettings, *, warm: bool = False) -> ca.Function:
-        """The IPOPT instance of a problem (its exact Hessian takes most of the build time).
-        It starts from the multipliers it is given (zero for a cold start, the stored
-        plan's for a warm start): warm_start_init_point with a small initial barrier.
-        The warm instance differs only in pushing the start 1e-9 (instead of 1e-3) inside
-        the bounds, which keeps a previous optimum's active set: walker2d re-plans in 4
-        instead of 9 iterations, while a cold start with it needs 126 instead of 77. It
-        reuses the cold instance's derivative Functions, so it costs under a second."""
-        if built.solver is None:
+    def _solver(self, built: _Built, s: GaitSettings, variant: str = "cold") -> ca.Function:
+        """The IPOPT instance `variant` of a problem, built on first use.
+
+        "cold" is built first and computes the exact Hessian and Jacobian (most of the
+        build time); the others reuse its derivative Functions, so each costs under a
+        second. All start from the multipliers they are given (zero for a cold start, the
+        stored plan's for a warm start), warm_start_init_point with a small initial barrier.
+        * "warm" pushes the start 1e-9 (instead of 1e-3) inside the bounds, which keeps a
+          previous optimum's active set: walker2d re-plans in 4 instead of 9 iterations (a
+          cold start with it needs 126 instead of 77).
+        (A loose first stage, tol 1e-4 with σ fixed, was tried: walker3d then needed 249
+        iterations in all instead of 168.)
+        """
+        if "cold" not in built.solvers:
             start = time.perf_counter()
-            built.solver = ca.nlpsol("gait", "ipopt", built.nlp, self._options(built, s))
+            built.solvers["cold"] = ca.nlpsol("gait", "ipopt", built.nlp, self._options(built, s))
             built.build_time += time.perf_counter() - start
-        if warm and built.warm_solver is None:
+        if variant not in built.solvers:
             start = time.perf_counter()
+            cold = built.solvers["cold"]
             opts = self._options(built, s)
-            for push in ("bound_push", "mult_bound_push", "slack_bound_push"):
-                opts[f"ipopt.warm_start_{push}"] = 1e-9
-            opts.update({name: built.solver.get_function(f"nlp_{name}")
-                         for name in ("grad_f", "jac_g")})
-            opts["hess_lag"] = built.solver.get_function("nlp_hess_l")
-            built.warm_solver = ca.nlpsol("gait_warm", "ipopt", built.nlp, opts)
+            opts.update(VARIANTS[variant])
+            opts.update({name: cold.get_function(f"nlp_{name}") for name in ("grad_f", "jac_g")})
+            opts["hess_lag"] = cold.get_function("nlp_hess_l")
+            built.solvers[variant] = ca.nlpsol(f"gait_{variant}", "ipopt", built.nlp, opts)
             built.build_time += time.perf_counter() - start
-        return built.warm_solver if warm else built.solver
+        return built.solvers[variant]
 
     @staticmethod
     def _options(built: _Built, s: GaitSettings) -> dict:
@@ -162,7 +172,9 @@ class Planner:
         try:
             built = self._build(scene, settings)
             warm_start = warm_start and bool(built.stored)
-            solver = self._solver(built, settings, warm=warm_start)
+            # (variant, sigma fixed): a cold solve fixes sigma first, then frees it
+            stages = [("warm", False)] if warm_start else [("cold", True), ("cold", False)]
+            solvers = {v: self._solver(built, settings, v) for v, _ in stages}
         except (ValueError, RuntimeError) as err:
             return failed_result(scene, settings, f"could not build the problem: {err}")
         start = time.perf_counter()
@@ -171,13 +183,12 @@ class Planner:
         if warm_start:
             step0, mu0, x0, lam_x, lam_g, qref = min(
                 built.stored, key=lambda r: abs(r[0] - step) + abs(r[1] - mu))
-            stages, duals = [False], {"lam_x0": lam_x, "lam_g0": lam_g}
+            duals = {"lam_x0": lam_x, "lam_g0": lam_g}
             origin = f"warm start from the plan for step length {step0:.4f} m, mu {mu0:.3g}"
         else:
             qref = kinematic_guess(tr, step)[: tr.N - 1]
             x0 = np.concatenate([np.zeros(tr.U.numel() + tr.T.numel()), initial_multipliers(tr),
                                  np.full(nsig, np.clip(1.0, *settings.scaling_bounds))])
-            stages = [True, False]
             duals = {"lam_x0": np.zeros(x0.size), "lam_g0": np.zeros(int(tr.g.shape[0]))}
             origin = "kinematic guess; sigma fixed, then free"
         p = np.concatenate([qref.reshape(-1), [step, mu]])
@@ -186,7 +197,8 @@ class Planner:
         built.callback.started, built.callback.iteration = start, 0
         built.callback.report = self.progress
         iterations, status, g, evaluation = 0, "not started", None, 0.0
-        for fix_sigma in stages:
+        for variant, fix_sigma in stages:
+            solver = solvers[variant]
             lb, ub = lbx.copy(), ubx.copy()
             if fix_sigma:
                 lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
