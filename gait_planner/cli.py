@@ -141,8 +141,12 @@ def _run(args: argparse.Namespace) -> int:
     if not data["success"]:
         return 1
     print(f"figure: {plot_recording(data['mcap'], os.path.splitext(data['mcap'])[0] + '.png')}")
-    print("\nthe paper (Koch & Leyendecker 2015): J = 41.2256 J s, half cycle 0.5988 s, "
-          "sigma = 1.5000, 1.5000, 1.4889, 1.4724 (README: why the numbers differ)")
+    sigma = ", ".join(f"{x:.4f}" for x in data["phase_scaling"])
+    print(f"\nthis plan: J = {data['cost_value']:.4f} J s (2 J = {2 * data['cost_value']:.4f}), "
+          f"half cycle {data['duration']:.4f} s, sigma = {sigma}")
+    print("the paper (Koch & Leyendecker 2015): J = 41.2256 J s, half cycle 0.5988 s, "
+          "sigma = 1.5000, 1.5000, 1.4889, 1.4724")
+    print("(README, 'Results': the paper's J matches our 2 J; its grid and bounds are unknown)")
     viewer = shutil.which("rerun") or os.path.join(os.path.dirname(sys.executable), "rerun")
     shown = data["rrd"] or data["mcap"]
     if not args.no_viewer and os.environ.get("DISPLAY") and os.path.exists(viewer):

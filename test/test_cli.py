@@ -1,0 +1,44 @@
+"""The `gait-planner` plan/run commands end to end on the compass (about a second): files,
+summary, exit codes, and one-line errors for what the user has to fix."""
+
+from __future__ import annotations
+
+import json
+
+from gait_planner.cli import main
+
+
+def test_run_plans_records_draws_and_compares(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    out = tmp_path / "compass.mcap"
+    assert main(["run", "--scene", "compass", "--out", str(out), "--no-rrd"]) == 0
+    text = capsys.readouterr().out
+    assert out.is_file() and out.with_suffix(".png").is_file()
+    assert "this plan: J = 1.38" in text and "the paper" in text
+    assert "no display" in text
+
+
+def test_plan_json_summary(tmp_path, capsys):
+    out = tmp_path / "c.mcap"
+    assert main(["plan", "--scene", "compass", "--out", str(out), "--json", "--no-rrd"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["success"] is True and data["scene"] == "compass"
+    assert data["max_constraint_violation"] <= 1e-9
+    assert data["mcap"] == str(out.resolve()) or data["mcap"] == str(out)
+
+
+def test_impossible_plan_exits_1_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "far.mcap"
+    code = main(["plan", "--scene", "compass", "--step-length", "3", "--max-time", "20",
+                 "--out", str(out), "--no-rrd"])
+    assert code == 1
+    assert "success" in capsys.readouterr().out
+    assert not out.exists()
+
+
+def test_user_errors_are_one_line(tmp_path, capsys):
+    assert main(["plan", "--scene", "compass", "--out", str(tmp_path / "x.txt")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("gait-planner: error: --out must name a .mcap file")
+    assert main(["plan", "--scene", "no_such_scene", "--out", str(tmp_path / "x.mcap")]) == 2
+    assert "gait-planner: error:" in capsys.readouterr().err
