@@ -32,8 +32,8 @@ import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.ocp.contacts import BodyContact, body_contacts, establishing_rows, stacked_rows
-from gait_planner.ocp.posture import joint_limit_margins
 from gait_planner.ocp.mirror import configuration_mirror, torque_mirror
+from gait_planner.ocp.posture import joint_limit_margins
 from gait_planner.ocp.settings import GaitSettings
 
 TORQUE_SCALE = 100.0  # N m
