@@ -12,6 +12,9 @@ Named CasADi Functions (one definition each, used by simulation, optimisation an
 * ``constraints``  g(q) -> (m,)            internal, joint and planar-root conditions
 * ``constraint_jacobian``  G(q) -> (m, k)
 * ``null_space``   P(q) -> (k, ndof), G P = 0  (Betsch & Leyendecker 2006; paper section 3)
+* ``null_space_transpose``  (q, r) -> P(q)^T r, (ndof,): the projection of a redundant force
+  r (k,) onto the generalised velocities, by reverse-mode differentiation of the velocity
+  map (subtree wrenches accumulated leaves to root) instead of forming P
 * ``reparametrise``  F_d(u, q) -> q_next: nodal reparametrisation, g(F_d(u, q)) = 0 for
   every u (paper section 3; DESIGN.md section 4)
 * ``actuation``    B^T(q) -> (k, nt): director forces of the joint torques (paper section 2)
@@ -237,6 +240,11 @@ class Multibody:
         )
         self.null_space = ca.Function(
             "null_space", [q], [ca.jacobian(qdot, nu)], ["q"], ["P"]
+        )
+        r = ca.SX.sym("r", self.k)
+        projected = ca.jtimes(qdot, nu, r, True)  # qdot is linear in nu: free of nu
+        self.null_space_transpose = ca.Function(
+            "null_space_transpose", [q, r], [projected], ["q", "r"], ["Pt_r"]
         )
         self.reparametrise = ca.Function(
             "reparametrise", [u, q], [self._reparametrise_expr(u, q)], ["u", "q"], ["q_next"]

@@ -108,7 +108,7 @@ class Transcription:
             r = self.mech.discrete_euler_lagrange(q0, q1, q2, h0, h1, t0, t1)
             if C.shape[0]:
                 r = r + w * ca.mtimes(ca.DM(C).T, lam)  # lambda: ground force on body
-            res = ca.mtimes(mb.null_space(q1).T, r) / (w * FORCE_SCALE)
+            res = mb.null_space_transpose(q1, r) / (w * FORCE_SCALE)
             f = ca.Function(f"dynamics_phase{k}", [q0, q1, q2, h0, h1, t0, t1, lam], [res])
             f = f.expand().map(len(nodes))
             idx = np.array(nodes)

@@ -105,6 +105,20 @@ def test_null_space_annihilates_constraint_jacobian(model, scene, seed):
 @pytest.mark.parametrize("scene", SCENES)
 @settings(max_examples=15, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1))
+def test_null_space_transpose_is_the_projection_by_P(model, scene, seed):
+    """P(q)^T r by reverse differentiation of the velocity map (what the optimiser uses)
+    equals the product with the explicit null space matrix, for any force r."""
+    mb = model(scene).mb
+    q = random_configuration(mb, vectors(seed, mb.ndof))
+    r = 100.0 * vectors(seed + 1, mb.k)
+    expected = np.array(mb.null_space(q)).T @ r
+    got = np.array(mb.null_space_transpose(q, r)).ravel()
+    assert np.abs(got - expected).max() <= ROUND_OFF * max(1.0, np.abs(expected).max())
+
+
+@pytest.mark.parametrize("scene", SCENES)
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
 def test_reparametrisation_tangent_is_null_space(model, scene, seed):
     mb = model(scene).mb
     q = random_configuration(mb, vectors(seed, mb.ndof))
