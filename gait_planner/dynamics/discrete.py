@@ -61,12 +61,10 @@ class DiscreteMechanics:
             "discrete_lagrangian_d2", [q0, q1, h1], [ca.gradient(Ld, q1)], ["q0", "q1", "h"], ["D2Ld"]
         )
 
-        Bt = mb.actuation(q1)
         r = (
             self.discrete_lagrangian_d2(q0, q1, h0)
             + self.discrete_lagrangian_d1(q1, q2, h1)
-            + 0.5 * h0 * ca.mtimes(Bt, t0)
-            + 0.5 * h1 * ca.mtimes(Bt, t1)
+            + mb.actuation_force(q1, 0.5 * h0 * t0 + 0.5 * h1 * t1)  # f+_{n-1} + f-_n
         )
         names = ["q_prev", "q", "q_next", "h_prev", "h", "tau_prev", "tau"]
         args = [q0, q1, q2, h0, h1, t0, t1]

@@ -18,6 +18,7 @@ Named CasADi Functions (one definition each, used by simulation, optimisation an
 * ``reparametrise``  F_d(u, q) -> q_next: nodal reparametrisation, g(F_d(u, q)) = 0 for
   every u (paper section 3; DESIGN.md section 4)
 * ``actuation``    B^T(q) -> (k, nt): director forces of the joint torques (paper section 2)
+* ``actuation_force``  (q, tau) -> B^T(q) tau (k,), without forming B^T (half the operations)
 """
 
 from __future__ import annotations
@@ -251,6 +252,9 @@ class Multibody:
         )
         self.actuation = ca.Function(
             "actuation", [q], [ca.jacobian(f, tau)], ["q"], ["Bt"]
+        )
+        self.actuation_force = ca.Function(
+            "actuation_force", [q, tau], [f], ["q", "tau"], ["f"]
         )
 
     @cached_property

@@ -119,6 +119,18 @@ def test_null_space_transpose_is_the_projection_by_P(model, scene, seed):
 @pytest.mark.parametrize("scene", SCENES)
 @settings(max_examples=15, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1))
+def test_actuation_force_is_the_product_with_the_actuation_matrix(model, scene, seed):
+    mb = model(scene).mb
+    q = random_configuration(mb, vectors(seed, mb.ndof))
+    tau = 50.0 * vectors(seed + 2, mb.nt)
+    expected = np.array(mb.actuation(q)) @ tau
+    got = np.array(mb.actuation_force(q, tau)).ravel()
+    assert np.abs(got - expected).max() <= ROUND_OFF * max(1.0, np.abs(expected).max())
+
+
+@pytest.mark.parametrize("scene", SCENES)
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
 def test_reparametrisation_tangent_is_null_space(model, scene, seed):
     mb = model(scene).mb
     q = random_configuration(mb, vectors(seed, mb.ndof))
