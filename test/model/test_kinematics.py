@@ -102,29 +102,27 @@ def test_null_space_annihilates_constraint_jacobian(model, scene, seed):
     assert np.linalg.matrix_rank(P) == mb.ndof
 
 
+# matrix-free products (what the optimiser uses) against the matrices they stand for:
+# name -> (the matrix at q, the attribute giving the size of x, scale of x)
+MATRIX_FREE = {
+    "null_space_transpose": (lambda mb, q: np.array(mb.null_space(q)).T, "k", 100.0),
+    "actuation_force": (lambda mb, q: np.array(mb.actuation(q)), "nt", 50.0),
+}
+
+
+@pytest.mark.parametrize("product", sorted(MATRIX_FREE))
 @pytest.mark.parametrize("scene", SCENES)
 @settings(max_examples=15, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1))
-def test_null_space_transpose_is_the_projection_by_P(model, scene, seed):
-    """P(q)^T r by reverse differentiation of the velocity map (what the optimiser uses)
-    equals the product with the explicit null space matrix, for any force r."""
+def test_matrix_free_products_equal_the_matrix_products(model, scene, product, seed):
+    """P(q)^T r (reverse differentiation of the velocity map) and B^T(q) tau (the
+    actuation forces applied directly) equal the products with the explicit matrices."""
     mb = model(scene).mb
+    matrix, size, scale = MATRIX_FREE[product]
     q = random_configuration(mb, vectors(seed, mb.ndof))
-    r = 100.0 * vectors(seed + 1, mb.k)
-    expected = np.array(mb.null_space(q)).T @ r
-    got = np.array(mb.null_space_transpose(q, r)).ravel()
-    assert np.abs(got - expected).max() <= ROUND_OFF * max(1.0, np.abs(expected).max())
-
-
-@pytest.mark.parametrize("scene", SCENES)
-@settings(max_examples=15, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1))
-def test_actuation_force_is_the_product_with_the_actuation_matrix(model, scene, seed):
-    mb = model(scene).mb
-    q = random_configuration(mb, vectors(seed, mb.ndof))
-    tau = 50.0 * vectors(seed + 2, mb.nt)
-    expected = np.array(mb.actuation(q)) @ tau
-    got = np.array(mb.actuation_force(q, tau)).ravel()
+    x = scale * vectors(seed + 1, getattr(mb, size))
+    expected = matrix(mb, q) @ x
+    got = np.array(getattr(mb, product)(q, x)).ravel()
     assert np.abs(got - expected).max() <= ROUND_OFF * max(1.0, np.abs(expected).max())
 
 
