@@ -21,6 +21,7 @@ range is sin(roll) in [sin lo, sin hi]. All margins are bilinear in the director
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import casadi as ca
 import numpy as np
@@ -64,9 +65,12 @@ def _angle_parts(scene: Scene) -> dict[str, tuple[str, str, np.ndarray, np.ndarr
 
 def check_joint_limits(scene: Scene, limits) -> tuple[tuple[str, float, float], ...]:
     """Validated ((angle name, lo rad, hi rad), ...) from {name: (lo deg, hi deg)}."""
+    if not isinstance(limits, Mapping):
+        raise JointLimitError(f"joint_limits: need a mapping {{angle name: [lower, upper]}} "
+                              f"in degrees, got {type(limits).__name__}")
     parts = _angle_parts(scene)
     out = []
-    for name, bounds in dict(limits).items():
+    for name, bounds in limits.items():
         if name not in parts:
             raise JointLimitError(f"joint_limits: {name!r} is not a joint angle of scene "
                                   f"{scene.name!r}; known: {', '.join(parts)}")

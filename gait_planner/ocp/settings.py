@@ -107,7 +107,7 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
             f"unknown gait option(s) {sorted(unknown)}; known: {sorted(_OPTION_NAMES)}"
         )
     options.update(overrides)
-    if "joint_limits" in options and not isinstance(options["joint_limits"], tuple):
+    if "joint_limits" in options:
         try:
             options["joint_limits"] = check_joint_limits(scene, options["joint_limits"])
         except JointLimitError as err:

@@ -93,6 +93,7 @@ def test_revolute_axis_of_any_direction():
     ({"knee_r": (0, float("nan"))}, "finite"),
     ({"knee_r": "straight"}, "need [lower, upper]"),
     ({"hip_r_roll": (-95, 10)}, "[-90, 90]"),
+    ((("knee_r", 0.0, 1.0),), "need a mapping"),
 ])
 def test_bad_ranges_name_what_is_wrong(limits, words):
     with pytest.raises(JointLimitError, match=None) as err:
