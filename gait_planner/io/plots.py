@@ -26,14 +26,14 @@ _COLOURS = plt.get_cmap("tab20").colors
 
 
 def _shade_phases(ax, rec: RecordedPlan) -> None:
+    """Every other phase shaded grey."""
     t, phases = rec.times, list(rec.phases)
-    start = 0
+    start, run = 0, 0
     for n in range(1, len(phases) + 1):
         if n == len(phases) or phases[n] != phases[start]:
-            end = min(n, len(t) - 1)
-            ax.axvspan(t[start], t[end], color="0.92" if len(set(phases[:start])) % 2 else "white",
+            ax.axvspan(t[start], t[min(n, len(t) - 1)], color="0.92" if run % 2 else "white",
                        zorder=0, lw=0)
-            start = n
+            start, run = n, run + 1
 
 
 def _side_view(ax, rec: RecordedPlan) -> None:
