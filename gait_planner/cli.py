@@ -62,6 +62,9 @@ def _add_plan_options(parser: argparse.ArgumentParser, scene_default: str | None
     parser.add_argument("--max-time", type=float, help="solver time limit, s (default 600)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--no-rrd", action="store_true", help="do not write the rerun .rrd")
+    parser.add_argument("--compile", action="store_true",
+                        help="compile the derivatives to C (cached in ~/.cache/gait_planner; "
+                        "the first time takes about a minute, later solves are faster)")
 
 
 def _add_plan(commands: argparse._SubParsersAction) -> None:
@@ -94,7 +97,8 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
         raise CliError(f"--out must name a .mcap file, got {out!r}")
     request = PlanRequest(scene=args.scene, step_length=args.step_length, cost=args.cost,
                           friction_coefficient=args.mu, intervals_per_phase=args.intervals,
-                          max_solve_time=args.max_time, output_name=target.stem)
+                          max_solve_time=args.max_time, output_name=target.stem,
+                          compiled=args.compile)
     print(f"planning {args.scene} (building the problem takes up to a minute the first "
           "time) ...", file=sys.stderr, flush=True)
     try:

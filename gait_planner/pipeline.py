@@ -37,6 +37,7 @@ class PlanRequest:
     max_solve_time: float | None = None
     output_name: str = ""
     cold_start: bool = False
+    compiled: bool = False  # compile the derivative elements (GaitSettings.compiled)
 
 
 @dataclass(frozen=True)
@@ -75,7 +76,8 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
             scene, step_length=request.step_length, cost=request.cost or None,
             friction_coefficient=request.friction_coefficient,
             intervals_per_phase=request.intervals_per_phase,
-            max_solve_time=request.max_solve_time)
+            max_solve_time=request.max_solve_time,
+            **({"compiled": True} if request.compiled else {}))
     except (SceneError, SettingsError) as err:
         raise RequestError(str(err)) from None
     stem = output_stem(request, scene.name)

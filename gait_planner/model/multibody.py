@@ -28,7 +28,7 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from gait_planner.model.rotations import exp_so3
+from gait_planner.model.rotations import axis_rotation, exp_so3
 from gait_planner.model.scene import JointType, RootType, Scene
 
 E_X, E_Y, E_Z = (ca.DM([1.0, 0.0, 0.0]), ca.DM([0.0, 1.0, 0.0]), ca.DM([0.0, 0.0, 1.0]))
@@ -57,6 +57,9 @@ class Multibody:
         }
         self.nt = int(offsets[-1])
         self.ndof = self.root_dof + self.nt
+        # which entries of u (reparametrise) are rotations (rad) rather than translations (m)
+        translations = 3 if scene.root.type is RootType.FREE else 2
+        self.rotation_mask = np.arange(self.ndof) >= translations
         self._joint_of_child = {j.child: j for j in scene.joints}
 
         masses = []
@@ -116,7 +119,11 @@ class Multibody:
         """q_next = F_d(u, q): every body's triad is turned by an exact rotation R_body,
         D_next = R_body D; the root by exp(theta^), a child by
         R_child = exp((D_parent_next a_j)^) R_parent with a_j = u_j (spherical: parent
-        components) or u_j n (revolute: the parent's NEW axis). Rotations are never built
+        components) or u_j n (revolute: the parent's NEW axis). As
+        exp((R w)^) = R exp(w^) R^T, this is R_child = R_parent exp((D_parent a_j)^), the
+        form built here: each exponential depends on its own joint's u_j only (D_parent is
+        the given triad), which keeps the derivatives of F_d short (a revolute joint is
+        a plain rotation about the given axis D_parent n). Rotations are never built
         from q, so round-off in q does not propagate down the tree. phi of a child follows
         from its joint condition."""
         frames = self._split(q)
@@ -131,10 +138,14 @@ class Multibody:
             new[root.body] = (phi + ca.vertcat(u[0], 0, u[1]), ca.mtimes(rot[root.body], D))
         for joint in self.scene.joints:
             _, Dc = frames[joint.child]
+            _, Dp = frames[joint.parent]
             phip_new, Dp_new = new[joint.parent]
             uj = u[self.root_dof + self.joint_slices[joint.name].start :][: joint.dof]
-            local = uj if joint.type is JointType.SPHERICAL else ca.DM(joint.axis) * uj
-            rot[joint.child] = ca.mtimes(exp_so3(ca.mtimes(Dp_new, local)), rot[joint.parent])
+            if joint.type is JointType.SPHERICAL:
+                turn = exp_so3(ca.mtimes(Dp, uj))
+            else:
+                turn = axis_rotation(ca.mtimes(Dp, ca.DM(joint.axis)), uj)
+            rot[joint.child] = ca.mtimes(rot[joint.parent], turn)
             Dc_new = ca.mtimes(rot[joint.child], Dc)
             phic_new = (
                 phip_new

@@ -44,6 +44,14 @@ def exp_so3(w):
     return ca.DM.eye(3) + a * W + b * ca.mtimes(W, W)
 
 
+def axis_rotation(k, angle):
+    """Rotation by `angle` (rad) about the axis k (3-vector, normalised here):
+    I + sin(angle) n^ + (1 - cos(angle)) n^2 with n = k/|k|. No branch, unlike exp_so3:
+    the axis is never zero. Returns a 3x3 expression of the type of k and angle."""
+    N = skew(k / ca.norm_2(k))
+    return ca.DM.eye(3) + ca.sin(angle) * N + (1 - ca.cos(angle)) * ca.mtimes(N, N)
+
+
 # ---- numeric (numpy) -------------------------------------------------------------------
 
 

@@ -34,7 +34,8 @@ class GaitSettings:
     contact; the paper's foot breadth is 0.0915 m); ground_clearance: free contact points stay at
     or above the ground (off for the rigid-legged compass, which must scuff at mid-stance);
     max_iterations, max_solve_time s (IPOPT); tolerance (IPOPT tol);
-    constraint_tolerance (IPOPT constr_viol_tol).
+    constraint_tolerance (IPOPT constr_viol_tol); compiled: build the per-node derivative
+    elements as C (`gait_planner.ocp.compile`; a one-time cost per machine, cached).
     """
 
     step_length: float
@@ -54,6 +55,7 @@ class GaitSettings:
     max_solve_time: float = 600.0
     tolerance: float = 1e-8
     constraint_tolerance: float = 1e-10
+    compiled: bool = False
 
     def __post_init__(self):
         def bad(name, why):

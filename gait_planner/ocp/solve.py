@@ -18,20 +18,39 @@ import numpy as np
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
+from gait_planner.ocp.compile import CompileError, compile_functions
+from gait_planner.ocp.derivatives import nlp_derivatives
 from gait_planner.ocp.guess import initial_multipliers, kinematic_guess
 from gait_planner.ocp.settings import GaitSettings
-from gait_planner.ocp.solution import build_result, failed_result
+from gait_planner.ocp.solution import STATUS_WORDS, build_result, failed_result
 from gait_planner.ocp.transcription import Transcription
 from gait_planner.result import PlanResult
 
 Progress = Callable[[int, float, float, float], None]  # iteration, cost, violation, seconds
 
-# IPOPT options of the solver variants beyond the common ones (`Planner._solver`)
+# Inertia-free curvature test (Chiang & Zavala 2016; IPOPT recommends 1e-12 to 1e-11): a
+# step is accepted when it has positive curvature, instead of regularising the Hessian
+# until MUMPS reports the right inertia. Far from the optimum walker3d's reduced Hessian is
+# strongly indefinite: with the inertia test it needed regularisations up to 1e6 and
+# 200-330 cold iterations, with this 70-105 (benchmarks/REPORT.md). walker2d cold solves
+# with it took from 31 to over 1000 iterations, hence the fallback below.
+INERTIA_FREE = {"ipopt.neg_curv_test_tol": 1e-12}
+# Iterations the inertia-free attempt of a cold plan gets (per stage) before the plan
+# restarts from the guess with IPOPT's inertia correction (walker3d: 57-87 in stage 1).
+FIRST_ATTEMPT_ITERATIONS = 150
+
+# IPOPT options of the solver variants beyond the common ones (`Planner._options`)
 VARIANTS = {
-    "cold": {},
-    "warm": {f"ipopt.warm_start_{push}": 1e-9
-             for push in ("bound_push", "mult_bound_push", "slack_bound_push")},
+    "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
+    "cold_inertia": {},
+    "warm": {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
+                                for push in ("bound_push", "mult_bound_push", "slack_bound_push")}},
 }
+# Attempts, each a list of stages (variant, sigma fixed): a cold plan fixes sigma first,
+# then frees it; if its inertia-free attempt fails it starts again with the inertia test.
+COLD_ATTEMPTS = ([("cold", True), ("cold", False)],
+                 [("cold_inertia", True), ("cold_inertia", False)])
+WARM_ATTEMPTS = ([("warm", False)],)
 
 
 class _IterationCallback(ca.Callback):
@@ -84,6 +103,8 @@ class _Built:
     nlp: dict
     bounds: tuple
     callback: _IterationCallback
+    derivatives: dict  # nlpsol options grad_f, jac_g, hess_lag (ocp.derivatives)
+    derivatives_used: str  # how, in words (result.settings["derivatives"])
     build_time: float
     solvers: dict = dataclasses.field(default_factory=dict)  # variant -> IPOPT instance
     stored: list = dataclasses.field(default_factory=list)  # (step, mu, x, lam_x, lam_g, qref)
@@ -107,40 +128,49 @@ class Planner:
             start = time.perf_counter()
             tr = Transcription(DiscreteMechanics(Multibody(scene)), s)
             bounds = tr.bounds()
-            # The MX graph of mapped per-node Functions is expanded into one SX graph: IPOPT
-            # then evaluates exact sparse derivatives without per-call overhead.
+            # The MX graph of mapped per-node Functions is expanded into one SX graph for
+            # IPOPT's f and g; their derivatives come from `nlp_derivatives`.
             fg = ca.Function("fg", [tr.x, tr.p], [tr.cost, tr.g]).expand()
             x, p = ca.SX.sym("x", tr.x.shape[0]), ca.SX.sym("p", tr.p.shape[0])
             f, g = fg(x, p)
             nlp = {"x": x, "p": p, "f": f, "g": g}
+            derivatives, used = None, "CasADi, whole SX graph"
+            if s.compiled:
+                try:
+                    derivatives = nlp_derivatives(tr, compile_functions)
+                    used = "per-node elements compiled to C"
+                except CompileError as err:
+                    used += f" (not compiled: {err})"
+            if derivatives is None:
+                # CasADi differentiates the whole SX graph: in its virtual machine this beats
+                # per-node elements (walker3d Hessian 26 ms against 49 ms), as each node's
+                # reparametrisation is shared by all the rows that use it.
+                reference = ca.nlpsol("gait_derivatives", "ipopt", nlp, {"print_time": False})
+                derivatives = {name: reference.get_function(f"nlp_{name}")
+                               for name in ("grad_f", "jac_g")}
+                derivatives["hess_lag"] = reference.get_function("nlp_hess_l")
             cb = _IterationCallback(int(tr.x.shape[0]), int(tr.g.shape[0]), bounds[2], bounds[3])
-            self._built[key] = _Built(tr, nlp, bounds, cb, time.perf_counter() - start)
+            self._built[key] = _Built(tr, nlp, bounds, cb, derivatives, used,
+                                      time.perf_counter() - start)
         return self._built[key]
 
     def _solver(self, built: _Built, s: GaitSettings, variant: str = "cold") -> ca.Function:
-        """The IPOPT instance `variant` of a problem, built on first use.
-
-        "cold" is built first and computes the exact Hessian and Jacobian (most of the
-        build time); the others reuse its derivative Functions, so each costs under a
-        second. All start from the multipliers they are given (zero for a cold start, the
-        stored plan's for a warm start), warm_start_init_point with a small initial barrier.
+        """The IPOPT instance `variant` of a problem, built on first use (under a second:
+        the derivative Functions are built with the problem). All start from the
+        multipliers they are given (zero for a cold start, the stored plan's for a warm
+        start), warm_start_init_point with a small initial barrier.
         * "warm" pushes the start 1e-9 (instead of 1e-3) inside the bounds, which keeps a
           previous optimum's active set: walker2d re-plans in 4 instead of 9 iterations (a
           cold start with it needs 126 instead of 77).
         (A loose first stage, tol 1e-4 with σ fixed, was tried: walker3d then needed 249
         iterations in all instead of 168.)
         """
-        if "cold" not in built.solvers:
-            start = time.perf_counter()
-            built.solvers["cold"] = ca.nlpsol("gait", "ipopt", built.nlp, self._options(built, s))
-            built.build_time += time.perf_counter() - start
         if variant not in built.solvers:
             start = time.perf_counter()
-            cold = built.solvers["cold"]
             opts = self._options(built, s)
             opts.update(VARIANTS[variant])
-            opts.update({name: cold.get_function(f"nlp_{name}") for name in ("grad_f", "jac_g")})
-            opts["hess_lag"] = cold.get_function("nlp_hess_l")
+            opts["ipopt.max_iter"] = min(opts["ipopt.max_iter"], s.max_iterations)
+            opts.update(built.derivatives)
             built.solvers[variant] = ca.nlpsol(f"gait_{variant}", "ipopt", built.nlp, opts)
             built.build_time += time.perf_counter() - start
         return built.solvers[variant]
@@ -172,24 +202,25 @@ class Planner:
         try:
             built = self._build(scene, settings)
             warm_start = warm_start and bool(built.stored)
-            # (variant, sigma fixed): a cold solve fixes sigma first, then frees it
-            stages = [("warm", False)] if warm_start else [("cold", True), ("cold", False)]
-            solvers = {v: self._solver(built, settings, v) for v, _ in stages}
+            attempts = WARM_ATTEMPTS if warm_start else COLD_ATTEMPTS
+            solvers = {v: self._solver(built, settings, v) for a in attempts for v, _ in a}
         except (ValueError, RuntimeError) as err:
             return failed_result(scene, settings, f"could not build the problem: {err}")
         start = time.perf_counter()
         tr, step, mu = built.tr, settings.step_length, settings.friction_coefficient
         nsig = int(tr.S.shape[0])
         if warm_start:
-            step0, mu0, x0, lam_x, lam_g, qref = min(
+            step0, mu0, x_start, lam_x, lam_g, qref = min(
                 built.stored, key=lambda r: abs(r[0] - step) + abs(r[1] - mu))
-            duals = {"lam_x0": lam_x, "lam_g0": lam_g}
+            duals_start = {"lam_x0": lam_x, "lam_g0": lam_g}
             origin = f"warm start from the plan for step length {step0:.4f} m, mu {mu0:.3g}"
         else:
             qref = kinematic_guess(tr, step)[: tr.N - 1]
-            x0 = np.concatenate([np.zeros(tr.U.numel() + tr.T.numel()), initial_multipliers(tr),
-                                 np.full(nsig, np.clip(1.0, *settings.scaling_bounds))])
-            duals = {"lam_x0": np.zeros(x0.size), "lam_g0": np.zeros(int(tr.g.shape[0]))}
+            x_start = np.concatenate([
+                np.zeros(tr.U.numel() + tr.T.numel()), initial_multipliers(tr),
+                np.full(nsig, np.clip(1.0, *settings.scaling_bounds))])
+            duals_start = {"lam_x0": np.zeros(x_start.size),
+                           "lam_g0": np.zeros(int(tr.g.shape[0]))}
             origin = "kinematic guess; sigma fixed, then free"
         p = np.concatenate([qref.reshape(-1), [step, mu]])
         lbx, ubx, lbg, ubg = built.bounds
@@ -197,25 +228,34 @@ class Planner:
         built.callback.started, built.callback.iteration = start, 0
         built.callback.report = self.progress
         iterations, status, g, evaluation = 0, "not started", None, 0.0
-        for variant, fix_sigma in stages:
-            solver = solvers[variant]
-            lb, ub = lbx.copy(), ubx.copy()
-            if fix_sigma:
-                lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
-            sol = solver(x0=x0, p=p, lbx=lb, ubx=ub, lbg=lbg, ubg=ubg, **duals)
-            stats = solver.stats()
-            iterations += int(stats.get("iter_count", 0))
-            evaluation += sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_"))
-            status = str(stats.get("return_status", "unknown"))
-            x0, g = np.array(sol["x"]).ravel(), np.array(sol["g"]).ravel()
-            duals = {"lam_x0": np.array(sol["lam_x"]).ravel(),
-                     "lam_g0": np.array(sol["lam_g"]).ravel()}
-            if not stats.get("success", False):
+        for number, attempt in enumerate(attempts):
+            x0, duals, success = x_start, duals_start, False
+            for variant, fix_sigma in attempt:
+                solver = solvers[variant]
+                lb, ub = lbx.copy(), ubx.copy()
+                if fix_sigma:
+                    lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
+                sol = solver(x0=x0, p=p, lbx=lb, ubx=ub, lbg=lbg, ubg=ubg, **duals)
+                stats = solver.stats()
+                iterations += int(stats.get("iter_count", 0))
+                evaluation += sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_"))
+                status = str(stats.get("return_status", "unknown"))
+                x0, g = np.array(sol["x"]).ravel(), np.array(sol["g"]).ravel()
+                duals = {"lam_x0": np.array(sol["lam_x"]).ravel(),
+                         "lam_g0": np.array(sol["lam_g"]).ravel()}
+                success = bool(stats.get("success", False))
+                if not success:
+                    break
+            if success or time.perf_counter() > built.callback.deadline \
+                    or number + 1 == len(attempts):
                 break
+            origin += (f"; the inertia-free attempt stopped ({STATUS_WORDS.get(status, status)})"
+                       f" after {iterations} iterations, restarted with IPOPT's inertia test")
         result = build_result(tr, x0, p, g, status=status, iterations=iterations,
                               solve_time=time.perf_counter() - start,
                               build_time=built.build_time, evaluation_time=evaluation,
                               origin=origin)
+        result.settings["derivatives"] = built.derivatives_used
         if result.success:
             built.stored.append((step, mu, x0, duals["lam_x0"], duals["lam_g0"], qref))
         return result

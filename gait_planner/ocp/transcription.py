@@ -11,7 +11,8 @@ Unknowns (scaled to O(1)):
 * u_n (ndof,) for the free nodes n = 0..N-2: the configuration q_n = F_d(u_n, qref_n) is
   the nodal reparametrisation about a reference configuration of that node (the initial
   guess or a previous plan). Every internal and joint constraint holds exactly, and each
-  equation touches only neighbouring nodes (a banded KKT system).
+  equation touches only neighbouring nodes (a banded KKT system). Its rotational entries
+  are bounded by ROTATION_INCREMENT_MAX.
 * tau_n (nt,) joint torques for intervals 0..N-2 (in units of TORQUE_SCALE).
 * lambda_n, contact multipliers of nodes 1..N-1 (in units of FORCE_SCALE): the paper
   removes them by projection (its Q matrices) and recovers them by eq. 10; keeping them as
@@ -27,6 +28,8 @@ and the friction coefficient.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import casadi as ca
 import numpy as np
 
@@ -38,6 +41,24 @@ from gait_planner.ocp.settings import GaitSettings
 
 TORQUE_SCALE = 100.0  # N m
 FORCE_SCALE = 1000.0  # N
+# Bound (rad) on each rotational entry of u_n. The reparametrisation about qref_n is a chart
+# that is one-to-one for turns below half a revolution; a Newton step beyond it is a
+# divergence, not progress. With IPOPT's inertia-free curvature test (solve.py) walker2d
+# cold solves diverged without these bounds (benchmarks/REPORT.md); no plan measured had
+# one active.
+ROTATION_INCREMENT_MAX = np.pi
+
+
+@dataclass(frozen=True)
+class ElementGroup:
+    """Constraint rows (or cost terms) that are one SX Function of a few entries of x and
+    p, evaluated at several nodes: g[rows[:, j]] += function(x[z_index[:, j]],
+    p[p_index[:, j]]), or, with rows None, cost += function(...)."""
+
+    function: ca.Function  # (z (nz,), pz (np,)) -> r (nr,)
+    z_index: np.ndarray  # (nz, n) int
+    p_index: np.ndarray  # (np, n) int
+    rows: np.ndarray | None  # (nr, n) int; None: a term of the cost
 
 
 class Transcription:
@@ -82,6 +103,8 @@ class Transcription:
             offset += size
 
         self._eq, self._ineq = [], []  # (name, expression)
+        self._without_elements = {}  # name -> the group's expression without its elements
+        self.elements: list[ElementGroup] = []  # parts of g and cost (see ElementGroup)
         self._dynamics()
         self._contacts()
         self._path()
@@ -94,8 +117,21 @@ class Transcription:
         w_n = (h_{n-1} + h_n)/2 so that they read as forces, in units of FORCE_SCALE: the
         rows are O(1) like the others, so IPOPT's absolute constraint tolerance (1e-10)
         means 1e-7 N here, reachable in floating point (in plain newtons it stalled at
-        ~2e-10 for hundreds of iterations)."""
+        ~2e-10 for hundreds of iterations).
+
+        A node's row is P(q_n)^T r / (w_n FORCE_SCALE) + P(q_n)^T C^T lambda_n / FORCE_SCALE
+        (the contact force term; w_n cancels). The first part is the same function in
+        every phase; it is also declared as an element of the NLP's own unknowns
+        (`ElementGroup`, `_dynamics_element`), so that its derivatives can be formed node by
+        node (`ocp.derivatives`). g itself is built from the configurations Q, which all
+        rows share."""
         mb, N = self.mb, self.N
+        for variant, nodes in self._element_nodes().items():
+            self.elements.append(ElementGroup(
+                self._dynamics_element(*variant),
+                np.stack([self._element_z_index(n, *variant) for n in nodes], axis=1),
+                np.stack([self._element_p_index(n, *variant) for n in nodes], axis=1),
+                np.stack([np.arange(mb.ndof) + (n - 1) * mb.ndof for n in nodes], axis=1)))
         for k, C in enumerate(self.rows):
             nodes = [n for n in range(1, N) if self.phase_of_interval[n] == k]
             if not nodes:
@@ -106,18 +142,69 @@ class Transcription:
             lam = ca.SX.sym("lambda", C.shape[0])
             w = 0.5 * (h0 + h1)
             r = self.mech.discrete_euler_lagrange(q0, q1, q2, h0, h1, t0, t1)
-            if C.shape[0]:
-                r = r + w * ca.mtimes(ca.DM(C).T, lam)  # lambda: ground force on body
-            res = mb.null_space_transpose(q1, r) / (w * FORCE_SCALE)
+            contact = mb.null_space_transpose(q1, ca.mtimes(ca.DM(C).T, lam)) / FORCE_SCALE
+            res = mb.null_space_transpose(q1, r) / (w * FORCE_SCALE) + contact
             f = ca.Function(f"dynamics_phase{k}", [q0, q1, q2, h0, h1, t0, t1, lam], [res])
-            f = f.expand().map(len(nodes))
             idx = np.array(nodes)
             lam_cols = ca.horzcat(*[self.lam_of_node[n] for n in nodes]) if C.shape[0] else \
                 ca.DM.zeros(0, len(nodes))
-            out = f(self.Q[:, idx - 1], self.Q[:, idx], self.Q[:, idx + 1],
-                    self.h[idx - 1].T, self.h[idx].T, self.TAU[:, idx - 1], self.TAU[:, idx],
-                    lam_cols)
-            self._eq.append((f"dynamics[{self._phase_name(k)}]", ca.vec(out)))
+            out = f.expand().map(len(nodes))(
+                self.Q[:, idx - 1], self.Q[:, idx], self.Q[:, idx + 1], self.h[idx - 1].T,
+                self.h[idx].T, self.TAU[:, idx - 1], self.TAU[:, idx], lam_cols)
+            name = f"dynamics[{self._phase_name(k)}]"
+            self._eq.append((name, ca.vec(out)))
+            g = ca.Function(f"contact_force_phase{k}", [q1, lam], [contact]).expand()
+            self._without_elements[name] = ca.vec(g.map(len(nodes))(self.Q[:, idx], lam_cols))
+
+    def _element_nodes(self) -> dict[tuple[bool, bool], list[int]]:
+        """Nodes 1..N-1 by element variant (q_n mirrored, q_{n+1} mirrored): q_{N-1} and
+        q_N are mirror images of q_0 and q_1, and so is tau_{N-1} of tau_0."""
+        out: dict[tuple[bool, bool], list[int]] = {}
+        for n in range(1, self.N):
+            out.setdefault((n == self.N - 1, n + 1 >= self.N - 1), []).append(n)
+        return out
+
+    def _dynamics_element(self, mirrored: bool, next_mirrored: bool) -> ca.Function:
+        """The phase-independent part of a node's dynamics row (ndof,) as an SX Function
+        of z = (u_{n-1}, u_n, u_{n+1}, T_{n-1}, T_n, sigma_{n-1}, sigma_n) (scaled unknowns,
+        a mirrored node given by the u of its source node) and pz = (qref_{n-1}, qref_n,
+        qref_{n+1}, step length)."""
+        mb, s = self.mb, self.settings
+        nd, nt, k = mb.ndof, mb.nt, mb.k
+        z = ca.SX.sym("z", 3 * nd + 2 * nt + 2)
+        pz = ca.SX.sym("pz", 3 * k + 1)
+        step = pz[3 * k]
+        q = [mb.reparametrise(z[i * nd : (i + 1) * nd], pz[i * k : (i + 1) * k]) for i in range(3)]
+        for i, flag in ((1, mirrored), (2, next_mirrored)):
+            if flag:
+                q[i] = ca.mtimes(ca.DM(self.A), q[i]) + step * ca.DM(self.shift)
+        t0 = TORQUE_SCALE * z[3 * nd : 3 * nd + nt]
+        t1 = TORQUE_SCALE * z[3 * nd + nt : 3 * nd + 2 * nt]
+        if mirrored:  # tau_{N-1} is the image of tau_0
+            t1 = ca.mtimes(ca.DM(self.B), t1)
+        h0, h1 = s.base_time_step * z[3 * nd + 2 * nt], s.base_time_step * z[3 * nd + 2 * nt + 1]
+        r = self.mech.discrete_euler_lagrange(q[0], q[1], q[2], h0, h1, t0, t1)
+        res = mb.null_space_transpose(q[1], r) / (0.5 * (h0 + h1) * FORCE_SCALE)
+        name = "dynamics_element" + ("_mirrored" if mirrored else "_next_mirrored" if next_mirrored else "")
+        return ca.Function(name, [z, pz], [res], ["z", "pz"], ["r"])
+
+    def _element_z_index(self, n: int, mirrored: bool, next_mirrored: bool) -> np.ndarray:
+        """Indices into x of the element's z (see _dynamics_element) at node n."""
+        mb = self.mb
+        source = [n - 1, 0 if mirrored else n, (1 if mirrored else 0) if next_mirrored else n + 1]
+        u = [np.arange(mb.ndof) + m * mb.ndof for m in source]
+        nu = self.U.numel()
+        tau = [nu + np.arange(mb.nt) + m * mb.nt for m in (n - 1, 0 if mirrored else n)]
+        sig0 = nu + self.T.numel() + self.L.numel()
+        scaling = [sig0 + self.mb.scene.gait.phases[self.phase_of_interval[m]].scaling
+                   for m in (n - 1, n)]
+        return np.concatenate(u + tau + [np.array(scaling)])
+
+    def _element_p_index(self, n: int, mirrored: bool, next_mirrored: bool) -> np.ndarray:
+        """Indices into p of the element's pz at node n."""
+        k = self.mb.k
+        source = [n - 1, 0 if mirrored else n, (1 if mirrored else 0) if next_mirrored else n + 1]
+        return np.concatenate([np.arange(k) + m * k for m in source] + [[self.Qref.numel()]])
 
     def _contacts(self):
         mb, N = self.mb, self.N
@@ -189,7 +276,8 @@ class Transcription:
 
     def _cost(self):
         """J over the half cycle t_0..t_{N-1} (intervals 0..N-2), plus the torque
-        regulariser; returns the MX cost and stores the named parts."""
+        regulariser; returns the MX cost and stores the named parts. The kinetic energy is
+        also declared as elements (`_kinetic_element`), for `ocp.derivatives`."""
         N, s = self.N, self.settings
         M = ca.DM(self.mb.mass_diagonal)
         dq = self.Q[:, 1:N] - self.Q[:, 0 : N - 1]
@@ -197,8 +285,46 @@ class Transcription:
         kinetic = ca.sum2(0.5 * ca.sum1(dq * (M * dq)) / h)
         torque = ca.sum2(ca.sum1(self.TAU[:, 0 : N - 1] ** 2) * h)
         self.cost_parts = {"kinetic_energy": kinetic, "torque_squared": torque}
-        main = self.cost_parts[s.cost]
-        return main + (s.torque_regularisation * torque if s.cost != "torque_squared" else 0)
+        if s.cost == "torque_squared":
+            self.cost_without_elements = torque
+            return torque
+        for next_mirrored, intervals in ((False, range(N - 2)), (True, [N - 2])):
+            self.elements.append(ElementGroup(
+                self._kinetic_element(next_mirrored),
+                np.stack([self._kinetic_z_index(n, next_mirrored) for n in intervals], 1),
+                np.stack([self._kinetic_p_index(n, next_mirrored) for n in intervals], 1),
+                None))
+        self.cost_without_elements = s.torque_regularisation * torque
+        return kinetic + self.cost_without_elements
+
+    def _kinetic_element(self, next_mirrored: bool) -> ca.Function:
+        """h_n times the discrete kinetic energy of interval n,
+        0.5 (q_{n+1} - q_n)^T M (q_{n+1} - q_n) / h_n (J s), as an SX Function of
+        z = (u_n, u_{n+1}, sigma_n) and pz = (qref_n, qref_{n+1}, step length)."""
+        mb, nd, k = self.mb, self.mb.ndof, self.mb.k
+        z, pz = ca.SX.sym("z", 2 * nd + 1), ca.SX.sym("pz", 2 * k + 1)
+        q0 = mb.reparametrise(z[0:nd], pz[0:k])
+        q1 = mb.reparametrise(z[nd : 2 * nd], pz[k : 2 * k])
+        if next_mirrored:
+            q1 = ca.mtimes(ca.DM(self.A), q1) + pz[2 * k] * ca.DM(self.shift)
+        dq = q1 - q0
+        kinetic = 0.5 * ca.dot(dq, ca.DM(self.mb.mass_diagonal) * dq) / (
+            self.settings.base_time_step * z[2 * nd])
+        name = "kinetic_element" + ("_next_mirrored" if next_mirrored else "")
+        return ca.Function(name, [z, pz], [kinetic], ["z", "pz"], ["J"])
+
+    def _kinetic_z_index(self, n: int, next_mirrored: bool) -> np.ndarray:
+        nd = self.mb.ndof
+        sig = self.U.numel() + self.T.numel() + self.L.numel() + \
+            self.mb.scene.gait.phases[self.phase_of_interval[n]].scaling
+        return np.concatenate([np.arange(nd) + n * nd,
+                               np.arange(nd) + (0 if next_mirrored else n + 1) * nd, [sig]])
+
+    def _kinetic_p_index(self, n: int, next_mirrored: bool) -> np.ndarray:
+        k = self.mb.k
+        return np.concatenate([np.arange(k) + n * k,
+                               np.arange(k) + (0 if next_mirrored else n + 1) * k,
+                               [self.Qref.numel()]])
 
     def _phase_name(self, k: int) -> str:
         return self.mb.scene.gait.phases[k].name
@@ -212,6 +338,12 @@ class Transcription:
     @property
     def p(self):
         return ca.vertcat(ca.vec(self.Qref), self.step, self.mu)
+
+    @property
+    def g_without_elements(self):
+        """g with the element rows' element parts left out (g minus the `elements`)."""
+        return ca.vertcat(*[self._without_elements.get(n, e) for n, e in self._eq],
+                          *[e for _, e in self._ineq])
 
     def constraint_groups(self):
         """[(name, size, is_equality)] in the order of g."""
@@ -228,6 +360,9 @@ class Transcription:
         n_in = sum(int(e.shape[0]) for _, e in self._ineq)
         nx = int(self.x.shape[0])
         lbx, ubx = np.full(nx, -np.inf), np.full(nx, np.inf)
+        rotations = np.tile(self.mb.rotation_mask, self.N - 1)  # U is stored column by column
+        lbx[: rotations.size][rotations] = -ROTATION_INCREMENT_MAX
+        ubx[: rotations.size][rotations] = ROTATION_INCREMENT_MAX
         nsig = int(self.S.shape[0])
         lbx[-nsig:], ubx[-nsig:] = self.settings.scaling_bounds
         lbg = np.concatenate([np.zeros(n_eq), np.zeros(n_in)])

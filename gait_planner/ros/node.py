@@ -40,7 +40,8 @@ def _given(value: float) -> float | None:
     return None if value <= 0 else value
 
 
-def request_from_msg(req, default_scene: str, default_time: float) -> PlanRequest:
+def request_from_msg(req, default_scene: str, default_time: float,
+                     compiled: bool = False) -> PlanRequest:
     """PlanGait.Request -> PlanRequest (<= 0 or empty fields: the scene's values)."""
     return PlanRequest(
         scene=req.scene or default_scene,
@@ -51,6 +52,7 @@ def request_from_msg(req, default_scene: str, default_time: float) -> PlanReques
         max_solve_time=_given(req.max_solve_time) or default_time,
         output_name=req.output_name,
         cold_start=req.cold_start,
+        compiled=compiled,
     )
 
 
@@ -62,6 +64,8 @@ class GaitPlannerNode(Node):
         self.declare_parameter("default_scene", "walker3d")
         self.declare_parameter("output_dir", "runs")
         self.declare_parameter("max_solve_time", 600.0)
+        # compile the derivative elements to C (a one-time cost per scene and machine)
+        self.declare_parameter("compile_derivatives", False)
         self._planner = planner or Planner(progress=self._progress)
         self._lock = threading.Lock()
         group = ReentrantCallbackGroup()
@@ -84,7 +88,8 @@ class GaitPlannerNode(Node):
         with self._lock:
             try:
                 plan_request = request_from_msg(
-                    request, self._param("default_scene"), self._param("max_solve_time"))
+                    request, self._param("default_scene"), self._param("max_solve_time"),
+                    self._param("compile_derivatives"))
                 outcome = plan_and_record(self._planner, plan_request, self._param("output_dir"))
             except (RequestError, OSError) as err:
                 response.success, response.message = False, str(err)
