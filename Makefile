@@ -14,7 +14,7 @@ test: setup
 	$(PYTHON) -m pytest test $(PYTEST_ARGS)
 
 run: setup
-	$(VENV)/bin/gait-planner run
+	$(VENV)/bin/gait-planner run --compile
 
 # Build outputs and caches; keeps .venv/ (and forgets its msg_defs build, so the next
 # `make setup` rebuilds and reinstalls gait_planner_msgs) and keeps runs/.

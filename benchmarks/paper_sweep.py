@@ -30,6 +30,7 @@ def main() -> None:
     parser.add_argument("--scene", default="walker3d")
     parser.add_argument("--intervals", type=int, nargs="+", default=[6, 8, 10])
     parser.add_argument("--dt", type=float, nargs="+", default=[0.01])
+    parser.add_argument("--compile", action="store_true", help="compiled derivatives")
     parser.add_argument("--half-cycle", type=float,
                         help="s at sigma = 1; base time step = this / (intervals in all phases - 1)")
     args = parser.parse_args()
@@ -40,7 +41,9 @@ def main() -> None:
     for n in args.intervals:
         phases = len(scene.gait.phases)
         for dt in ([args.half_cycle / (phases * n - 1)] if args.half_cycle else args.dt):
-            s = dataclasses.replace(settings_for(scene, intervals_per_phase=n), base_time_step=dt)
+            s = dataclasses.replace(
+                settings_for(scene, intervals_per_phase=n, compiled=args.compile),
+                base_time_step=dt)
             r = Planner().plan(scene, s)
             rows.append((n, dt, r))
             print(f"# done: {n} intervals, dt {dt:.5g}: {r.message}", flush=True)
