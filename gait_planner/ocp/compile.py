@@ -33,11 +33,19 @@ def cache_folder() -> Path:
 
 
 def compile_functions(functions: list[ca.Function], folder: Path | None = None) -> list[ca.Function]:
-    """The compiled (external) equivalents of `functions`, in order."""
+    """The compiled (external) equivalents of `functions`, in order. Raises CompileError
+    (no compiler, a failed build, a cache folder that cannot be written)."""
     compiler = shutil.which(os.environ.get("CC", "cc"))
     if compiler is None:
         raise CompileError("no C compiler found (set CC, or install gcc)")
     folder = cache_folder() if folder is None else folder
+    try:
+        return _compile(functions, compiler, folder)
+    except OSError as err:
+        raise CompileError(f"cannot build in {folder}: {err}") from None
+
+
+def _compile(functions: list[ca.Function], compiler: str, folder: Path) -> list[ca.Function]:
     folder.mkdir(parents=True, exist_ok=True)
     libraries, jobs = [], []
     with tempfile.TemporaryDirectory(dir=folder) as work:

@@ -145,3 +145,11 @@ def test_compile_failure_falls_back_and_says_so(tmp_path, monkeypatch):
     result = Planner().plan(scene, settings_for(scene, compiled=True))
     assert result.success
     assert "not compiled: no C compiler" in result.settings["derivatives"]
+
+
+def test_unwritable_cache_is_a_clear_error(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    tr, *_ = _problem("compass")
+    with pytest.raises(CompileError, match="cannot build in"):
+        compile_functions([tr.elements[0].function], blocker / "cache")

@@ -6,6 +6,7 @@ import dataclasses
 import math
 import time
 
+import numpy as np
 import pytest
 
 from gait_planner.model.loader import load_scene
@@ -130,3 +131,38 @@ def test_bad_settings_raise_naming_the_field(kwargs, field):
     scene = load_scene("compass")
     with pytest.raises(SettingsError, match=field):
         settings_for(scene, **kwargs)
+
+
+# ------------------------------------------------------------ cold-start fallback
+
+
+def test_failed_inertia_free_attempt_restarts_with_the_inertia_test(monkeypatch):
+    """A cold plan whose inertia-free attempt hits its iteration cap starts again from the
+    guess with IPOPT's inertia correction, converges, and says so."""
+    from gait_planner.ocp import solve
+
+    monkeypatch.setitem(solve.VARIANTS, "cold", {**solve.VARIANTS["cold"], "ipopt.max_iter": 3})
+    scene = load_scene("compass")
+    result = Planner().plan(scene, settings_for(scene))
+    assert result.success, result.message
+    assert "inertia-free attempt stopped (iteration limit reached) after 3 iterations" in \
+        result.settings["initial_guess"]
+    assert result.stats.iterations > 3
+    assert verify_result(result).ok
+
+
+def test_rotation_increments_are_bounded_translations_are_not():
+    from gait_planner.dynamics.discrete import DiscreteMechanics
+    from gait_planner.model.multibody import Multibody
+    from gait_planner.ocp.transcription import ROTATION_INCREMENT_MAX, Transcription
+
+    for name, translations in (("walker3d", 3), ("walker2d", 2)):
+        scene = load_scene(name)
+        tr = Transcription(DiscreteMechanics(Multibody(scene)), settings_for(scene))
+        lbx, ubx, _, _ = tr.bounds()
+        u_upper = ubx[: tr.U.numel()].reshape(tr.N - 1, tr.mb.ndof)
+        u_lower = lbx[: tr.U.numel()].reshape(tr.N - 1, tr.mb.ndof)
+        assert np.all(np.isinf(u_upper[:, :translations]))
+        assert np.all(u_upper[:, translations:] == ROTATION_INCREMENT_MAX)
+        assert np.all(u_lower[:, translations:] == -ROTATION_INCREMENT_MAX)
+        assert np.all(np.isinf(ubx[tr.U.numel(): -tr.S.shape[0]]))  # torques, forces free
