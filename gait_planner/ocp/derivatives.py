@@ -64,17 +64,17 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     hess = second(x, p, lam_f, lam_g)
     for group, (jac_fn, hess_fn) in zip(groups, pairs):
         n = group.z_index.shape[1]
-        z, pz = x[group.z_index], p[group.p_index]
+        z, pz, c = x[group.z_index], p[group.p_index], ca.DM(group.constants)
         if group.rows is None:  # a cost term
             y = ca.repmat(lam_f, 1, n)
-            grad = grad + _scatter(jac_fn.map(n)(z, pz), jac_fn.sparsity_out(0),
+            grad = grad + _scatter(jac_fn.map(n)(z, pz, c), jac_fn.sparsity_out(0),
                                    np.zeros((1, n), dtype=int), group.z_index, (1, nx),
                                    upper=False).T
         else:
             y = lam_g[group.rows]
-            jac = jac + _scatter(jac_fn.map(n)(z, pz), jac_fn.sparsity_out(0), group.rows,
+            jac = jac + _scatter(jac_fn.map(n)(z, pz, c), jac_fn.sparsity_out(0), group.rows,
                                  group.z_index, (ng, nx), upper=False)
-        hess = hess + _scatter(hess_fn.map(n)(z, pz, y), hess_fn.sparsity_out(0),
+        hess = hess + _scatter(hess_fn.map(n)(z, pz, c, y), hess_fn.sparsity_out(0),
                                group.z_index, group.z_index, (nx, nx), upper=True)
     return {
         "grad_f": ca.Function("nlp_grad_f", [x, p], [f_val, grad],
@@ -89,13 +89,14 @@ def _element_derivatives(group: ElementGroup) -> tuple[ca.Function, ca.Function]
     """(jacobian(z, pz) -> dr/dz, hessian(z, pz, y) -> d2(y . r)/dz2) of one element,
     both sparse (the Hessian as a full symmetric matrix)."""
     fn = group.function
-    z, pz = ca.SX.sym("z", fn.sparsity_in(0)), ca.SX.sym("pz", fn.sparsity_in(1))
-    r = fn(z, pz)
+    z, pz, c = (ca.SX.sym(name, fn.sparsity_in(i)) for i, name in enumerate(("z", "pz", "c")))
+    r = fn(z, pz, c)
     y = ca.SX.sym("y", r.shape[0])
     name = fn.name()
-    return (ca.Function(f"{name}_jac", [z, pz], [ca.jacobian(r, z)], ["z", "pz"], ["jac"]),
-            ca.Function(f"{name}_hess", [z, pz, y], [ca.hessian(ca.dot(y, r), z)[0]],
-                        ["z", "pz", "y"], ["hess"]))
+    return (ca.Function(f"{name}_jac", [z, pz, c], [ca.jacobian(r, z)], ["z", "pz", "c"],
+                        ["jac"]),
+            ca.Function(f"{name}_hess", [z, pz, c, y], [ca.hessian(ca.dot(y, r), z)[0]],
+                        ["z", "pz", "c", "y"], ["hess"]))
 
 
 def _scatter(mapped: ca.MX, pattern: ca.Sparsity, row_index: np.ndarray,

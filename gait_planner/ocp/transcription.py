@@ -53,12 +53,15 @@ ROTATION_INCREMENT_MAX = np.pi
 class ElementGroup:
     """Constraint rows (or cost terms) that are one SX Function of a few entries of x and
     p, evaluated at several nodes: g[rows[:, j]] += function(x[z_index[:, j]],
-    p[p_index[:, j]]), or, with rows None, cost += function(...)."""
+    p[p_index[:, j]], constants), or, with rows None, cost += function(...). Settings
+    enter as `constants` (an input, not folded in), so one compiled function serves them
+    all."""
 
-    function: ca.Function  # (z (nz,), pz (np,)) -> r (nr,)
+    function: ca.Function  # (z (nz,), pz (np,), c (nc,)) -> r (nr,)
     z_index: np.ndarray  # (nz, n) int
     p_index: np.ndarray  # (np, n) int
     rows: np.ndarray | None  # (nr, n) int; None: a term of the cost
+    constants: np.ndarray  # (nc,) c: the base time step (s)
 
 
 class Transcription:
@@ -131,7 +134,8 @@ class Transcription:
                 self._dynamics_element(*variant),
                 np.stack([self._element_z_index(n, *variant) for n in nodes], axis=1),
                 np.stack([self._element_p_index(n, *variant) for n in nodes], axis=1),
-                np.stack([np.arange(mb.ndof) + (n - 1) * mb.ndof for n in nodes], axis=1)))
+                np.stack([np.arange(mb.ndof) + (n - 1) * mb.ndof for n in nodes], axis=1),
+                np.array([self.settings.base_time_step])))
         for k, C in enumerate(self.rows):
             nodes = [n for n in range(1, N) if self.phase_of_interval[n] == k]
             if not nodes:
@@ -167,12 +171,13 @@ class Transcription:
     def _dynamics_element(self, mirrored: bool, next_mirrored: bool) -> ca.Function:
         """The phase-independent part of a node's dynamics row (ndof,) as an SX Function
         of z = (u_{n-1}, u_n, u_{n+1}, T_{n-1}, T_n, sigma_{n-1}, sigma_n) (scaled unknowns,
-        a mirrored node given by the u of its source node) and pz = (qref_{n-1}, qref_n,
-        qref_{n+1}, step length)."""
-        mb, s = self.mb, self.settings
+        a mirrored node given by the u of its source node), pz = (qref_{n-1}, qref_n,
+        qref_{n+1}, step length) and c = (base time step)."""
+        mb = self.mb
         nd, nt, k = mb.ndof, mb.nt, mb.k
         z = ca.SX.sym("z", 3 * nd + 2 * nt + 2)
         pz = ca.SX.sym("pz", 3 * k + 1)
+        c = ca.SX.sym("c", 1)
         step = pz[3 * k]
         q = [mb.reparametrise(z[i * nd : (i + 1) * nd], pz[i * k : (i + 1) * k]) for i in range(3)]
         for i, flag in ((1, mirrored), (2, next_mirrored)):
@@ -182,11 +187,11 @@ class Transcription:
         t1 = TORQUE_SCALE * z[3 * nd + nt : 3 * nd + 2 * nt]
         if mirrored:  # tau_{N-1} is the image of tau_0
             t1 = ca.mtimes(ca.DM(self.B), t1)
-        h0, h1 = s.base_time_step * z[3 * nd + 2 * nt], s.base_time_step * z[3 * nd + 2 * nt + 1]
+        h0, h1 = c[0] * z[3 * nd + 2 * nt], c[0] * z[3 * nd + 2 * nt + 1]
         r = self.mech.discrete_euler_lagrange(q[0], q[1], q[2], h0, h1, t0, t1)
         res = mb.null_space_transpose(q[1], r) / (0.5 * (h0 + h1) * FORCE_SCALE)
         name = "dynamics_element" + ("_mirrored" if mirrored else "_next_mirrored" if next_mirrored else "")
-        return ca.Function(name, [z, pz], [res], ["z", "pz"], ["r"])
+        return ca.Function(name, [z, pz, c], [res], ["z", "pz", "c"], ["r"])
 
     def _element_z_index(self, n: int, mirrored: bool, next_mirrored: bool) -> np.ndarray:
         """Indices into x of the element's z (see _dynamics_element) at node n."""
@@ -293,25 +298,25 @@ class Transcription:
                 self._kinetic_element(next_mirrored),
                 np.stack([self._kinetic_z_index(n, next_mirrored) for n in intervals], 1),
                 np.stack([self._kinetic_p_index(n, next_mirrored) for n in intervals], 1),
-                None))
+                None, np.array([s.base_time_step])))
         self.cost_without_elements = s.torque_regularisation * torque
         return kinetic + self.cost_without_elements
 
     def _kinetic_element(self, next_mirrored: bool) -> ca.Function:
         """h_n times the discrete kinetic energy of interval n,
         0.5 (q_{n+1} - q_n)^T M (q_{n+1} - q_n) / h_n (J s), as an SX Function of
-        z = (u_n, u_{n+1}, sigma_n) and pz = (qref_n, qref_{n+1}, step length)."""
+        z = (u_n, u_{n+1}, sigma_n), pz = (qref_n, qref_{n+1}, step length) and
+        c = (base time step)."""
         mb, nd, k = self.mb, self.mb.ndof, self.mb.k
-        z, pz = ca.SX.sym("z", 2 * nd + 1), ca.SX.sym("pz", 2 * k + 1)
+        z, pz, c = ca.SX.sym("z", 2 * nd + 1), ca.SX.sym("pz", 2 * k + 1), ca.SX.sym("c", 1)
         q0 = mb.reparametrise(z[0:nd], pz[0:k])
         q1 = mb.reparametrise(z[nd : 2 * nd], pz[k : 2 * k])
         if next_mirrored:
             q1 = ca.mtimes(ca.DM(self.A), q1) + pz[2 * k] * ca.DM(self.shift)
         dq = q1 - q0
-        kinetic = 0.5 * ca.dot(dq, ca.DM(self.mb.mass_diagonal) * dq) / (
-            self.settings.base_time_step * z[2 * nd])
+        kinetic = 0.5 * ca.dot(dq, ca.DM(self.mb.mass_diagonal) * dq) / (c[0] * z[2 * nd])
         name = "kinetic_element" + ("_next_mirrored" if next_mirrored else "")
-        return ca.Function(name, [z, pz], [kinetic], ["z", "pz"], ["J"])
+        return ca.Function(name, [z, pz, c], [kinetic], ["z", "pz", "c"], ["J"])
 
     def _kinetic_z_index(self, n: int, next_mirrored: bool) -> np.ndarray:
         nd = self.mb.ndof

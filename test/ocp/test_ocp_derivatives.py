@@ -70,7 +70,8 @@ def test_elements_and_rest_sum_to_g_and_cost():
     g_sum, f_sum = g_rest.copy(), float(f_rest[0])
     for group in tr.elements:
         for j in range(group.z_index.shape[1]):
-            value = np.array(group.function(x[group.z_index[:, j]], p[group.p_index[:, j]]))
+            value = np.array(group.function(x[group.z_index[:, j]], p[group.p_index[:, j]],
+                                            group.constants))
             if group.rows is None:
                 f_sum += value.item()
             else:
@@ -109,9 +110,9 @@ def test_compiled_functions_agree_and_are_cached(tmp_path):
     tr, x, p, lam_g = _problem("compass")
     group = tr.elements[0]
     fn = group.function
-    z, pz = x[group.z_index[:, 0]], p[group.p_index[:, 0]]
+    args = (x[group.z_index[:, 0]], p[group.p_index[:, 0]], group.constants)
     (compiled,) = compile_functions([fn], tmp_path)
-    assert float(np.abs(np.array(compiled(z, pz)) - np.array(fn(z, pz))).max()) == 0.0
+    assert float(np.abs(np.array(compiled(*args)) - np.array(fn(*args))).max()) == 0.0
     libraries = sorted(tmp_path.glob("*.so"))
     stamps = [lib.stat().st_mtime_ns for lib in libraries]
     compile_functions([fn], tmp_path)  # found in the cache: nothing rebuilt or added
@@ -153,3 +154,18 @@ def test_unwritable_cache_is_a_clear_error(tmp_path):
     tr, *_ = _problem("compass")
     with pytest.raises(CompileError, match="cannot build in"):
         compile_functions([tr.elements[0].function], blocker / "cache")
+
+
+def test_one_compiled_library_serves_every_base_time_step(tmp_path):
+    import dataclasses
+
+    scene = load_scene("compass")
+    functions = []
+    for dt in (0.01, 0.02):
+        s = dataclasses.replace(settings_for(scene), base_time_step=dt)
+        functions.append(Transcription(DiscreteMechanics(Multibody(scene)), s).elements[0])
+    compile_functions([functions[0].function], tmp_path)
+    libraries = sorted(tmp_path.glob("*.so"))
+    compile_functions([functions[1].function], tmp_path)
+    assert sorted(tmp_path.glob("*.so")) == libraries
+    assert functions[1].constants.tolist() == [0.02]
