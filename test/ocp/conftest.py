@@ -3,8 +3,9 @@
 `solved(name)` plans scene `name` with its default settings on one `Planner` per scene
 (kept, so warm-start and failure tests reuse the built problem), records the result with
 the real MCAP writer into the session's temporary folder and verifies the recording with
-`gait_planner.verify`. Costs on this 2-core machine: compass ~1 s, walker2d ~25 s
-(build ~16 s), walker3d ~2 min (build ~60 s): tests needing walker3d are marked slow.
+`gait_planner.verify`. Costs on this 2-core machine (benchmarks/plan.py, 2026-11-23):
+compass under 1 s, walker2d ~10 s (build 6 s), walker3d ~21 s (build 13 s): tests needing
+walker3d are marked slow.
 
 The `slow` marker is registered by test/conftest.py; `pytest_configure` below registers it
 again only if this folder runs on its own with another root conftest.
