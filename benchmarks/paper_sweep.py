@@ -4,6 +4,10 @@ gait: walker3d, step length 0.6338 m, minimal kinetic energy. Prints one row per
 Usage:
   .venv/bin/python benchmarks/paper_sweep.py [--intervals 6 8 10] [--dt 0.01 0.0125]
   .venv/bin/python benchmarks/paper_sweep.py --intervals 4 6 8 12 16 --half-cycle 0.39
+  .venv/bin/python benchmarks/paper_sweep.py --intervals 8 --set torque_regularisation=1e-5
+
+--set NAME=VALUE (repeatable; VALUE is JSON, e.g. joint_limits={} or torso_lean_max=0)
+overrides a gait option of the scene for every row.
 
 With --half-cycle T the base time step is T / (5 * intervals - 1): the half cycle spans
 nodes 0..N-1 (paper eqs. 7-9), so at sigma = 1 it lasts T for every row, and each row
@@ -17,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import math
 import time
 
@@ -31,9 +36,15 @@ def main() -> None:
     parser.add_argument("--intervals", type=int, nargs="+", default=[6, 8, 10])
     parser.add_argument("--dt", type=float, nargs="+", default=[0.01])
     parser.add_argument("--compile", action="store_true", help="compiled derivatives")
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="override a gait option (VALUE in JSON)")
     parser.add_argument("--half-cycle", type=float,
                         help="s at sigma = 1; base time step = this / (intervals in all phases - 1)")
     args = parser.parse_args()
+    overrides = {}
+    for item in args.set:
+        name, _, value = item.partition("=")
+        overrides[name] = json.loads(value)
     scene = load_scene(args.scene)
     print(f"# {args.scene} sweep, {time.strftime('%Y-%m-%d %H:%M')}; paper (walker3d): "
           "J = 41.2256 J s, T = 0.5988 s, sigma = 1.5, 1.5, 1.4889, 1.4724")
@@ -42,7 +53,7 @@ def main() -> None:
         phases = len(scene.gait.phases)
         for dt in ([args.half_cycle / (phases * n - 1)] if args.half_cycle else args.dt):
             s = dataclasses.replace(
-                settings_for(scene, intervals_per_phase=n, compiled=args.compile),
+                settings_for(scene, intervals_per_phase=n, compiled=args.compile, **overrides),
                 base_time_step=dt)
             r = Planner().plan(scene, s)
             rows.append((n, dt, r))
