@@ -43,26 +43,25 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     f, f_rest, g, g_rest = ca.Function(
         "fg", [tr.x, tr.p], [tr.cost, tr.cost_without_elements, tr.g, tr.g_without_elements]
     ).expand()(x_sx, p_sx)
-    groups = tr.elements
     lagrangian = lam_f_sx * f_rest + ca.dot(lam_g_sx, g_rest)
-    gradient = ca.Function("nlp_rest_grad_f", [x_sx, p_sx], [f, ca.gradient(f_rest, x_sx)])
-    first = ca.Function("nlp_rest_jac_g", [x_sx, p_sx], [g, ca.jacobian(g_rest, x_sx)])
-    second = ca.Function("nlp_rest_second", [x_sx, p_sx, lam_f_sx, lam_g_sx],
-                         [ca.triu(ca.hessian(lagrangian, x_sx)[0])])
+    rest_grad = ca.Function("nlp_rest_grad_f", [x_sx, p_sx], [f, ca.gradient(f_rest, x_sx)])
+    rest_jac = ca.Function("nlp_rest_jac_g", [x_sx, p_sx], [g, ca.jacobian(g_rest, x_sx)])
+    rest_hess = ca.Function("nlp_rest_hess_l", [x_sx, p_sx, lam_f_sx, lam_g_sx],
+                            [ca.triu(ca.hessian(lagrangian, x_sx)[0])])
 
-    pairs = [_element_derivatives(group) for group in groups]
+    pairs = [_element_derivatives(group) for group in tr.elements]
     if compiler is not None:  # only what runs at more than one node is worth compiling
-        chosen = [fn for group, pair in zip(groups, pairs) if group.z_index.shape[1] > 1
+        chosen = [fn for group, pair in zip(tr.elements, pairs) if group.z_index.shape[1] > 1
                   for fn in pair]
         done = dict(zip([fn.name() for fn in chosen], compiler(chosen)))
         pairs = [tuple(done.get(fn.name(), fn) for fn in pair) for pair in pairs]
 
     x, p = ca.MX.sym("x", nx), ca.MX.sym("p", int(tr.p.shape[0]))
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
-    f_val, grad = gradient(x, p)
-    g_val, jac = first(x, p)
-    hess = second(x, p, lam_f, lam_g)
-    for group, (jac_fn, hess_fn) in zip(groups, pairs):
+    f_val, grad = rest_grad(x, p)
+    g_val, jac = rest_jac(x, p)
+    hess = rest_hess(x, p, lam_f, lam_g)
+    for group, (jac_fn, hess_fn) in zip(tr.elements, pairs):
         n = group.z_index.shape[1]
         z, pz, c = x[group.z_index], p[group.p_index], ca.DM(group.constants)
         if group.rows is None:  # a cost term

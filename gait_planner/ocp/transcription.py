@@ -132,8 +132,8 @@ class Transcription:
         for variant, nodes in self._element_nodes().items():
             self.elements.append(ElementGroup(
                 self._dynamics_element(*variant),
-                np.stack([self._element_z_index(n, *variant) for n in nodes], axis=1),
-                np.stack([self._element_p_index(n, *variant) for n in nodes], axis=1),
+                np.stack([self._element_z_index(n) for n in nodes], axis=1),
+                np.stack([self._element_p_index(n) for n in nodes], axis=1),
                 np.stack([np.arange(mb.ndof) + (n - 1) * mb.ndof for n in nodes], axis=1),
                 np.array([self.settings.base_time_step])))
         for k, C in enumerate(self.rows):
@@ -193,23 +193,34 @@ class Transcription:
         name = "dynamics_element" + ("_mirrored" if mirrored else "_next_mirrored" if next_mirrored else "")
         return ca.Function(name, [z, pz, c], [res], ["z", "pz", "c"], ["r"])
 
-    def _element_z_index(self, n: int, mirrored: bool, next_mirrored: bool) -> np.ndarray:
-        """Indices into x of the element's z (see _dynamics_element) at node n."""
-        mb = self.mb
-        source = [n - 1, 0 if mirrored else n, (1 if mirrored else 0) if next_mirrored else n + 1]
-        u = [np.arange(mb.ndof) + m * mb.ndof for m in source]
-        nu = self.U.numel()
-        tau = [nu + np.arange(mb.nt) + m * mb.nt for m in (n - 1, 0 if mirrored else n)]
-        sig0 = nu + self.T.numel() + self.L.numel()
-        scaling = [sig0 + self.mb.scene.gait.phases[self.phase_of_interval[m]].scaling
-                   for m in (n - 1, n)]
-        return np.concatenate(u + tau + [np.array(scaling)])
+    def _source(self, m: int) -> int:
+        """The free node (or interval) whose unknowns give node m (or interval m): itself, or
+        for the mirror images N-1 and N (interval N-1), node 0 and 1 (interval 0)."""
+        return m - (self.N - 1) if m >= self.N - 1 else m
 
-    def _element_p_index(self, n: int, mirrored: bool, next_mirrored: bool) -> np.ndarray:
-        """Indices into p of the element's pz at node n."""
-        k = self.mb.k
-        source = [n - 1, 0 if mirrored else n, (1 if mirrored else 0) if next_mirrored else n + 1]
-        return np.concatenate([np.arange(k) + m * k for m in source] + [[self.Qref.numel()]])
+    def _u_index(self, node: int) -> np.ndarray:
+        return np.arange(self.mb.ndof) + self._source(node) * self.mb.ndof
+
+    def _qref_index(self, node: int) -> np.ndarray:
+        return np.arange(self.mb.k) + self._source(node) * self.mb.k
+
+    def _tau_index(self, interval: int) -> np.ndarray:
+        return self.U.numel() + np.arange(self.mb.nt) + self._source(interval) * self.mb.nt
+
+    def _scaling_index(self, interval: int) -> int:
+        first = self.U.numel() + self.T.numel() + self.L.numel()
+        return first + self.mb.scene.gait.phases[self.phase_of_interval[interval]].scaling
+
+    def _element_z_index(self, n: int) -> np.ndarray:
+        """Indices into x of the dynamics element's z (see _dynamics_element) at node n."""
+        return np.concatenate([self._u_index(n - 1), self._u_index(n), self._u_index(n + 1),
+                               self._tau_index(n - 1), self._tau_index(n),
+                               [self._scaling_index(n - 1), self._scaling_index(n)]])
+
+    def _element_p_index(self, n: int) -> np.ndarray:
+        """Indices into p of the dynamics element's pz at node n."""
+        return np.concatenate([self._qref_index(n - 1), self._qref_index(n),
+                               self._qref_index(n + 1), [self.Qref.numel()]])
 
     def _contacts(self):
         mb, N = self.mb, self.N
@@ -296,8 +307,8 @@ class Transcription:
         for next_mirrored, intervals in ((False, range(N - 2)), (True, [N - 2])):
             self.elements.append(ElementGroup(
                 self._kinetic_element(next_mirrored),
-                np.stack([self._kinetic_z_index(n, next_mirrored) for n in intervals], 1),
-                np.stack([self._kinetic_p_index(n, next_mirrored) for n in intervals], 1),
+                np.stack([self._kinetic_z_index(n) for n in intervals], 1),
+                np.stack([self._kinetic_p_index(n) for n in intervals], 1),
                 None, np.array([s.base_time_step])))
         self.cost_without_elements = s.torque_regularisation * torque
         return kinetic + self.cost_without_elements
@@ -318,18 +329,11 @@ class Transcription:
         name = "kinetic_element" + ("_next_mirrored" if next_mirrored else "")
         return ca.Function(name, [z, pz, c], [kinetic], ["z", "pz", "c"], ["J"])
 
-    def _kinetic_z_index(self, n: int, next_mirrored: bool) -> np.ndarray:
-        nd = self.mb.ndof
-        sig = self.U.numel() + self.T.numel() + self.L.numel() + \
-            self.mb.scene.gait.phases[self.phase_of_interval[n]].scaling
-        return np.concatenate([np.arange(nd) + n * nd,
-                               np.arange(nd) + (0 if next_mirrored else n + 1) * nd, [sig]])
+    def _kinetic_z_index(self, n: int) -> np.ndarray:
+        return np.concatenate([self._u_index(n), self._u_index(n + 1), [self._scaling_index(n)]])
 
-    def _kinetic_p_index(self, n: int, next_mirrored: bool) -> np.ndarray:
-        k = self.mb.k
-        return np.concatenate([np.arange(k) + n * k,
-                               np.arange(k) + (0 if next_mirrored else n + 1) * k,
-                               [self.Qref.numel()]])
+    def _kinetic_p_index(self, n: int) -> np.ndarray:
+        return np.concatenate([self._qref_index(n), self._qref_index(n + 1), [self.Qref.numel()]])
 
     def _phase_name(self, k: int) -> str:
         return self.mb.scene.gait.phases[k].name
