@@ -161,9 +161,10 @@ class Planner:
         start), warm_start_init_point with a small initial barrier.
         * "warm" pushes the start 1e-9 (instead of 1e-3) inside the bounds, which keeps a
           previous optimum's active set: walker2d re-plans in 4 instead of 9 iterations (a
-          cold start with it needs 126 instead of 77).
-        (A loose first stage, tol 1e-4 with σ fixed, was tried: walker3d then needed 249
-        iterations in all instead of 168.)
+          cold start with it needs 126 instead of 77; measured with IPOPT's inertia test,
+          before the inertia-free variants).
+        (A loose first stage, tol 1e-4 with σ fixed, was tried with the inertia test:
+        walker3d then needed 249 iterations in all instead of 168.)
         """
         if variant not in built.solvers:
             start = time.perf_counter()
@@ -203,7 +204,8 @@ class Planner:
             built = self._build(scene, settings)
             warm_start = warm_start and bool(built.stored)
             attempts = WARM_ATTEMPTS if warm_start else COLD_ATTEMPTS
-            solvers = {v: self._solver(built, settings, v) for a in attempts for v, _ in a}
+            for variant, _ in attempts[0]:  # a fallback's solver is built if it is needed
+                self._solver(built, settings, variant)
         except (ValueError, RuntimeError) as err:
             return failed_result(scene, settings, f"could not build the problem: {err}")
         start = time.perf_counter()
@@ -231,7 +233,7 @@ class Planner:
         for number, attempt in enumerate(attempts):
             x0, duals, success = x_start, duals_start, False
             for variant, fix_sigma in attempt:
-                solver = solvers[variant]
+                solver = self._solver(built, settings, variant)
                 lb, ub = lbx.copy(), ubx.copy()
                 if fix_sigma:
                     lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
