@@ -4,10 +4,23 @@ One BLAS thread for CasADi's bundled OpenBLAS (read when CasADi first loads its 
 plugin, so this has to run before the first solver is built): MUMPS then factorises the
 same way every time and IPOPT takes the same path on every run. With two threads walker3d's cold solve took 160 or 199 iterations
 depending on the run's threading, and spent a third of its time spinning in the kernel
-(benchmarks/REPORT.md). A value set by the caller is kept.
+(benchmarks/REPORT.md).
+
+numpy's OpenBLAS chooses its kernels by CPU (DYNAMIC_ARCH; CasADi's is built for one core
+type): the kinematic guess's Gauss-Newton solves then differ in the last bits from machine
+to machine, and the cold start ends in another local minimum. Measured on walker3d's
+default request (compiled derivatives), numpy's kernels forced to Haswell or Zen: 96
+iterations, J = 20.7801 J s; SkylakeX (what an AVX-512 Intel machine picks): 118, J =
+20.8470; Prescott: 79, J = 20.8936. The kernels are therefore pinned to Haswell (any x86-64
+CPU with AVX2), which takes effect only if this package is imported before numpy loads
+OpenBLAS. Values set by the caller are kept (a CPU without AVX2 needs
+OPENBLAS_CORETYPE=Prescott).
 """
 
 import os
+import platform
 
 for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
     os.environ.setdefault(_name, "1")
+if platform.machine() in ("x86_64", "AMD64"):
+    os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")

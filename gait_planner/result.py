@@ -4,7 +4,9 @@
 it (`gait_planner.io.messages` owns the conversion to message layouts).
 
 Node and interval conventions (DESIGN.md section 7): nodes n = 0 .. N, intervals
-n = 0 .. N-1 between t_n and t_{n+1}. The torque tau[n] acts on interval n. Nodes N-1 and N
+n = 0 .. N-1 between t_n and t_{n+1}. Joint torques are node values tau[n], linear in
+time between nodes; node n's discrete equation applies (h_{n-1} + h_n)/2 B^T(q_n) tau[n]
+(`gait_planner.ocp.transcription`). Nodes N-1 and N
 are the mirror images of nodes 0 and 1 (shifted by the step length), so the half cycle
 lasts t_{N-1} - t_0 (`duration`).
 """
@@ -44,7 +46,7 @@ class PlanResult:
         times: (N+1,) s, times[0] = 0.
         q: (N+1, k) director coordinates per node, bodies in scene order, each
             (phi, d1, d2, d3) in world coordinates (m, -).
-        tau: (N, nt) joint torques per interval, N m; spherical joints: components along
+        tau: (N+1, nt) joint torques per node, N m; spherical joints: components along
             the parent's directors; revolute joints: about the joint axis.
         joint_angle_names / joint_angles: (N+1, na) rad, `gait_planner.model.angles`.
         joint_velocities: (N+1, na) rad/s (central differences of the angles).
@@ -52,6 +54,9 @@ class PlanResult:
         active_contacts: (N+1,) names of the contacts held at each node.
         contact_forces: contact name -> (N+1, 3) ground force on the body, N, world frame;
             zero where the contact is not active.
+        roll_moments: body name -> (N+1,) N m, the moment of the ground about the heel-toe
+            line of a body in 3D full contact, acting as M (d2 x e_z) (`ocp.contacts`),
+            which two point forces on that line cannot carry; zero elsewhere.
         generalized_force: (N+1, k) f+_{n-1} + f-_n (N s: discrete forces are impulses
             over half intervals; director form, zero on phi).
         kinetic_energy, potential_energy: (N+1,) J.
@@ -75,6 +80,7 @@ class PlanResult:
     phases: tuple[str, ...]
     active_contacts: tuple[tuple[str, ...], ...]
     contact_forces: dict[str, np.ndarray]
+    roll_moments: dict[str, np.ndarray]
     generalized_force: np.ndarray
     kinetic_energy: np.ndarray
     potential_energy: np.ndarray

@@ -11,6 +11,8 @@
 
 from __future__ import annotations
 
+import gait_planner  # noqa: F401  (first: pins numpy's BLAS kernels before numpy loads)
+
 import functools
 from typing import Callable, Iterator, NamedTuple
 

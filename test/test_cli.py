@@ -14,7 +14,7 @@ def test_run_plans_records_draws_and_compares(tmp_path, capsys, monkeypatch):
     assert main(["run", "--scene", "compass", "--out", str(out), "--no-rrd"]) == 0
     text = capsys.readouterr().out
     assert out.is_file() and out.with_suffix(".png").is_file()
-    assert "this plan: J = 1.38" in text and "the paper" in text
+    assert "this plan: J = 1.31" in text and "the paper" in text
     assert "no display" in text
 
 

@@ -72,7 +72,9 @@ class RecordedPlan:
     kinetic_energy, potential_energy (N+1,).
     Contacts (/gait_planner/contact_forces), per node: contact_names, contact_points and
     contact_force_vectors ((m_n, 3) arrays, m_n active contacts); `contact_force(name)`
-    gives the dense (N+1, 3) series, zero where inactive.
+    gives the dense (N+1, 3) series, zero where inactive. Per foot in contact:
+    wrench_bodies, wrench_points ((b_n, 3)), wrenches ((b_n, 6): force N, moment N m about
+    the wrench point, world) and centers_of_pressure ((b_n, 3)).
     Trajectory (/gait_planner/joint_trajectory, one message): joint_names, trajectory_stamp_ns,
     time_from_start (N+1,) s, positions, velocities, effort (N+1, na).
     Joint states: joint_state_position / _velocity / _effort (N+1, na).
@@ -105,6 +107,10 @@ class RecordedPlan:
     contact_names: tuple[tuple[str, ...], ...]
     contact_points: tuple[np.ndarray, ...]
     contact_force_vectors: tuple[np.ndarray, ...]
+    wrench_bodies: tuple[tuple[str, ...], ...]
+    wrench_points: tuple[np.ndarray, ...]
+    wrenches: tuple[np.ndarray, ...]
+    centers_of_pressure: tuple[np.ndarray, ...]
     joint_names: tuple[str, ...]
     trajectory_stamp_ns: int
     time_from_start: np.ndarray
@@ -130,6 +136,11 @@ class RecordedPlan:
             if name in names:
                 out[n] = forces[names.index(name)]
         return out
+
+
+def _points(points: Any) -> np.ndarray:
+    """(m, 3) from geometry_msgs/Point-like messages."""
+    return np.array([[p.x, p.y, p.z] for p in points]).reshape(-1, 3)
 
 
 def _ns(time_msg: Any) -> int:
@@ -224,10 +235,17 @@ def read_plan_mcap(path: str | Path) -> RecordedPlan:
         kinetic_energy=np.array([m.kinetic_energy for m in states], dtype=float),
         potential_energy=np.array([m.potential_energy for m in states], dtype=float),
         contact_names=tuple(tuple(m.contact_names) for m in contacts),
-        contact_points=tuple(np.array([[p.x, p.y, p.z] for p in m.points]).reshape(-1, 3)
-                             for m in contacts),
+        contact_points=tuple(_points(m.points) for m in contacts),
         contact_force_vectors=tuple(np.array([[f.x, f.y, f.z] for f in m.forces]).reshape(-1, 3)
                                     for m in contacts),
+        # recordings made before the per-foot wrenches were published have none
+        wrench_bodies=tuple(tuple(getattr(m, "wrench_bodies", ())) for m in contacts),
+        wrench_points=tuple(_points(getattr(m, "wrench_points", ())) for m in contacts),
+        wrenches=tuple(np.array([[w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y,
+                                  w.torque.z] for w in getattr(m, "wrenches", ())]).reshape(-1, 6)
+                       for m in contacts),
+        centers_of_pressure=tuple(_points(getattr(m, "centers_of_pressure", ()))
+                                  for m in contacts),
         joint_names=tuple(trajectory.joint_names),
         trajectory_stamp_ns=_ns(trajectory.header.stamp),
         time_from_start=np.array([_ns(p.time_from_start) * 1e-9 for p in points]),

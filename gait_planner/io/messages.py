@@ -14,9 +14,9 @@ Conventions:
   yaw with R_rel = Ry(pitch) Rx(roll) Rz(yaw); revolute: right-handed about the axis).
 * Effort (JointTrajectory points and JointState): N m, in the order of the joint angle
   names, the torque conjugate to each joint angle (effort . angle rate = joint power), so a
-  controller can use it with the positions as given. tau is piecewise constant on the
-  intervals: node n carries the torque of the interval [t_n, t_{n+1}] starting there,
-  expressed with the angles at node n; the last node N repeats tau[N-1]. A revolute
+  controller can use it with the positions as given. Node n carries the planner's node
+  torque tau[n] (torques are linear in time between nodes), the torque node n's discrete
+  equation applies, expressed with the angles at node n. A revolute
   joint's effort is its torque about the axis; a spherical joint's three efforts are the
   projections of its couple on the pitch axis (the parent's d2), the once-pitched roll axis
   and the child's yaw axis d3 (`gait_planner.model.angles.conjugate_torques`). The
@@ -28,8 +28,10 @@ Conventions:
   world), published as the planner split them. For full contact (heel and forefoot of one
   foot both active) the two forces sum to the net ground force on that foot; how that net
   force is divided between the two points is the planner's convention (documented with the
-  contact multipliers in gait_planner.ocp) and the couple of the ground about the heel-toe
-  line, which two point forces on that line cannot carry, is not part of these messages.
+  contact multipliers in gait_planner.ocp.contacts: each point's force lies in its own
+  friction cone). The couple of the ground about the heel-toe line, which two point forces
+  on that line cannot carry, is in the per-foot wrenches (`foot_wrenches`): force and
+  moment about the mean of the foot's active points, and the centre of pressure.
 * /tf: per node one TFMessage: ``world -> <root>`` (the root's COM and directors) and one
   transform per moving URDF joint (origin translation, rotation about the axis by the joint
   angle); /tf_static: the contact frames. Frames are those of `gait_planner.io.urdf`.
@@ -48,7 +50,8 @@ from gait_planner.io.urdf import WORLD_FRAME, KinematicTree, kinematic_tree, sce
 from gait_planner.model.angles import angle_names, conjugate_torques
 from gait_planner.result import PlanResult
 
-__all__ = ["check_result", "contact_forces", "contact_points", "fill_message", "joint_states",
+__all__ = ["check_result", "contact_forces", "contact_points", "fill_message", "foot_wrenches",
+           "joint_states",
            "joint_trajectory", "multibody_states", "node_efforts", "plan_response_fields",
            "quaternion_msg", "robot_description", "node_stamps_ns", "tf_messages", "tf_static",
            "time_msg", "WORLD_FRAME"]
@@ -126,14 +129,11 @@ def _vector3(v) -> dict[str, float]:
 
 def node_efforts(result: PlanResult) -> np.ndarray:
     """(N+1, na) efforts per node: the torques conjugate to the joint angles
-    (`gait_planner.model.angles.conjugate_torques`) of tau[n], the torque of the interval
-    starting at node n; node N repeats tau[N-1]."""
+    (`gait_planner.model.angles.conjugate_torques`) of the node torques tau[n]."""
     tau = np.asarray(result.tau, dtype=float)
-    n_nodes = result.n_nodes
     if tau.shape[0] == 0:
-        return np.zeros((n_nodes, len(result.joint_angle_names)))
-    per_node = tau[np.minimum(np.arange(n_nodes), tau.shape[0] - 1)]
-    return conjugate_torques(result.scene, result.joint_angles, per_node)
+        return np.zeros((result.n_nodes, len(result.joint_angle_names)))
+    return conjugate_torques(result.scene, result.joint_angles, tau)
 
 
 # ---------------------------------------------------------------------------- validation
@@ -154,7 +154,7 @@ def check_result(result: PlanResult, *, finite: bool = True) -> None:
         fail("it has no time nodes")
     if names != angle_names(scene):
         fail(f"joint_angle_names {names} differ from the scene's {angle_names(scene)}")
-    shapes = {"times": (n,), "q": (n, 12 * nb), "tau": (n - 1, na), "joint_angles": (n, na),
+    shapes = {"times": (n,), "q": (n, 12 * nb), "tau": (n, na), "joint_angles": (n, na),
               "joint_velocities": (n, na), "generalized_force": (n, 12 * nb),
               "kinetic_energy": (n,), "potential_energy": (n,)}
     for field, shape in shapes.items():
@@ -239,6 +239,35 @@ def contact_points(result: PlanResult, node: int, names: Sequence[str]) -> list[
     return out
 
 
+def foot_wrenches(result: PlanResult, node: int) -> list[tuple[str, np.ndarray, np.ndarray,
+                                                               np.ndarray, np.ndarray]]:
+    """Per body with an active contact at `node`, in scene body order: (body, reference
+    point r, force F, moment M about r, centre of pressure), world frame, m, N, N m.
+    r is the mean of the body's active points; F and M sum the point forces and their
+    moments about r plus the full contact's roll moment M_roll (d2 x e_z); the centre of
+    pressure is r + (-M_y, M_x, 0) / F_z (r itself where F_z <= 0)."""
+    scene = result.scene
+    names = list(result.active_contacts[node])
+    points = dict(zip(names, contact_points(result, node, names)))
+    frames = _frames(np.asarray(result.q[node], dtype=float), len(scene.bodies))
+    out = []
+    for body in (b.name for b in scene.bodies):
+        mine = [c for c in names if scene.contact(c).body == body]
+        if not mine:
+            continue
+        r = np.mean([points[c] for c in mine], axis=0)
+        forces = [np.asarray(result.contact_forces[c], dtype=float)[node] for c in mine]
+        F = np.sum(forces, axis=0)
+        M = np.sum([np.cross(points[c] - r, f) for c, f in zip(mine, forces)], axis=0)
+        roll = result.roll_moments.get(body)
+        if roll is not None:
+            d2 = frames[scene.body_index(body)][1][:, 1]
+            M = M + float(roll[node]) * np.cross(d2, [0.0, 0.0, 1.0])
+        cop = r + (np.array([-M[1], M[0], 0.0]) / F[2] if F[2] > 0 else 0.0)
+        out.append((body, r, F, M, cop))
+    return out
+
+
 def contact_forces(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
     """gait_planner_msgs/ContactForces per node, active contacts only (module docstring)."""
     stamps = node_stamps_ns(result, start_ns)
@@ -246,6 +275,7 @@ def contact_forces(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
     messages = []
     for n in range(result.n_nodes):
         names = list(result.active_contacts[n])
+        wrenches = foot_wrenches(result, n)
         messages.append({
             "header": _header(stamps[n], WORLD_FRAME),
             "node": n,
@@ -254,6 +284,10 @@ def contact_forces(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
             "points": [_vector3(p) for p in contact_points(result, n, names)],
             "forces": [_vector3(np.asarray(result.contact_forces[c], dtype=float)[n])
                        for c in names],
+            "wrench_bodies": [w[0] for w in wrenches],
+            "wrench_points": [_vector3(w[1]) for w in wrenches],
+            "wrenches": [{"force": _vector3(w[2]), "torque": _vector3(w[3])} for w in wrenches],
+            "centers_of_pressure": [_vector3(w[4]) for w in wrenches],
         })
     return messages
 

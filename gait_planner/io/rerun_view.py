@@ -11,7 +11,7 @@ Entities (timeline ``time``: s from the start of the half cycle, duration type; 
 * ``world/contacts/points`` and ``world/contacts/forces``: the active contact points and
   the ground forces on them as arrows, `FORCE_SCALE` m per N (1 mm/N).
 * ``plots/joint_angle/<angle>`` (rad), ``plots/joint_torque/<angle>`` (N m, the effort
-  convention of `gait_planner.io.messages`: tau of the interval starting at the node),
+  convention of `gait_planner.io.messages`: the node torque),
   ``plots/contact_force/<contact>/{x,y,z}`` (N, zero while inactive),
   ``plots/energy/{kinetic,potential,total}`` (J) as Scalars.
 * ``plan``: a text summary (cost, duration, step length, sigma, solver statistics).

@@ -34,6 +34,7 @@ STANDARD_DEFINITIONS: dict[str, str] = {
     "geometry_msgs/Vector3": "float64 x\nfloat64 y\nfloat64 z\n",
     "geometry_msgs/Quaternion": "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n",
     "geometry_msgs/Transform": "Vector3 translation\nQuaternion rotation\n",
+    "geometry_msgs/Wrench": "Vector3 force\nVector3 torque\n",
     "geometry_msgs/TransformStamped": (
         "std_msgs/Header header\nstring child_frame_id\nTransform transform\n"
     ),

@@ -34,7 +34,9 @@ YAML layout (exactly these keys; unknown keys are errors)::
       mirror: {thigh_r: thigh_l}      # optional; one way suffices, unnamed bodies -> selves
       phases:
         - {name: right_full, contacts: [foot_r_heel], scaling: 0, intervals: 8}
-      options: {}                     # optional; passed through to the optimiser
+      options: {}                     # optional; passed through to the optimiser, but its
+                                      # posture entries (joint_limits, torso_lean_max, in
+                                      # degrees) are checked here (gait_planner.model.posture)
 
 Planar scenes (root type planar) move in the x-z plane: every joint is revolute about
 (0, 1, 0), and the initial root angles have yaw = roll = 0.
@@ -51,6 +53,7 @@ from types import MappingProxyType
 from typing import Any
 
 from gait_planner.model._validate import Checker, SceneError, check_gait, join, parse_yaml
+from gait_planner.model.posture import PostureError, check_posture
 from gait_planner.model.scene import (
     Body,
     Contact,
@@ -180,9 +183,7 @@ def _build_scene(data: Any, file: str, stem: str, source: str) -> Scene:
     contacts = _contacts(c, top["contacts"], bodies)
     pose = _initial_pose(c, top["initial_pose"], joints, root)
     gait = check_gait(c, top["gait"], bodies, contacts) if "gait" in top else None
-    for warning in c.warnings:
-        _log.warning("%s", warning)
-    return Scene(
+    scene = Scene(
         name=name,
         bodies=bodies,
         joints=joints,
@@ -194,6 +195,14 @@ def _build_scene(data: Any, file: str, stem: str, source: str) -> Scene:
         description=description,
         source=source,
     )
+    if gait is not None:
+        try:
+            check_posture(scene, gait.options)
+        except PostureError as err:
+            c.fail(join("gait.options", err.option), err.reason)
+    for warning in c.warnings:
+        _log.warning("%s", warning)
+    return scene
 
 
 def _bodies(c: Checker, value: Any, allow_nonphysical: bool) -> tuple[Body, ...]:

@@ -155,7 +155,9 @@ class Gait:
         friction_coefficient: Coulomb static friction coefficient mu_0.
         cost: the default cost name (e.g. "kinetic_energy").
         options: further named settings of the transcription (path constraints,
-            regularisation weights ...), validated by the optimal-control code.
+            regularisation weights ...), validated by the optimal-control code; its posture
+            entries (joint_limits, torso_lean_max) already when the scene loads
+            (`gait_planner.model.posture`).
     """
 
     phases: tuple[Phase, ...]

@@ -16,6 +16,12 @@ Rows per body (3D; planar scenes drop the y rows and the roll row):
 where M_roll (N m) is the generalised force on d2_z: a moment d2 x e_z M_roll about the
 heel-toe line, which two point forces cannot carry. The net ground force on the body is
 F_a + F_b with F_b = (0, F_b,y, F_b,z).
+
+A full contact has one more multiplier, s (N), that no row sees: equal and opposite forces
+along the heel-toe line e = (x_b - x_a)/|x_b - x_a| change neither the net force nor the
+moment, so the two points' share of the along-line force is free. The point forces are
+F_a - s e and F_b + s e; each point's friction cone is imposed on them, and they are what
+is published (`point_forces`).
 """
 
 from __future__ import annotations
@@ -35,6 +41,8 @@ class BodyContact:
     points: tuple[str, ...]  # contact names, scene order (1 = point, 2 = full contact)
     rows: np.ndarray  # (r, k) constant rows of q fixed by the contact
     planar: bool
+    span: np.ndarray | None = None  # (3, k): x_b - x_a = span @ q (full contact)
+    span_length: float = 0.0  # |x_b - x_a| (m), constant on a rigid body
 
     @property
     def full(self) -> bool:
@@ -44,17 +52,33 @@ class BodyContact:
     def n_rows(self) -> int:
         return int(self.rows.shape[0])
 
-    def point_forces(self, lam: np.ndarray) -> dict[str, np.ndarray]:
-        """Ground force (3,) on each point from this contact's multipliers (r,)."""
-        lam = np.asarray(lam, dtype=float)
+    @property
+    def n_multipliers(self) -> int:
+        """Rows, plus the along-line share s of a full contact (module docstring)."""
+        return self.n_rows + (1 if self.full else 0)
+
+    def force_components(self, lam, q) -> list[list]:
+        """Per point the ground force as [x, y, z] components, from this contact's
+        multipliers lam (n_multipliers,) and the configuration q (k,): plain arithmetic on
+        entries, so it serves numpy values and CasADi expressions alike."""
         if self.planar:
-            first = np.array([lam[0], 0.0, lam[1]])
-            if not self.full:
-                return {self.points[0]: first}
-            return {self.points[0]: first, self.points[1]: np.array([0.0, 0.0, lam[2]])}
+            first = [lam[0], 0.0, lam[1]]
+            second = [0.0, 0.0, lam[2]] if self.full else None
+        else:
+            first = [lam[0], lam[1], lam[2]]
+            second = [0.0, lam[3], lam[4]] if self.full else None
         if not self.full:
-            return {self.points[0]: lam[0:3].copy()}
-        return {self.points[0]: lam[0:3].copy(), self.points[1]: np.array([0.0, lam[3], lam[4]])}
+            return [first]
+        d = [sum(self.span[i, j] * q[j] for j in np.flatnonzero(self.span[i])) for i in range(3)]
+        s = lam[self.n_rows] / self.span_length  # d / length = e
+        return [[a - s * e for a, e in zip(first, d)], [b + s * e for b, e in zip(second, d)]]
+
+    def point_forces(self, lam: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
+        """Ground force (3,) on each point (N, world) from this contact's multipliers
+        (n_multipliers,) at configuration q (k,)."""
+        lam, q = np.asarray(lam, dtype=float), np.asarray(q, dtype=float)
+        return {p: np.array([float(c) for c in f])
+                for p, f in zip(self.points, self.force_components(lam, q))}
 
     def roll_moment(self, lam: np.ndarray) -> float:
         """M_roll (N m) of a 3D full contact, else 0."""
@@ -77,14 +101,18 @@ def body_contacts(mb: Multibody, contact_names) -> tuple[BodyContact, ...]:
             raise ValueError(f"body {body!r} holds {len(names)} contact points; at most 2")
         first = mb.contact_rows(names[0])
         if len(names) == 1:
-            rows = first
-        else:
-            second = mb.contact_rows(names[1])
-            roll = np.zeros((1, mb.k))
-            roll[0, mb.block(body).start + 6 + 2] = 1.0  # z component of d2
-            rows = (np.vstack([first, second[1:]]) if scene.planar
-                    else np.vstack([first, second[1:], roll]))
-        out.append(BodyContact(body, tuple(names), rows, scene.planar))
+            out.append(BodyContact(body, tuple(names), first, scene.planar))
+            continue
+        second = mb.contact_rows(names[1])
+        roll = np.zeros((1, mb.k))
+        roll[0, mb.block(body).start + 6 + 2] = 1.0  # z component of d2
+        rows = (np.vstack([first, second[1:]]) if scene.planar
+                else np.vstack([first, second[1:], roll]))
+        a, b = (scene.contact(n) for n in names)
+        span = mb.point_matrix(body, b.point) - mb.point_matrix(body, a.point)
+        length = float(np.linalg.norm(np.subtract(scene.body(body).points[b.point],
+                                                  scene.body(body).points[a.point])))
+        out.append(BodyContact(body, tuple(names), rows, scene.planar, span, length))
     return tuple(out)
 
 

@@ -143,13 +143,13 @@ def _levenberg_marquardt(f: ca.Function, x: np.ndarray, t: np.ndarray,
 
 def initial_multipliers(tr: Transcription) -> np.ndarray:
     """Scaled lambda: the weight shared by the bodies in contact, split over full-contact
-    points, no tangential force."""
+    points, no tangential force (and no along-line share)."""
     weight = sum(b.mass for b in tr.mb.scene.bodies) * tr.mb.scene.gravity
     out = []
     for n in tr.lam_nodes:
         contacts = tr.contacts[tr.phase_of_interval[n]]
         for bc in contacts:
-            lam = np.zeros(bc.n_rows)
+            lam = np.zeros(bc.n_multipliers)
             share = weight / len(contacts) / FORCE_SCALE
             z_rows = ([1] if bc.planar else [2]) if not bc.full else \
                 ([1, 2] if bc.planar else [2, 4])

@@ -4,8 +4,10 @@ a declared interval, written as smooth margins of the relative rotation.
 Minimal kinetic energy alone leaves light bodies free to turn far (DESIGN.md section 5: a
 foot spun 143 deg about the shank when nothing held it), so a scene declares ranges,
 e.g. ``joint_limits: {ankle_r_yaw: [-20, 20], knee_r: [0, 70]}`` (degrees) in its gait
-options. An angle theta is never computed (atan2 would put a branch cut into the NLP):
-with R = D_p^T D_c the rotation of the child relative to the parent (D = [d1 d2 d3]),
+options, checked (and converted to radians) by `gait_planner.model.posture` when the scene
+loads and when a request overrides them. An angle theta is never computed (atan2 would put
+a branch cut into the NLP): with R = D_p^T D_c the rotation of the child relative to the
+parent (D = [d1 d2 d3]),
 
 * spherical joints, R = Ry(pitch) Rx(roll) Rz(yaw) (`angles.spherical_rotation`):
   cos(roll) (sin pitch, cos pitch) = (R02, R22), sin roll = -R12,
@@ -21,17 +23,12 @@ range is sin(roll) in [sin lo, sin hi]. All margins are bilinear in the director
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 
 import casadi as ca
 import numpy as np
 
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import JointType, Scene
-
-
-class JointLimitError(ValueError):
-    """A joint range that names no angle of the scene or cannot be expressed."""
 
 
 def _basis(axis) -> tuple[np.ndarray, np.ndarray]:
@@ -63,36 +60,10 @@ def _angle_parts(scene: Scene) -> dict[str, tuple[str, str, np.ndarray, np.ndarr
     return out
 
 
-def check_joint_limits(scene: Scene, limits) -> tuple[tuple[str, float, float], ...]:
-    """Validated ((angle name, lo rad, hi rad), ...) from {name: (lo deg, hi deg)}."""
-    if not isinstance(limits, Mapping):
-        raise JointLimitError(f"joint_limits: need a mapping {{angle name: [lower, upper]}} "
-                              f"in degrees, got {type(limits).__name__}")
-    parts = _angle_parts(scene)
-    out = []
-    for name, bounds in limits.items():
-        if name not in parts:
-            raise JointLimitError(f"joint_limits: {name!r} is not a joint angle of scene "
-                                  f"{scene.name!r}; known: {', '.join(parts)}")
-        try:
-            lo, hi = (float(v) for v in bounds)
-        except (TypeError, ValueError):
-            raise JointLimitError(f"joint_limits.{name}: need [lower, upper] in degrees, "
-                                  f"got {bounds!r}") from None
-        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi and hi - lo < 180):
-            raise JointLimitError(f"joint_limits.{name}: need finite lower < upper within "
-                                  f"180 deg, got [{lo}, {hi}]")
-        if parts[name][3] is None and not -90 <= lo < hi <= 90:
-            raise JointLimitError(f"joint_limits.{name}: a roll range must lie in "
-                                  f"[-90, 90] deg, got [{lo}, {hi}]")
-        out.append((name, math.radians(lo), math.radians(hi)))
-    return tuple(out)
-
-
 def joint_limit_margins(mb: Multibody, limits: tuple[tuple[str, float, float], ...]):
     """CasADi Function `joint_limit_margins`: q (k,) -> margins (2 * len(limits),), each
     >= 0 exactly when its angle lies in its range (module docstring); limits in radians,
-    as returned by `check_joint_limits`."""
+    as returned by `gait_planner.model.posture.check_joint_limits`."""
     parts = _angle_parts(mb.scene)
     q = ca.SX.sym("q", mb.k)
 

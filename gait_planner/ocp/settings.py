@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass
 
 from gait_planner.model.scene import Scene
-from gait_planner.ocp.posture import JointLimitError, check_joint_limits
+from gait_planner.model.posture import PostureError, check_joint_limits, check_torso_lean_max
 
 COSTS = ("kinetic_energy", "torque_squared")
 
@@ -27,12 +27,18 @@ class GaitSettings:
     friction_coefficient -; cost one of COSTS; intervals per phase;
     torque_regularisation weight on sum h |tau|^2 (J s per (N m)^2 s, i.e. 1/(N s)) added to
     any cost; friction_smoothing delta (N) of mu f_z - sqrt(f_x^2 + f_y^2 + delta^2) >= 0;
-    torso_lean_max rad (torso d3 within this angle of vertical; 0 = off);
-    torso_height_min m (torso centre-of-mass height; 0 = off); joint_limits ((angle name,
-    lower rad, upper rad), ...) from the scene's ``joint_limits: {name: [lo, hi]}`` in degrees
-    (`gait_planner.ocp.posture`); foot_half_width m (|roll moment| <= half width * normal force of a full
-    contact; the paper's foot breadth is 0.0915 m); ground_clearance: free contact points stay at
-    or above the ground (off for the rigid-legged compass, which must scuff at mid-stance);
+    torso_lean_max deg in [0, 90) (the root body's d3 within this angle of vertical;
+    0 = off; the transcription takes its cosine); torso_height_min m (torso
+    centre-of-mass height; 0 = off); joint_limits ((angle name, lower rad, upper rad), ...)
+    from the option ``joint_limits: {name: [lo, hi]}`` in degrees, converted by
+    `gait_planner.model.posture.check_joint_limits` in `settings_for`; foot_half_width m
+    (|roll moment| <= half width * normal force of a full contact; the paper's foot breadth
+    is 0.0915 m); ground_clearance: free contact points stay at or above the ground (off for
+    the rigid-legged compass, which must scuff at mid-stance);
+    swing_clearance m: with ground_clearance, a contact point that is neither held nor
+    striking at a node (nor released there) stays at least this high, so no swing point
+    slides along the ground at zero force; joint_speed_max deg/s (0 = off): every joint's
+    relative rotation over an interval stays below joint_speed_max * h_n;
     max_iterations, max_solve_time s (IPOPT); tolerance (IPOPT tol);
     constraint_tolerance (IPOPT constr_viol_tol); compiled: build the per-node derivative
     elements as C (`gait_planner.ocp.compile`; a one-time cost per machine, cached).
@@ -51,6 +57,8 @@ class GaitSettings:
     joint_limits: tuple[tuple[str, float, float], ...] = ()
     foot_half_width: float = 0.04575
     ground_clearance: bool = True
+    swing_clearance: float = 0.0
+    joint_speed_max: float = 0.0
     max_iterations: int = 3000
     max_solve_time: float = 600.0
     tolerance: float = 1e-8
@@ -82,8 +90,13 @@ class GaitSettings:
             bad("intervals", f"every phase needs at least 1 interval, got {self.intervals}")
         if self.max_solve_time <= 0:
             bad("max_solve_time", f"must be positive (s), got {self.max_solve_time}")
-        for name in ("torque_regularisation", "friction_smoothing", "torso_lean_max",
-                     "torso_height_min", "foot_half_width"):
+        try:  # degrees, validated and made a float
+            object.__setattr__(self, "torso_lean_max", check_torso_lean_max(self.torso_lean_max))
+        except PostureError as err:
+            raise SettingsError(str(err)) from None
+        for name in ("torque_regularisation", "friction_smoothing",
+                     "torso_height_min", "foot_half_width", "swing_clearance",
+                     "joint_speed_max"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")
 
@@ -112,7 +125,7 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
     if "joint_limits" in options:
         try:
             options["joint_limits"] = check_joint_limits(scene, options["joint_limits"])
-        except JointLimitError as err:
+        except PostureError as err:
             raise SettingsError(str(err)) from None
     if max_solve_time is not None:
         options["max_solve_time"] = max_solve_time

@@ -51,8 +51,11 @@ def _extractor(tr: Transcription) -> ca.Function:
     return tr._extract
 
 
-def _mirror_forces(tr: Transcription, forces: dict[str, np.ndarray], src: int, dst: int):
-    """Forces at node dst = mirror images of those at node src on the partner points."""
+def _mirror_forces(tr: Transcription, forces: dict[str, np.ndarray],
+                   rolls: dict[str, np.ndarray], src: int, dst: int):
+    """Forces at node dst = mirror images of those at node src on the partner points; roll
+    moments change sign (the mirror turns d2 into -S d2, so M (d2 x e_z) into -S times it
+    with -M)."""
     scene = tr.mb.scene
     mirror = dict(scene.gait.mirror)
     S = np.array([1.0, -1.0, 1.0])
@@ -60,6 +63,8 @@ def _mirror_forces(tr: Transcription, forces: dict[str, np.ndarray], src: int, d
         body = mirror.get(c.body, c.body)
         partner = next(d.name for d in scene.contacts if d.body == body and d.point == c.point)
         forces[partner][dst] = S * forces[c.name][src]
+    for body in rolls:
+        rolls[mirror.get(body, body)][dst] = -rolls[body][src]
 
 
 def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray, *,
@@ -75,25 +80,23 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
     active = tuple(tuple(pt for bc in tr.contacts[k] for pt in bc.points) for k in node_phase)
 
     forces = {c.name: np.zeros((N + 1, 3)) for c in scene.contacts}
+    rolls = {c.body: np.zeros(N + 1) for c in scene.contacts}
     lam = x[tr.U.numel() + tr.T.numel() : tr.U.numel() + tr.T.numel() + tr.L.numel()]
     offset = 0
     for n, size in zip(tr.lam_nodes, tr.lam_sizes):
         values, inner = FORCE_SCALE * lam[offset : offset + size], 0
         offset += size
         for bc in tr.contacts[tr.phase_of_interval[n]]:
-            for name, f in bc.point_forces(values[inner : inner + bc.n_rows]).items():
+            own = values[inner : inner + bc.n_multipliers]
+            for name, f in bc.point_forces(own, q[n]).items():
                 forces[name][n] = f
-            inner += bc.n_rows
-    _mirror_forces(tr, forces, N - 1, 0)
-    _mirror_forces(tr, forces, 1, N)
+            rolls[bc.body][n] = bc.roll_moment(own)
+            inner += bc.n_multipliers
+    _mirror_forces(tr, forces, rolls, N - 1, 0)
+    _mirror_forces(tr, forces, rolls, 1, N)
 
-    Bt = [np.array(mb.actuation(qn)) for qn in q]
-    gen = np.zeros((N + 1, mb.k))
-    for n in range(N + 1):
-        if n > 0:
-            gen[n] += 0.5 * h[n - 1] * Bt[n] @ tau[n - 1]
-        if n < N:
-            gen[n] += 0.5 * h[n] * Bt[n] @ tau[n]
+    half = 0.5 * (np.concatenate([[0.0], h]) + np.concatenate([h, [0.0]]))  # w_n; ends h/2
+    gen = np.array([half[n] * np.array(mb.actuation(q[n])) @ tau[n] for n in range(N + 1)])
     v = np.diff(q, axis=0) / h[:, None]
     T_int = 0.5 * np.einsum("ni,i,ni->n", v, mb.mass_diagonal, v)
     T_node = np.concatenate([[T_int[0]], 0.5 * (T_int[:-1] + T_int[1:]), [T_int[-1]]])
@@ -124,7 +127,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
         times=times, q=q, tau=tau, joint_angle_names=angle_names(scene), joint_angles=angles,
         joint_velocities=np.gradient(angles, times, axis=0),
         phases=tuple(phases[k].name for k in node_phase), active_contacts=active,
-        contact_forces=forces, generalized_force=gen, kinetic_energy=T_node,
+        contact_forces=forces, roll_moments=rolls, generalized_force=gen, kinetic_energy=T_node,
         potential_energy=q @ mech.gravity_gradient, phase_scaling=x[-int(tr.S.shape[0]):].copy(),
         duration=float(times[N - 1] - times[0]), stats=stats,
         settings={
@@ -154,6 +157,7 @@ def failed_result(scene: Scene, settings: GaitSettings | None, message: str) -> 
         times=empty, q=np.zeros((0, k)), tau=np.zeros((0, 0)),
         joint_angle_names=angle_names(scene), joint_angles=np.zeros((0, 0)),
         joint_velocities=np.zeros((0, 0)), phases=(), active_contacts=(), contact_forces={},
+        roll_moments={},
         generalized_force=np.zeros((0, k)), kinetic_energy=empty, potential_energy=empty,
         phase_scaling=empty, duration=float("nan"),
         stats=SolverStats(status="not solved", iterations=0, solve_time=0.0),

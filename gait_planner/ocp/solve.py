@@ -46,11 +46,13 @@ VARIANTS = {
     "warm": {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
                                 for push in ("bound_push", "mult_bound_push", "slack_bound_push")}},
 }
-# Attempts, each a list of stages (variant, sigma fixed): a cold plan fixes sigma first,
-# then frees it; if its inertia-free attempt fails it starts again with the inertia test.
-COLD_ATTEMPTS = ([("cold", True), ("cold", False)],
-                 [("cold_inertia", True), ("cold_inertia", False)])
-WARM_ATTEMPTS = ([("warm", False)],)
+# Attempts, each a list of stages (variant, sigma fixed, limits relaxed): a cold plan fixes
+# sigma and relaxes the swing clearance and joint speed limits first
+# (`Transcription.relaxed_lower_bounds`), then frees both; if its inertia-free attempt
+# fails it starts again with the inertia test.
+COLD_ATTEMPTS = ([("cold", True, True), ("cold", False, False)],
+                 [("cold_inertia", True, True), ("cold_inertia", False, False)])
+WARM_ATTEMPTS = ([("warm", False, False)],)
 
 
 class _IterationCallback(ca.Callback):
@@ -204,7 +206,7 @@ class Planner:
             built = self._build(scene, settings)
             warm_start = warm_start and bool(built.stored)
             attempts = WARM_ATTEMPTS if warm_start else COLD_ATTEMPTS
-            for variant, _ in attempts[0]:  # a fallback's solver is built if it is needed
+            for variant, *_ in attempts[0]:  # a fallback's solver is built if it is needed
                 self._solver(built, settings, variant)
         except (ValueError, RuntimeError) as err:
             return failed_result(scene, settings, f"could not build the problem: {err}")
@@ -223,7 +225,7 @@ class Planner:
                 np.full(nsig, np.clip(1.0, *settings.scaling_bounds))])
             duals_start = {"lam_x0": np.zeros(x_start.size),
                            "lam_g0": np.zeros(int(tr.g.shape[0]))}
-            origin = "kinematic guess; sigma fixed, then free"
+            origin = "kinematic guess; sigma fixed and limits relaxed, then free"
         p = np.concatenate([qref.reshape(-1), [step, mu]])
         lbx, ubx, lbg, ubg = built.bounds
         built.callback.deadline = start + settings.max_solve_time
@@ -232,12 +234,13 @@ class Planner:
         iterations, status, g, evaluation = 0, "not started", None, 0.0
         for number, attempt in enumerate(attempts):
             x0, duals, success = x_start, duals_start, False
-            for variant, fix_sigma in attempt:
+            for variant, fix_sigma, relaxed in attempt:
                 solver = self._solver(built, settings, variant)
                 lb, ub = lbx.copy(), ubx.copy()
                 if fix_sigma:
                     lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
-                sol = solver(x0=x0, p=p, lbx=lb, ubx=ub, lbg=lbg, ubg=ubg, **duals)
+                lower = tr.relaxed_lower_bounds(lbg) if relaxed else lbg
+                sol = solver(x0=x0, p=p, lbx=lb, ubx=ub, lbg=lower, ubg=ubg, **duals)
                 stats = solver.stats()
                 iterations += int(stats.get("iter_count", 0))
                 evaluation += sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_"))

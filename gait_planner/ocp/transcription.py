@@ -13,14 +13,23 @@ Unknowns (scaled to O(1)):
   guess or a previous plan). Every internal and joint constraint holds exactly, and each
   equation touches only neighbouring nodes (a banded KKT system). Its rotational entries
   are bounded by ROTATION_INCREMENT_MAX.
-* tau_n (nt,) joint torques for intervals 0..N-2 (in units of TORQUE_SCALE).
+* tau_n (nt,) joint torques at the free nodes 0..N-2 (in units of TORQUE_SCALE). Torques
+  are node values, piecewise linear in time: the trapezoidal rule of the virtual work of
+  the Lagrange-d'Alembert principle gives node n the discrete force
+  f+_{n-1} + f-_n = (h_{n-1} + h_n)/2 B^T(q_n) tau_n, so the torque published at a node is
+  the torque its equation applies. (The paper's piecewise-constant interval torques put
+  (h_{n-1} tau_{n-1} + h_n tau_n)/2 into node n's equation: a sequence alternating in sign
+  from interval to interval is invisible to the equations, and the optimum deconvolved
+  rapidly varying node demands into such zigzags, measured up to 2.7 times a joint's peak
+  torque in its second difference; benchmarks/REPORT.md.)
 * lambda_n, contact multipliers of nodes 1..N-1 (in units of FORCE_SCALE): the paper
   removes them by projection (its Q matrices) and recovers them by eq. 10; keeping them as
   unknowns gives the same discrete trajectory and makes the friction cones and unilateral
   conditions plain inequalities on unknowns.
 * sigma, the phase scalings (sigma_1 serves phases 1 and 5).
-The periodic end is not a set of unknowns: q_{N-1}, q_N, tau_{N-1} are the mirrored
-expressions of q_0, q_1, tau_0 shifted by the step length (paper eqs. 7-9).
+The periodic end is not a set of unknowns: q_{N-1}, q_N, tau_{N-1}, tau_N are the mirrored
+expressions of q_0, q_1, tau_0, tau_1, the configurations shifted by the step length (paper
+eqs. 7-9).
 
 Parameters (changeable without rebuilding): the reference configurations, the step length
 and the friction coefficient.
@@ -85,7 +94,8 @@ class Transcription:
         self.T = ca.MX.sym("tau", mb.nt, N - 1)
         self.S = ca.MX.sym("sigma", nsig)
         self.lam_nodes = list(range(1, N))
-        self.lam_sizes = [self.rows[self.phase_of_interval[n]].shape[0] for n in self.lam_nodes]
+        self.lam_sizes = [sum(bc.n_multipliers for bc in self.contacts[self.phase_of_interval[n]])
+                          for n in self.lam_nodes]
         self.L = ca.MX.sym("lambda", int(sum(self.lam_sizes)))
         self.Qref = ca.MX.sym("qref", mb.k, N - 1)
         self.step, self.mu = ca.MX.sym("step_length"), ca.MX.sym("mu")
@@ -95,7 +105,7 @@ class Transcription:
                  for j in (0, 1)]
         self.Q = ca.horzcat(q_free, *q_end)  # (k, N+1)
         tau = TORQUE_SCALE * self.T
-        self.TAU = ca.horzcat(tau, ca.mtimes(ca.DM(self.B), tau[:, 0]))  # (nt, N)
+        self.TAU = ca.horzcat(tau, ca.mtimes(ca.DM(self.B), tau[:, 0:2]))  # (nt, N+1) nodes
         select = np.zeros((N, nsig))
         select[np.arange(N), [phases[k].scaling for k in self.phase_of_interval]] = 1.0
         self.h = settings.base_time_step * ca.mtimes(ca.DM(select), self.S)  # (N,)
@@ -142,23 +152,31 @@ class Transcription:
                 continue
             q0, q1, q2 = (ca.SX.sym(s, mb.k) for s in ("q_prev", "q", "q_next"))
             h0, h1 = ca.SX.sym("h_prev"), ca.SX.sym("h")
-            t0, t1 = ca.SX.sym("tau_prev", mb.nt), ca.SX.sym("tau", mb.nt)
+            t1 = ca.SX.sym("tau", mb.nt)
             lam = ca.SX.sym("lambda", C.shape[0])
             w = 0.5 * (h0 + h1)
-            r = self.mech.discrete_euler_lagrange(q0, q1, q2, h0, h1, t0, t1)
+            r = self.mech.discrete_euler_lagrange(q0, q1, q2, h0, h1, t1, t1)
             contact = mb.null_space_transpose(q1, ca.mtimes(ca.DM(C).T, lam)) / FORCE_SCALE
             res = mb.null_space_transpose(q1, r) / (w * FORCE_SCALE) + contact
-            f = ca.Function(f"dynamics_phase{k}", [q0, q1, q2, h0, h1, t0, t1, lam], [res])
+            f = ca.Function(f"dynamics_phase{k}", [q0, q1, q2, h0, h1, t1, lam], [res])
             idx = np.array(nodes)
-            lam_cols = ca.horzcat(*[self.lam_of_node[n] for n in nodes]) if C.shape[0] else \
-                ca.DM.zeros(0, len(nodes))
+            lam_cols = ca.horzcat(*[self._row_multipliers(n) for n in nodes]) if C.shape[0] \
+                else ca.DM.zeros(0, len(nodes))
             out = f.expand().map(len(nodes))(
                 self.Q[:, idx - 1], self.Q[:, idx], self.Q[:, idx + 1], self.h[idx - 1].T,
-                self.h[idx].T, self.TAU[:, idx - 1], self.TAU[:, idx], lam_cols)
+                self.h[idx].T, self.TAU[:, idx], lam_cols)
             name = f"dynamics[{self._phase_name(k)}]"
             self._eq.append((name, ca.vec(out)))
             g = ca.Function(f"contact_force_phase{k}", [q1, lam], [contact]).expand()
             self._without_elements[name] = ca.vec(g.map(len(nodes))(self.Q[:, idx], lam_cols))
+
+    def _row_multipliers(self, n: int):
+        """The multipliers of node n's contact rows (the along-line shares left out), N."""
+        lam, parts, offset = self.lam_of_node[n], [], 0
+        for bc in self.contacts[self.phase_of_interval[n]]:
+            parts.append(lam[offset : offset + bc.n_rows])
+            offset += bc.n_multipliers
+        return ca.vertcat(*parts)
 
     def _element_nodes(self) -> dict[tuple[bool, bool], list[int]]:
         """Nodes 1..N-1 by element variant (q_n mirrored, q_{n+1} mirrored): q_{N-1} and
@@ -170,12 +188,12 @@ class Transcription:
 
     def _dynamics_element(self, mirrored: bool, next_mirrored: bool) -> ca.Function:
         """The phase-independent part of a node's dynamics row (ndof,) as an SX Function
-        of z = (u_{n-1}, u_n, u_{n+1}, T_{n-1}, T_n, sigma_{n-1}, sigma_n) (scaled unknowns,
-        a mirrored node given by the u of its source node), pz = (qref_{n-1}, qref_n,
+        of z = (u_{n-1}, u_n, u_{n+1}, T_n, sigma_{n-1}, sigma_n) (scaled unknowns, a
+        mirrored node given by the u and T of its source node), pz = (qref_{n-1}, qref_n,
         qref_{n+1}, step length) and c = (base time step)."""
         mb = self.mb
         nd, nt, k = mb.ndof, mb.nt, mb.k
-        z = ca.SX.sym("z", 3 * nd + 2 * nt + 2)
+        z = ca.SX.sym("z", 3 * nd + nt + 2)
         pz = ca.SX.sym("pz", 3 * k + 1)
         c = ca.SX.sym("c", 1)
         step = pz[3 * k]
@@ -183,12 +201,11 @@ class Transcription:
         for i, flag in ((1, mirrored), (2, next_mirrored)):
             if flag:
                 q[i] = ca.mtimes(ca.DM(self.A), q[i]) + step * ca.DM(self.shift)
-        t0 = TORQUE_SCALE * z[3 * nd : 3 * nd + nt]
-        t1 = TORQUE_SCALE * z[3 * nd + nt : 3 * nd + 2 * nt]
+        tau = TORQUE_SCALE * z[3 * nd : 3 * nd + nt]
         if mirrored:  # tau_{N-1} is the image of tau_0
-            t1 = ca.mtimes(ca.DM(self.B), t1)
-        h0, h1 = c[0] * z[3 * nd + 2 * nt], c[0] * z[3 * nd + 2 * nt + 1]
-        r = self.mech.discrete_euler_lagrange(q[0], q[1], q[2], h0, h1, t0, t1)
+            tau = ca.mtimes(ca.DM(self.B), tau)
+        h0, h1 = c[0] * z[3 * nd + nt], c[0] * z[3 * nd + nt + 1]
+        r = self.mech.discrete_euler_lagrange(q[0], q[1], q[2], h0, h1, tau, tau)
         res = mb.null_space_transpose(q[1], r) / (0.5 * (h0 + h1) * FORCE_SCALE)
         name = "dynamics_element" + ("_mirrored" if mirrored else "_next_mirrored" if next_mirrored else "")
         return ca.Function(name, [z, pz, c], [res], ["z", "pz", "c"], ["r"])
@@ -204,8 +221,8 @@ class Transcription:
     def _qref_index(self, node: int) -> np.ndarray:
         return np.arange(self.mb.k) + self._source(node) * self.mb.k
 
-    def _tau_index(self, interval: int) -> np.ndarray:
-        return self.U.numel() + np.arange(self.mb.nt) + self._source(interval) * self.mb.nt
+    def _tau_index(self, node: int) -> np.ndarray:
+        return self.U.numel() + np.arange(self.mb.nt) + self._source(node) * self.mb.nt
 
     def _scaling_index(self, interval: int) -> int:
         first = self.U.numel() + self.T.numel() + self.L.numel()
@@ -214,8 +231,7 @@ class Transcription:
     def _element_z_index(self, n: int) -> np.ndarray:
         """Indices into x of the dynamics element's z (see _dynamics_element) at node n."""
         return np.concatenate([self._u_index(n - 1), self._u_index(n), self._u_index(n + 1),
-                               self._tau_index(n - 1), self._tau_index(n),
-                               [self._scaling_index(n - 1), self._scaling_index(n)]])
+                               self._tau_index(n), [self._scaling_index(n - 1), self._scaling_index(n)]])
 
     def _element_p_index(self, n: int) -> np.ndarray:
         """Indices into p of the dynamics element's pz at node n."""
@@ -246,27 +262,21 @@ class Transcription:
             lam = self.lam_of_node[n]
             offset = 0
             for bc in self.contacts[self.phase_of_interval[n]]:
-                cones += self._cone(bc, lam[offset : offset + bc.n_rows])
-                offset += bc.n_rows
+                cones += self._cone(bc, lam[offset : offset + bc.n_multipliers], self.Q[:, n])
+                offset += bc.n_multipliers
         self._ineq.append(("friction_cone", ca.vertcat(*cones)))
 
-    def _cone(self, bc: BodyContact, lam) -> list:
-        """Unilateral and friction conditions (>= 0) of one body's contact force."""
+    def _cone(self, bc: BodyContact, lam, q) -> list:
+        """Friction cone (>= 0) of every point's ground force, which makes it push; for a 3D
+        full contact also the roll moment's bound (centre of pressure within the foot's
+        half width)."""
         mu, delta = self.mu, self.settings.friction_smoothing
-        planar = bc.planar
-        if planar:
-            fx, fz = lam[0], lam[1] + (lam[2] if bc.full else 0)
-            tangential = ca.sqrt(fx**2 + delta**2)
-        else:
-            fx, fy = lam[0], lam[1] + (lam[3] if bc.full else 0)
-            fz = lam[2] + (lam[4] if bc.full else 0)
-            tangential = ca.sqrt(fx**2 + fy**2 + delta**2)
-        out = [mu * fz - tangential]
-        if bc.full:
-            out += [lam[1], lam[2]] if planar else [lam[2], lam[4]]
-            if not planar:
-                half_width = self.settings.foot_half_width
-                out += [half_width * fz - lam[5], half_width * fz + lam[5]]
+        out = [mu * f[2] - ca.sqrt(f[0] ** 2 + f[1] ** 2 + delta**2)
+               for f in bc.force_components(lam, q)]
+        if bc.full and not bc.planar:
+            fz = lam[2] + lam[4]
+            half_width = self.settings.foot_half_width
+            out += [half_width * fz - lam[5], half_width * fz + lam[5]]
         return out
 
     def _path(self):
@@ -277,18 +287,46 @@ class Transcription:
             held |= {p for bc in self.contacts[self.phase_of_interval[n]] for p in bc.points}
             for c in mb.scene.contacts:
                 if c.name not in held:
-                    ground.append(ca.mtimes(ca.DM(mb.contact_rows(c.name)[-1:]), self.Q[:, n]))
+                    ground.append(ca.mtimes(ca.DM(mb.contact_rows(c.name)[-1:]), self.Q[:, n])
+                                  - s.swing_clearance)
         if ground:
             self._ineq.append(("ground_clearance", ca.vertcat(*ground)))
         root = mb.block(mb.scene.root.body).start
         inner = self.Q[:, 1:N]
         if s.torso_lean_max > 0:
-            self._ineq.append(("torso_lean", ca.vec(inner[root + 11, :] - np.cos(s.torso_lean_max))))
+            self._ineq.append(("torso_lean", ca.vec(inner[root + 11, :] - np.cos(np.radians(s.torso_lean_max)))))
         if s.torso_height_min > 0:
             self._ineq.append(("torso_height", ca.vec(inner[root + 2, :] - s.torso_height_min)))
         if s.joint_limits:
             margins = joint_limit_margins(mb, s.joint_limits).map(N - 1)(inner)
             self._ineq.append(("joint_limits", ca.vec(margins)))
+        if s.joint_speed_max > 0 and mb.scene.joints:
+            speed = self._joint_speed_margins().map(N - 1)(
+                self.Q[:, 0 : N - 1], self.Q[:, 1:N], self.h[0 : N - 1].T)
+            self._ineq.append(("joint_speed", ca.vec(speed)))
+
+    def _joint_speed_margins(self) -> ca.Function:
+        """(q_n, q_{n+1}, h_n) -> one margin (>= 0) per joint of interval n: the rotation
+        R_rel(q_n)^T R_rel(q_{n+1}) of the child relative to its parent, by an angle theta,
+        has |R_rel(q_{n+1}) - R_rel(q_n)|_F^2 = 8 sin^2(theta/2), so
+        8 sin^2(w h_n / 2) - |dR_rel|_F^2 >= 0 bounds theta by w h_n (w = joint_speed_max,
+        rad/s): a mean relative angular speed, whatever the joint's axes. Rows are divided
+        by (w base_time_step)^2 to be O(1)."""
+        mb, k = self.mb, self.mb.k
+        q0, q1, h = ca.SX.sym("q", k), ca.SX.sym("q_next", k), ca.SX.sym("h")
+        w = np.radians(self.settings.joint_speed_max)
+        scale = (w * self.settings.base_time_step) ** 2
+
+        def relative(q, joint):
+            D = [ca.reshape(q[mb.block(b).start + 3 : mb.block(b).start + 12], 3, 3)
+                 for b in (joint.parent, joint.child)]
+            return ca.mtimes(D[0].T, D[1])
+
+        bound = 8 * ca.sin(0.5 * w * h) ** 2
+        rows = [(bound - ca.sumsqr(relative(q1, j) - relative(q0, j))) / scale
+                for j in mb.scene.joints]
+        return ca.Function("joint_speed_margins", [q0, q1, h], [ca.vertcat(*rows)],
+                           ["q", "q_next", "h"], ["margin"])
 
     def _cost(self):
         """J over the half cycle t_0..t_{N-1} (intervals 0..N-2), plus the torque
@@ -299,19 +337,37 @@ class Transcription:
         dq = self.Q[:, 1:N] - self.Q[:, 0 : N - 1]
         h = self.h[0 : N - 1].T
         kinetic = ca.sum2(0.5 * ca.sum1(dq * (M * dq)) / h)
-        torque = ca.sum2(ca.sum1(self.TAU[:, 0 : N - 1] ** 2) * h)
+        squares = ca.sum1(self.TAU[:, 0:N] ** 2)  # nodes 0..N-1
+        torque = ca.sum2(0.5 * (squares[0 : N - 1] + squares[1:N]) * h)  # trapezoidal
         self.cost_parts = {"kinetic_energy": kinetic, "torque_squared": torque}
+        # The along-line shares of full contacts (`ocp.contacts`) move no equation: without
+        # curvature of their own IPOPT's steps in them were unbounded (constraint violation
+        # 1e5 and more, walker3d's inertia-free attempt failed). The regulariser's weight,
+        # times sum h_n s^2, picks the smallest shares that keep every point in its cone.
+        shares = s.torque_regularisation * self._share_squares()
         if s.cost == "torque_squared":
-            self.cost_without_elements = torque
-            return torque
+            self.cost_without_elements = torque + shares
+            return self.cost_without_elements
         for next_mirrored, intervals in ((False, range(N - 2)), (True, [N - 2])):
             self.elements.append(ElementGroup(
                 self._kinetic_element(next_mirrored),
                 np.stack([self._kinetic_z_index(n) for n in intervals], 1),
                 np.stack([self._kinetic_p_index(n) for n in intervals], 1),
                 None, np.array([s.base_time_step])))
-        self.cost_without_elements = s.torque_regularisation * torque
+        self.cost_without_elements = s.torque_regularisation * torque + shares
         return kinetic + self.cost_without_elements
+
+    def _share_squares(self):
+        """sum over nodes of w_n s^2 (N^2 s) of the full contacts' along-line shares s."""
+        terms = []
+        for n in self.lam_nodes:
+            lam, offset = self.lam_of_node[n], 0
+            w = 0.5 * (self.h[n - 1] + self.h[n])
+            for bc in self.contacts[self.phase_of_interval[n]]:
+                offset += bc.n_multipliers
+                if bc.full:
+                    terms.append(w * lam[offset - 1] ** 2)
+        return ca.sum1(ca.vertcat(*terms)) if terms else 0.0
 
     def _kinetic_element(self, next_mirrored: bool) -> ca.Function:
         """h_n times the discrete kinetic energy of interval n,
@@ -377,3 +433,18 @@ class Transcription:
         lbg = np.concatenate([np.zeros(n_eq), np.zeros(n_in)])
         ubg = np.concatenate([np.zeros(n_eq), np.full(n_in, np.inf)])
         return lbx, ubx, lbg, ubg
+
+    def relaxed_lower_bounds(self, lbg: np.ndarray) -> np.ndarray:
+        """lbg of a first, relaxed stage: swing points only above the ground (not by
+        swing_clearance), joint speeds free. From a kinematic guess IPOPT finds the gait
+        of the relaxed problem in about 100 iterations and the full one from there; with
+        every limit from the start its inertia-free attempt stalled (walker3d: 851
+        iterations through the fallback; benchmarks/REPORT.md)."""
+        out, offset = lbg.copy(), 0
+        for name, size, _ in self.constraint_groups():
+            if name == "ground_clearance":
+                out[offset : offset + size] = -self.settings.swing_clearance
+            elif name == "joint_speed":
+                out[offset : offset + size] = -np.inf
+            offset += size
+        return out

@@ -47,27 +47,28 @@ Checks and method (limits in `LIMITS`):
   exactly from the body couples on the tree, leaves first: m_j = m_child(j) +
   sum of the couples of the joints below child(j) (a joint acts +m_j on its child and -m_j
   on its parent). A revolute joint's couple must be parallel to its axis D_p n. The
-  recorded efforts must produce these couples. JointTrajectory effort[n] is the torque of
-  interval n (the last node repeats that of interval N-1) conjugate to the joint angles at
-  node n (gait_planner.io.messages): revolute, about the axis; spherical, the couple's
+  recorded efforts must produce these couples. JointTrajectory effort[n] is the node
+  torque tau_n conjugate to the joint angles at node n (gait_planner.io.messages):
+  revolute, about the axis; spherical, the couple's
   projections on the parent's d2 (pitch), the roll axis (d2_p x d3_c normalised) and the
-  child's d3 (yaw), so the world couple follows from a 3x3 solve at q_n. The planner's
-  torque tau_n (parent-director components) is constant on the interval, and the check is
-  m_j(n) = D_p(q_n) (h_{n-1} tau_{n-1} + h_n tau_n)/2 (node 0 and N: one half interval).
+  child's d3 (yaw), so the world couple follows from a 3x3 solve at q_n. Torques are
+  node values (linear between nodes, trapezoidal virtual work), and the check is
+  m_j(n) = w_n D_p(q_n) tau_n, w_n = (h_{n-1} + h_n)/2 (node 0 and N: one half interval).
 * Contact forces push (F_z of every point >= 0) and lie in the Coulomb cone
   sqrt(F_x^2 + F_y^2) <= mu F_z of the body's net force (full contact: heel + forefoot),
   mu = metadata ``friction_coefficient``.
 * Periodicity: q_{N-1}, q_N equal the mirror images of q_0, q_1 shifted by the step
   length (phi' = S phi, d1' = S d1, d2' = -S d2, d3' = S d3 in the partner body,
   S = diag(1, -1, 1)); the contact forces of nodes 0, N are the mirror images (S F) of
-  those of nodes N-1, 1; the joint couple of interval N-1 is the mirror image of that of
-  interval 0 (a couple m mirrors to -S m, or to +S m when the mirror swaps the joint's
+  those of nodes N-1, 1; the joint couples of nodes N-1, N are the mirror images of those
+  of nodes 0, 1 (a couple m mirrors to -S m, or to +S m when the mirror swaps the joint's
   parent and child).
 * Time and cost: times strictly increasing, interval lengths = base_time_step * sigma of
   their phase (when the metadata states base_time_step), sigma within the scaling
   bounds, duration = t_{N-1} - t_0, cost recomputed from q, times and efforts
   (kinetic_energy = sum_{n<N-1} h_n 1/2 v_n^T M v_n, torque_squared =
-  sum_{n<N-1} h_n |tau_n|^2 with the planner's torques tau_n recovered from the efforts),
+  sum_{n<N-1} h_n (|tau_n|^2 + |tau_{n+1}|^2)/2 with the planner's node torques tau_n
+  recovered from the efforts),
   potential energy = sum m g phi_z. sigma may exceed its bounds by LIMITS["scaling"]
   (IPOPT relaxes bounds by up to its bound_relax_factor).
 """

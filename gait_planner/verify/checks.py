@@ -9,6 +9,7 @@ import numpy as np
 
 from gait_planner.io.mcap_reader import RecordedPlan
 from gait_planner.verify.mechanics import MIRROR, Mechanics, SceneData, parse_scene
+from gait_planner.verify.physical import check_physical
 from gait_planner.verify.report import LIMITS, VerificationReport
 
 
@@ -244,7 +245,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
              f"axis: off by {off_axis:.3e} (relative; limit {L['actuation']:.0e})")
     effort = np.asarray(rec.effort, dtype=float)
     slots = _effort_slots(scene, tuple(rec.joint_names))
-    torques = None  # (N, nj, 3): the couple of interval n in its parent's directors
+    torques = None  # (N+1, nj, 3): the couple of node n in its parent's directors
     if isinstance(slots, str):
         fail(slots)
     elif effort.shape != (n_nodes, len(rec.joint_names)):
@@ -253,19 +254,12 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
     else:
         effort_couples = _effort_couples(scene, mech, q, effort, slots)  # (N+1, nj, 3)
         torques = np.array([[mech.directors(q[n], j.parent).T @ effort_couples[n, ji]
-                             for ji, j in enumerate(scene.joints)] for n in range(N)])
+                             for ji, j in enumerate(scene.joints)] for n in range(n_nodes)])
+        half = 0.5 * (np.concatenate([[0.0], h]) + np.concatenate([h, [0.0]]))  # w_n
         for n in range(n_nodes):
             for ji, j in enumerate(scene.joints):
-                Dp = mech.directors(q[n], j.parent)
-                expected = np.zeros(3)
-                if n > 0:
-                    expected += 0.5 * h[n - 1] * (Dp @ torques[n - 1, ji])
-                if n < N:
-                    expected += 0.5 * h[n] * (Dp @ torques[n, ji])
+                expected = half[n] * effort_couples[n, ji]
                 error = _norm(joint_couples[n, ji] - expected) / couple_scale
-                if n == N:  # the last node repeats the torque of interval N-1
-                    error = max(error, 0.5 * h[N - 1] * _norm(
-                        effort_couples[N, ji] - Dp @ torques[N - 1, ji]) / couple_scale)
                 if error > mismatch:
                     mismatch, mismatch_at = error, (j.name, n)
         if mismatch > L["actuation"]:
@@ -303,8 +297,8 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
     if torques is not None:
         periodic_torque = _periodic_torque_error(scene, effort_couples, N)
         if periodic_torque > L["actuation"]:
-            fail(f"the joint couples of interval N-1 are not the mirror images of those of "
-                 f"interval 0: off by {periodic_torque:.3e} (relative; limit "
+            fail(f"the joint couples of nodes N-1, N are not the mirror images of those of "
+                 f"nodes 0, 1: off by {periodic_torque:.3e} (relative; limit "
                  f"{L['actuation']:.0e})")
 
     # ---- time, cost, energy
@@ -319,9 +313,10 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         cost = float(np.sum(h[: N - 1] * 0.5 * np.einsum("ni,i,ni->n", v, mech.mass_diagonal,
                                                          v)))
     elif cost_name == "torque_squared" and torques is not None:
-        # |tau|^2 of the planner's torques (parent-director components, revolute: about
-        # the axis) = |couple|^2 of every joint
-        cost = float(np.sum(h[: N - 1] * np.sum(torques[: N - 1] ** 2, axis=(1, 2))))
+        # |tau|^2 of the planner's node torques (parent-director components, revolute:
+        # about the axis) = |couple|^2 of every joint, trapezoidal over t_0 .. t_(N-1)
+        squares = np.sum(torques[:N] ** 2, axis=(1, 2))
+        cost = float(np.sum(h[: N - 1] * 0.5 * (squares[: N - 1] + squares[1:N])))
     else:
         cost = math.nan
         fail(f"unknown cost name {cost_name!r} in the metadata")
@@ -338,6 +333,9 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
     if energy_error > L["energy"]:
         fail(f"recorded potential energy differs from sum m g phi_z by {energy_error:.3e} "
              f"(relative)")
+
+    physical = check_physical(rec, scene, mu)
+    failures += physical.failures
 
     return VerificationReport(
         path=str(rec.path), scene=scene.name, cost_name=cost_name, n_nodes=n_nodes,
@@ -358,7 +356,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         max_interval_error=interval_error,
         max_scaling_bound_excess=max(excesses, default=math.nan),
         max_potential_energy_error=energy_error,
-        failures=tuple(failures), notes=tuple(notes),
+        failures=tuple(failures), notes=tuple(notes), physical=physical,
     )
 
 
@@ -417,22 +415,24 @@ def _effort_slots(scene: SceneData, names: Sequence[str]) -> dict[str, list[int]
 
 
 def _periodic_torque_error(scene: SceneData, couples: np.ndarray, N: int) -> float:
-    """Largest relative difference between the joint couples of interval N-1 (world, at
-    q_{N-1}) and the mirror images of those of interval 0 (at q_0): a couple m mirrors to
+    """Largest relative difference between the joint couples of nodes N-1, N (world, at
+    q_{N-1}, q_N) and the mirror images of those of nodes 0, 1: a couple m mirrors to
     -S m on the partner joint, or to +S m when the mirror swaps the joint's parent and child
     (the couple then acts on the other body)."""
     by_bodies = {(j.parent, j.child): i for i, j in enumerate(scene.joints)}
-    scale = max(float(np.abs(couples[[0, N - 1]]).max()), 1e-300)
+    scale = max(float(np.abs(couples[[0, 1, N - 1, N]]).max()), 1e-300)
     error = 0.0
     for i, j in enumerate(scene.joints):
         p, c = scene.mirror[j.parent], scene.mirror[j.child]
         if (p, c) in by_bodies:
-            image, partner = -MIRROR * couples[0, i], by_bodies[(p, c)]
+            sign, partner = -1.0, by_bodies[(p, c)]
         elif (c, p) in by_bodies:
-            image, partner = MIRROR * couples[0, i], by_bodies[(c, p)]
+            sign, partner = 1.0, by_bodies[(c, p)]
         else:
             return math.inf
-        error = max(error, _norm(couples[N - 1, partner] - image) / scale)
+        for src, dst in ((0, N - 1), (1, N)):
+            image = sign * MIRROR * couples[src, i]
+            error = max(error, _norm(couples[dst, partner] - image) / scale)
     return error
 
 

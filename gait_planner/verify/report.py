@@ -5,6 +5,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from gait_planner.verify.physical import PhysicalReport
+
 LIMITS = {
     "constraint": 1e-9,  # m (and dimensionless for director conditions), every node
     "contact": 1e-9,  # m, held points: drift over an interval and height
@@ -72,6 +74,7 @@ class VerificationReport:
     max_potential_energy_error: float  # relative
     failures: tuple[str, ...]
     notes: tuple[str, ...] = ()
+    physical: PhysicalReport | None = None  # per-point cones, swing clearance, speeds, torques
 
     @property
     def ok(self) -> bool:
@@ -81,13 +84,21 @@ class VerificationReport:
         lines = [f"{self.path}: scene {self.scene}, cost {self.cost_name}, {self.n_nodes} nodes: "
                  + ("all checks passed" if self.ok else f"{len(self.failures)} check(s) FAILED")]
         for f in dataclasses.fields(self):
-            if f.name in ("path", "scene", "cost_name", "n_nodes", "failures", "notes"):
+            if f.name in ("path", "scene", "cost_name", "n_nodes", "failures", "notes",
+                          "physical"):
                 continue
-            value = getattr(self, f.name)
-            text = f"{value:.6g}" if isinstance(value, float) else str(value)
-            lines.append(f"  {f.name:32s} {text}")
+            lines.append(_line(f.name, getattr(self, f.name)))
+        if self.physical is not None:
+            lines += [_line(f.name, getattr(self.physical, f.name))
+                      for f in dataclasses.fields(self.physical)
+                      if f.name not in ("failures", "scuffs", "zigzags")]
         lines += [f"  note: {n}" for n in self.notes]
         lines += [f"  FAILED: {f}" for f in self.failures]
         return "\n".join(lines)
 
     __str__ = summary
+
+
+def _line(name: str, value) -> str:
+    text = f"{value:.6g}" if isinstance(value, float) else str(value)
+    return f"  {name:32s} {text}"

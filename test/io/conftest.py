@@ -50,6 +50,13 @@ def _kinetic_energy(scene: Scene, q: np.ndarray, times: np.ndarray) -> np.ndarra
     return np.r_[t_interval[0], 0.5 * (t_interval[:-1] + t_interval[1:]), t_interval[-1]]
 
 
+def _points_by_body(scene: Scene) -> dict[str, list[str]]:
+    out: dict[str, list[str]] = {}
+    for c in scene.contacts:
+        out.setdefault(c.body, []).append(c.name)
+    return out
+
+
 def make_result(scene_name: str = "walker3d", intervals: int = 10, **changes) -> PlanResult:
     """A successful-looking PlanResult with `intervals` intervals; `changes` replace fields."""
     scene = load_scene(scene_name)
@@ -86,13 +93,16 @@ def make_result(scene_name: str = "walker3d", intervals: int = 10, **changes) ->
         friction_coefficient=gait.friction_coefficient,
         times=times,
         q=q,
-        tau=rng.normal(scale=50.0, size=(intervals, nt)),
+        tau=rng.normal(scale=50.0, size=(n, nt)),
         joint_angle_names=angle_names(scene),
         joint_angles=angles,
         joint_velocities=np.gradient(angles, times, axis=0),
         phases=phases,
         active_contacts=active,
         contact_forces=forces,
+        roll_moments={b: np.where([len(pts) == 2 and not scene.planar and set(pts) <= set(a)
+                                   for a in active], 3.0 * np.cos(np.arange(n)), 0.0)
+                      for b, pts in _points_by_body(scene).items()},
         generalized_force=gf,
         kinetic_energy=_kinetic_energy(scene, q, times),
         potential_energy=potential,

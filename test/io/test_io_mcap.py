@@ -54,6 +54,13 @@ def test_round_trip(result, recorded, start_ns):
     assert recorded.contact_names == result.active_contacts
     for name, forces in result.contact_forces.items():
         assert np.array_equal(recorded.contact_force(name), forces)
+    for n in range(result.n_nodes):
+        wrenches = messages.foot_wrenches(result, n)
+        assert recorded.wrench_bodies[n] == tuple(w[0] for w in wrenches)
+        assert np.array_equal(recorded.wrench_points[n], np.array([w[1] for w in wrenches]))
+        assert np.array_equal(recorded.wrenches[n],
+                              np.array([np.r_[w[2], w[3]] for w in wrenches]))
+        assert np.array_equal(recorded.centers_of_pressure[n], np.array([w[4] for w in wrenches]))
     assert recorded.joint_names == result.joint_angle_names == angle_names(result.scene)
     assert np.array_equal(recorded.positions, result.joint_angles)
     assert np.array_equal(recorded.velocities, result.joint_velocities)

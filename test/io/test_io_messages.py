@@ -63,6 +63,39 @@ def test_contact_forces_only_active_with_world_points(result):
         assert _stamp(msg["header"]) == messages.node_stamps_ns(result, START_NS)[n]
 
 
+def test_foot_wrench_is_the_sum_of_point_forces_moments_and_roll(result):
+    """Each foot's wrench carries the net force, the moments of its point forces about the
+    wrench point plus the full contact's roll moment M (d2 x e_z), and a centre of pressure
+    about which the horizontal moment vanishes."""
+    scene, full_nodes = result.scene, 0
+    for n, msg in enumerate(messages.contact_forces(result, START_NS)):
+        names = msg["contact_names"]
+        feet = [b.name for b in scene.bodies if any(scene.contact(c).body == b.name for c in names)]
+        assert msg["wrench_bodies"] == feet
+        for body, r, w, cop in zip(feet, msg["wrench_points"], msg["wrenches"],
+                                   msg["centers_of_pressure"]):
+            r = np.array([r["x"], r["y"], r["z"]])
+            F = np.array([w["force"][a] for a in "xyz"])
+            M = np.array([w["torque"][a] for a in "xyz"])
+            cop = np.array([cop["x"], cop["y"], cop["z"]])
+            mine = [i for i, c in enumerate(names) if scene.contact(c).body == body]
+            points = [np.array([msg["points"][i][a] for a in "xyz"]) for i in mine]
+            forces = [np.array([msg["forces"][i][a] for a in "xyz"]) for i in mine]
+            assert np.allclose(r, np.mean(points, axis=0), atol=1e-15)
+            assert np.allclose(F, np.sum(forces, axis=0), atol=1e-12)
+            i = scene.body_index(body)
+            d2 = result.q[n, 12 * i + 6:12 * i + 9]
+            roll = result.roll_moments[body][n]
+            full_nodes += roll != 0
+            expected = sum(np.cross(p - r, f) for p, f in zip(points, forces)) + \
+                roll * np.cross(d2, [0.0, 0.0, 1.0])
+            assert np.allclose(M, expected, atol=1e-12)
+            if F[2] > 0:  # the moment about the centre of pressure has no horizontal part
+                assert np.allclose((M - np.cross(cop - r, F))[:2], 0.0, atol=1e-9)
+                assert cop[2] == pytest.approx(r[2])
+    assert full_nodes > 0  # the synthetic result has full contacts with a roll moment
+
+
 def test_joint_trajectory_one_point_per_node_and_effort_convention(result):
     traj = messages.joint_trajectory(result, START_NS)
     assert set(traj) == _std("trajectory_msgs/JointTrajectory")

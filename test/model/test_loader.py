@@ -127,7 +127,7 @@ def test_walker3d_matches_the_paper():
     assert gait.scaling_bounds == (0.5, 1.5)
     assert (gait.friction_coefficient, gait.cost) == (0.8, "kinetic_energy")
     # the posture the paper does not state: declared path constraints, mirror-symmetric
-    assert gait.options["torso_lean_max"] == 0.0873
+    assert gait.options["torso_lean_max"] == 5  # degrees, like the joint ranges
     limits = gait.options["joint_limits"]
     assert len(limits) == 14
     for name, bounds in limits.items():
@@ -149,6 +149,26 @@ def test_joint_types_and_angle_names():
     assert [j.angle_names for j in w2.joints] == [(j.name,) for j in w2.joints]
     assert w2.planar and compass.planar and not w3.planar
     assert compass.joints[0].angle_names == ("hip",)
+
+
+def test_every_walking_scene_declares_its_posture():
+    """Upright in every scene: the walkers keep the torso within 5 deg of vertical and the
+    knees bent or straight, never hyperextended; the compass (no torso, no knees) bounds
+    its hip. Every range is a valid one of the scene (the loader checked it)."""
+    for name in ("walker3d", "walker2d"):
+        scene = load_scene(name)
+        options = scene.gait.options
+        assert options["torso_lean_max"] == 5
+        limits = options["joint_limits"]
+        for knee in ("knee_r", "knee_l"):
+            assert tuple(limits[knee]) == (0, 75)
+        for side in ("r", "l"):  # the sagittal ranges agree between the scenes
+            suffix = "_pitch" if name == "walker3d" else ""
+            assert tuple(limits[f"hip_{side}{suffix}"]) == (-45, 25)
+            assert tuple(limits[f"ankle_{side}{suffix}"]) == (-30, 45)
+        assert set(limits) == {n for j in scene.joints for n in j.angle_names}
+    compass = load_scene("compass").gait.options
+    assert "torso_lean_max" not in compass and tuple(compass["joint_limits"]["hip"]) == (-60, 60)
 
 
 def test_joints_are_reordered_depth_first(tmp_path):
@@ -310,6 +330,27 @@ SET_CASES = [
     ("gait.options", {"a": {"b": [1, math.nan]}}, "gait.options.a.b[1]: must be a finite number"),
     ("gait.options", [1], "gait.options: must be a mapping, got a list of 1"),
     ("gait", [1], "gait: must be a mapping, got a list of 1"),
+    # posture options (gait_planner.model.posture), in degrees, checked when the scene loads
+    ("gait.options.torso_lean_max", 90,
+     "walker3d.yaml: gait.options.torso_lean_max: must be in [0, 90) degrees, got 90.0"),
+    ("gait.options.torso_lean_max", -5, "gait.options.torso_lean_max: must be in [0, 90) deg"),
+    ("gait.options.torso_lean_max", "5 deg",
+     "gait.options.torso_lean_max: must be a number of degrees, got '5 deg'"),
+    ("gait.options.joint_limits.knee_r", [75, 0],
+     "walker3d.yaml: gait.options.joint_limits.knee_r: need finite lower < upper within 180 "
+     "deg, got [75.0, 0.0]"),
+    ("gait.options.joint_limits.knee_r", [-100, 100], "joint_limits.knee_r: need finite lower"),
+    ("gait.options.joint_limits.knee_r", [170, 200],
+     "gait.options.joint_limits.knee_r: bounds must lie in [-180, 180] deg, got [170.0, 200.0]"),
+    ("gait.options.joint_limits.knee_r", [0, True], "joint_limits.knee_r: need [lower, upper]"),
+    ("gait.options.joint_limits.knee_r", [0, 10, 20], "joint_limits.knee_r: need [lower, upper]"),
+    ("gait.options.joint_limits.knee_r", "straight", "joint_limits.knee_r: need [lower, upper]"),
+    ("gait.options.joint_limits.hip_r_roll", [-95, 10],
+     "gait.options.joint_limits.hip_r_roll: a roll range must lie in [-90, 90] deg"),
+    ("gait.options.joint_limits.elbow", [0, 10],
+     "gait.options.joint_limits: 'elbow' is not a joint angle of scene 'walker3d'; known: "
+     "hip_r_pitch"),
+    ("gait.options.joint_limits", [0, 75], "gait.options.joint_limits: need a mapping"),
 ]
 
 
@@ -326,6 +367,12 @@ def test_validation_rule(tmp_path, path, value, expected):
     ("joints[1].axis", [1, 0, 0], "joints[1].axis: a planar scene allows only revolute joints"),
     ("initial_pose.root_angles", [0.1, 0, 0], "initial_pose.root_angles[0]: a planar root turns"),
     ("initial_pose.root_angles", [0, 0, 0.1], "initial_pose.root_angles[2]: a planar root turns"),
+    ("gait.options.joint_limits.hip_r_pitch", [-45, 25],
+     "walker2d.yaml: gait.options.joint_limits: 'hip_r_pitch' is not a joint angle of scene "
+     "'walker2d'; known: hip_r, knee_r, ankle_r, hip_l, knee_l, ankle_l"),
+    ("gait.options.joint_limits.knee_l", [0, 180], "joint_limits.knee_l: need finite lower"),
+    ("gait.options.torso_lean_max", 100,
+     "torso_lean_max: must be in [0, 90) degrees, got 100.0"),
 ])
 def test_planar_rules(tmp_path, path, value, expected):
     data = scene_data("walker2d")

@@ -88,7 +88,7 @@ def test_result_fields_are_consistent(solved, name):
     assert r.times.shape == (N + 1,) and r.times[0] == 0.0
     assert np.all(np.diff(r.times) > 0)
     assert r.q.shape == (N + 1, k)
-    assert r.tau.shape == (N, nt)
+    assert r.tau.shape == (N + 1, nt)  # node torques
     assert r.joint_angles.shape == r.joint_velocities.shape == (N + 1, nt)
     assert r.generalized_force.shape == (N + 1, k)
     assert r.kinetic_energy.shape == r.potential_energy.shape == (N + 1,)

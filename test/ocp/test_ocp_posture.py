@@ -1,23 +1,28 @@
-"""Joint-range margins (`gait_planner.ocp.posture`) against the angles of
-`gait_planner.model.angles`: for random poses and random ranges, every margin is >= 0
+"""Posture: joint-range margins (`gait_planner.ocp.posture`) against the angles of
+`gait_planner.model.angles` (for random poses and random ranges, every margin is >= 0
 exactly when the numpy angle lies in its range, and the margin's size is the sine of the
-distance to the bound (times cos roll for pitch and yaw)."""
+distance to the bound, times cos roll for pitch and yaw); the posture options' checks
+(`gait_planner.model.posture`), torso_lean_max in degrees; walker2d's plan upright."""
 
 from __future__ import annotations
 
 import math
 
+import casadi as ca
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.angles import configuration, joint_angles
 from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
+from gait_planner.model.posture import PostureError, check_joint_limits
 from gait_planner.model.scene import InitialPose, JointType
-from gait_planner.ocp.posture import JointLimitError, check_joint_limits, joint_limit_margins
+from gait_planner.ocp.posture import joint_limit_margins
 from gait_planner.ocp.settings import SettingsError, settings_for
+from gait_planner.ocp.transcription import Transcription
 
 _SCENE = load_scene("walker3d")
 _MB = Multibody(_SCENE)
@@ -93,10 +98,13 @@ def test_revolute_axis_of_any_direction():
     ({"knee_r": (0, float("nan"))}, "finite"),
     ({"knee_r": "straight"}, "need [lower, upper]"),
     ({"hip_r_roll": (-95, 10)}, "[-90, 90]"),
+    ({"knee_r": (170, 200)}, "bounds must lie in [-180, 180] deg"),
+    ({"knee_r": (0, True)}, "need [lower, upper]"),
+    ({"knee_r": ("0", "10")}, "need [lower, upper]"),
     ((("knee_r", 0.0, 1.0),), "need a mapping"),
 ])
 def test_bad_ranges_name_what_is_wrong(limits, words):
-    with pytest.raises(JointLimitError, match=None) as err:
+    with pytest.raises(PostureError) as err:
         check_joint_limits(_SCENE, limits)
     assert words in str(err.value)
     with pytest.raises(SettingsError) as err:
@@ -107,3 +115,57 @@ def test_bad_ranges_name_what_is_wrong(limits, words):
 def test_settings_carry_the_ranges_in_radians():
     s = settings_for(_SCENE, joint_limits={"knee_r": (0, 70)})
     assert s.joint_limits == (("knee_r", 0.0, pytest.approx(math.radians(70))),)
+
+
+@pytest.mark.parametrize("value, words", [
+    (90, "torso_lean_max: must be in [0, 90) degrees, got 90.0"),
+    (-1, "torso_lean_max: must be in [0, 90) degrees, got -1.0"),
+    ("5", "torso_lean_max: must be a number of degrees, got '5'"),
+    (True, "torso_lean_max: must be a number of degrees, got True"),
+])
+def test_torso_lean_max_is_degrees_below_90(value, words):
+    with pytest.raises(SettingsError) as err:
+        settings_for(_SCENE, torso_lean_max=value)
+    assert words in str(err.value)
+
+
+def test_torso_lean_max_in_degrees_bounds_the_root_d3_at_its_cosine():
+    """5 (degrees) from the option becomes d3_z - cos(5 deg) >= 0 at nodes 1..N-1 of the
+    root body: the rows minus the root's d3_z are the constant -cos(5 deg) at any x, p."""
+    scene = load_scene("compass")
+    s = settings_for(scene, torso_lean_max=5)
+    assert s.torso_lean_max == 5.0
+    tr = Transcription(DiscreteMechanics(Multibody(scene)), s)
+    offset = 0
+    for name, size, _ in tr.constraint_groups():
+        if name == "torso_lean":
+            break
+        offset += size
+    assert size == tr.N - 1
+    root = tr.mb.block(scene.root.body).start
+    rows = tr.g[offset : offset + size] - ca.vec(tr.Q[root + 11, 1 : tr.N])
+    f = ca.Function("f", [tr.x, tr.p], [rows])
+    rng = np.random.default_rng(0)
+    x, p = rng.normal(size=tr.x.shape[0]) * 0.1, rng.normal(size=tr.p.shape[0])
+    np.testing.assert_allclose(np.array(f(x, p)).ravel(), -math.cos(math.radians(5)),
+                               rtol=0, atol=1e-14)
+
+
+def test_walker2d_plan_is_upright(solved):
+    """walker2d's default plan (cold, from the kinematic guess) keeps its declared posture:
+    the torso's d3 within 5 deg of vertical and every knee bent or straight (>= 0) at every
+    node, every joint angle within its range; minimal kinetic energy leans it on the bound.
+    Without the posture the torso hung head-down between the hips (d3_z -0.98)."""
+    s = solved("walker2d")
+    r, scene = s.result, s.scene
+    assert r.success, r.message
+    assert s.settings.torso_lean_max == 5.0
+    root = [b.name for b in scene.bodies].index(scene.root.body) * 12
+    d3z = r.q[:, root + 11]
+    assert d3z.min() >= math.cos(math.radians(5)) - 1e-8
+    assert d3z.min() == pytest.approx(math.cos(math.radians(5)), abs=1e-6)  # active
+    angles = dict(zip(r.joint_angle_names, r.joint_angles.T))
+    for knee in ("knee_r", "knee_l"):
+        assert angles[knee].min() >= -1e-6
+    for name, lo, hi in s.settings.joint_limits:
+        assert lo - 1e-6 <= angles[name].min() and angles[name].max() <= hi + 1e-6, name

@@ -57,6 +57,10 @@ EXPECTED_FIELDS = {
         "contact_names": "sequence<string>",
         "points": "sequence<geometry_msgs/Point>",
         "forces": "sequence<geometry_msgs/Vector3>",
+        "wrench_bodies": "sequence<string>",
+        "wrench_points": "sequence<geometry_msgs/Point>",
+        "wrenches": "sequence<geometry_msgs/Wrench>",
+        "centers_of_pressure": "sequence<geometry_msgs/Point>",
     },
     MultibodyState: {
         "header": "std_msgs/Header",
