@@ -165,8 +165,10 @@ def _run(args: argparse.Namespace) -> int:
 def _add_report(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "report", help="draw a recorded plan (PNG) and check it independently",
-        description="Read RUN.mcap, draw walker, joint angles, torques, ground forces and "
-        "energies into a PNG, and run the independent verifier (gait_planner.verify) on it.")
+        description="Read RUN.mcap, draw walker, joint angles, torques, ground forces, "
+        "energies and the continuous-dynamics certificate into a PNG, run the independent "
+        "verifier (gait_planner.verify) on it and print the certificate's summary line (the "
+        "exit status is the verifier's).")
     parser.add_argument("mcap", help="a recording written by plan/run/node")
     parser.add_argument("--png", help="the figure (default: RUN.png beside the recording)")
     parser.set_defaults(handler=_report)
@@ -175,15 +177,23 @@ def _add_report(commands: argparse._SubParsersAction) -> None:
 def _report(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from gait_planner.io.mcap_reader import read_plan_mcap
     from gait_planner.io.plots import plot_recording
     from gait_planner.verify import verify_recording
+    from gait_planner.verify.continuous import certificate_of_recording
 
     source = Path(args.mcap)
     if source.suffix != ".mcap" or not source.is_file():
         raise CliError(f"{args.mcap!r} is not an existing .mcap file")
-    png = plot_recording(source, args.png or source.with_suffix(".png"))
+    try:  # informative: the exit status stays the verifier's
+        certificate = certificate_of_recording(read_plan_mcap(source))
+        line = certificate.summary()
+    except (ValueError, KeyError) as error:
+        certificate = line = f"continuous dynamics: cannot be computed: {error}"
+    png = plot_recording(source, args.png or source.with_suffix(".png"), certificate)
     report = verify_recording(source)
     print(report.summary())
+    print(line)
     print(f"figure: {png}")
     return 0 if report.ok else 1
 

@@ -4,13 +4,16 @@
 recording can be plotted, not only fresh plans) and draws, over the half cycle, with the
 phases shaded: a side view of the walker every few nodes, the joint angles, the joint
 torques (JointTrajectory efforts), the vertical and tangential ground forces per contact
-point, and the kinetic, potential and total energy. Written atomically (temporary file,
-then rename).
+point, the kinetic, potential and total energy, the time steps and, across the bottom, the
+continuous-dynamics certificate (`gait_planner.verify.continuous`: torque error in % of the
+peak effort and base residual force per node, contact switches marked). Written atomically
+(temporary file, then rename).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -81,12 +84,60 @@ def _rounded(csv: str) -> str:
         return csv
 
 
-def plot_recording(mcap: str | Path, png: str | Path) -> Path:
-    """Draw the figure of recording `mcap` into `png`; returns the written path."""
+def _certificate_panel(ax, rec: RecordedPlan, cert: Any) -> None:
+    """Per inner node, on one log axis in %: max |torque error| over the joints relative to
+    the peak effort, and the base residual force relative to the body weight; the
+    certificate's limits dashed, the nodes where the set of held contacts changes as grey
+    lines. `cert` is a ContinuousCertificate, or the text of why there is none."""
+    ax.set_xlabel("t (s)")
+    if isinstance(cert, str):
+        ax.text(0.5, 0.5, f"continuous-dynamics certificate unavailable: {cert}",
+                ha="center", va="center", transform=ax.transAxes)
+        return
+    from gait_planner.verify.continuous import LIMITS
+
+    floor = 1e-6  # %: round-off zeros still show on the log scale
+    torque = np.maximum(100 * np.abs(cert.torque_error_relative).max(axis=1), floor)
+    force = np.maximum(100 * cert.base_force / cert.weight, floor)
+    ax.semilogy(cert.times, torque, "o-", ms=3, color="tab:blue",
+                label="torque error (max over joints), % of peak effort")
+    ax.semilogy(cert.times, force, "s-", ms=3, color="tab:red",
+                label="base residual force, % of body weight")
+    ax.axhline(100 * LIMITS["torque"], color="tab:blue", ls="--", lw=0.8,
+               label=f"torque limit {100 * LIMITS['torque']:g} % "
+                     f"({100 * LIMITS['torque_switch']:g} % at switches)")
+    ax.axhline(100 * LIMITS["force"], color="tab:red", ls="--", lw=0.8,
+               label=f"force limit {100 * LIMITS['force']:g} % (away from switches)")
+    active = rec.active_contacts
+    for n in range(1, len(active)):
+        if set(active[n]) != set(active[n - 1]):
+            ax.axvline(rec.times[n], color="0.5", lw=0.8)
+    ax.set_ylabel("%")
+    ax.set_title(f"continuous dynamics (Pinocchio inverse dynamics; ground wrenches: "
+                 f"{cert.wrench_source}): {'OK' if cert.ok else 'FAILED'}; grey lines: "
+                 f"contact switches", fontsize=9)
+    ax.legend(fontsize=7, loc="best", ncol=2)
+
+
+def _certificate_of(rec: RecordedPlan) -> Any:
+    from gait_planner.verify.continuous import certificate_of_recording
+
+    try:
+        return certificate_of_recording(rec)
+    except (ValueError, KeyError) as error:
+        return str(error)
+
+
+def plot_recording(mcap: str | Path, png: str | Path, certificate: Any = None) -> Path:
+    """Draw the figure of recording `mcap` into `png`; returns the written path.
+    `certificate`: its ContinuousCertificate if already computed (else computed here)."""
     rec = read_plan_mcap(mcap)
     meta = rec.metadata
     t = rec.times
-    fig, axes = plt.subplots(3, 2, figsize=(13, 11), constrained_layout=True)
+    fig = plt.figure(figsize=(13, 14), constrained_layout=True)
+    grid = fig.add_gridspec(4, 2, height_ratios=(1.0, 1.0, 1.0, 0.8))
+    axes = np.array([[fig.add_subplot(grid[r, c]) for c in range(2)] for r in range(3)])
+    bottom = fig.add_subplot(grid[3, :])
     fig.suptitle(f"{meta.get('scene', '?')}: {meta.get('cost', '?')} = "
                  f"{float(meta.get('cost_value', 'nan')):.4f}, step {meta.get('step_length')} m, "
                  f"half cycle {float(meta.get('duration', 'nan')):.4f} s, "
@@ -123,7 +174,8 @@ def plot_recording(mcap: str | Path, png: str | Path) -> Path:
     ax.set_ylim(0.0, 1.15 * steps.max())
     ax.set_ylabel("time step (ms)")
     ax.set_title("time steps (base step x sigma of the phase)")
-    for ax in (*axes[1], *axes[2], axes[0, 1]):
+    _certificate_panel(bottom, rec, _certificate_of(rec) if certificate is None else certificate)
+    for ax in (*axes[1], *axes[2], axes[0, 1], bottom):
         _shade_phases(ax, rec)
         ax.set_xlabel("t (s)")
 

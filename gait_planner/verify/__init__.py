@@ -63,6 +63,12 @@ Checks and method (limits in `LIMITS`):
   those of nodes N-1, 1; the joint couples of nodes N-1, N are the mirror images of those
   of nodes 0, 1 (a couple m mirrors to -S m, or to +S m when the mirror swaps the joint's
   parent and child).
+* Physical plausibility (`gait_planner.verify.physical`): per-point friction cones, no
+  swing point at ground height, joint speeds, no torque zigzag away from contact switches.
+* Continuous dynamics (`gait_planner.verify.continuous`): Pinocchio's inverse dynamics of
+  the continuous model at every inner node from the recorded motion and foot wrenches,
+  against the published efforts (torque error within 0.2 % of the peak away from contact
+  switches, 2 % at them) and a free floating base (residual force and moment).
 * Time and cost: times strictly increasing, interval lengths = base_time_step * sigma of
   their phase (when the metadata states base_time_step), sigma within the scaling
   bounds, duration = t_{N-1} - t_0, cost recomputed from q, times and efforts
@@ -83,10 +89,13 @@ from typing import Sequence
 
 from gait_planner.io.mcap_reader import read_plan_mcap
 from gait_planner.verify.checks import verify_plan
+from gait_planner.verify.continuous import ContinuousCertificate, certificate_of_recording
+from gait_planner.verify.physical import PhysicalReport, check_physical
 from gait_planner.verify.mechanics import Mechanics, SceneData, parse_scene
 from gait_planner.verify.report import LIMITS, VerificationReport
 
 __all__ = ["LIMITS", "SceneData", "Mechanics", "VerificationReport", "parse_scene",
+           "ContinuousCertificate", "certificate_of_recording", "PhysicalReport", "check_physical",
            "verify_plan", "verify_recording", "verify_result", "main"]
 
 

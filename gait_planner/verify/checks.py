@@ -9,6 +9,7 @@ import numpy as np
 
 from gait_planner.io.mcap_reader import RecordedPlan
 from gait_planner.verify.mechanics import MIRROR, Mechanics, SceneData, parse_scene
+from gait_planner.verify.continuous import certificate_of_recording
 from gait_planner.verify.physical import check_physical
 from gait_planner.verify.report import LIMITS, VerificationReport
 
@@ -336,6 +337,8 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
 
     physical = check_physical(rec, scene, mu)
     failures += physical.failures
+    continuous = certificate_of_recording(rec)
+    failures += [f"continuous dynamics: {f}" for f in continuous.failures]
 
     return VerificationReport(
         path=str(rec.path), scene=scene.name, cost_name=cost_name, n_nodes=n_nodes,
@@ -356,7 +359,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         max_interval_error=interval_error,
         max_scaling_bound_excess=max(excesses, default=math.nan),
         max_potential_energy_error=energy_error,
-        failures=tuple(failures), notes=tuple(notes), physical=physical,
+        failures=tuple(failures), notes=tuple(notes), physical=physical, continuous=continuous,
     )
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from gait_planner.verify.continuous import ContinuousCertificate
 from gait_planner.verify.physical import PhysicalReport
 
 LIMITS = {
@@ -75,6 +76,7 @@ class VerificationReport:
     failures: tuple[str, ...]
     notes: tuple[str, ...] = ()
     physical: PhysicalReport | None = None  # per-point cones, swing clearance, speeds, torques
+    continuous: ContinuousCertificate | None = None  # inverse dynamics of the continuous model
 
     @property
     def ok(self) -> bool:
@@ -85,13 +87,15 @@ class VerificationReport:
                  + ("all checks passed" if self.ok else f"{len(self.failures)} check(s) FAILED")]
         for f in dataclasses.fields(self):
             if f.name in ("path", "scene", "cost_name", "n_nodes", "failures", "notes",
-                          "physical"):
+                          "physical", "continuous"):
                 continue
             lines.append(_line(f.name, getattr(self, f.name)))
         if self.physical is not None:
             lines += [_line(f.name, getattr(self.physical, f.name))
                       for f in dataclasses.fields(self.physical)
                       if f.name not in ("failures", "scuffs", "zigzags")]
+        if self.continuous is not None:
+            lines.append(f"  {self.continuous.summary()}")
         lines += [f"  note: {n}" for n in self.notes]
         lines += [f"  FAILED: {f}" for f in self.failures]
         return "\n".join(lines)
