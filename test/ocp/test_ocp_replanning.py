@@ -20,7 +20,7 @@ _STATUS_WORDS = ("time limit reached", "locally infeasible", "restoration failed
                  "iterates diverged", "NaN or Inf", "step computation failed",
                  "acceptable but not optimal")
 _GROUPS = ("dynamics[", "contact_hold", "contact_establish", "pin_x", "friction_cone",
-           "ground_clearance", "torso_lean", "torso_height", "joint_limits")
+           "ground_clearance", "torso_lean", "torso_height", "joint_limits", "joint_speed")
 
 
 def _assert_explained_failure(result, limit: float, elapsed: float):
@@ -89,7 +89,7 @@ def test_impossible_request_fails_from_a_warm_start_within_the_time_limit(solved
 
 def test_time_limit_stops_the_solve(compass_planner):
     scene, planner = compass_planner
-    limit = 0.05
+    limit = 0.005  # a cold compass plan takes about 12 iterations, 0.04 s
     start = time.perf_counter()
     result = planner.plan(scene, settings_for(scene, max_solve_time=limit), warm_start=False)
     _assert_explained_failure(result, limit, time.perf_counter() - start)
