@@ -13,6 +13,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from gait_planner.model.loader import SceneError, load_scene
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
@@ -86,6 +88,7 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
     result = planner.plan(scene, settings, warm_start=not request.cold_start)
     if not result.success:
         return Outcome(result, None, None)
+    result.settings.update(certificate_metadata(continuous_certificate(result)))
     from gait_planner.io.mcap_writer import write_plan_mcap
 
     mcap = write_plan_mcap(result, folder / f"{stem}.mcap", allowed_dirs=[folder])
@@ -95,6 +98,34 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
 
         rrd_path = save_rrd(result, folder / f"{stem}.rrd")
     return Outcome(result, mcap, rrd_path)
+
+
+def continuous_certificate(result: PlanResult):
+    """`gait_planner.verify.continuous` on what the result's messages will publish: the
+    efforts of `node_efforts` and the foot wrenches of `foot_wrenches` (moved to the world
+    origin), so the certificate in the metadata is the one a reader of the recording gets."""
+    from gait_planner.io.messages import foot_wrenches, node_efforts
+    from gait_planner.verify.continuous import certificate
+    from gait_planner.verify.mechanics import parse_scene
+
+    scene = parse_scene(result.scene.source)
+    wrenches = {body: np.zeros((result.n_nodes, 6)) for body, _ in scene.contacts.values()}
+    for n in range(result.n_nodes):
+        for body, r, F, M, _ in foot_wrenches(result, n):
+            wrenches[body][n] = np.concatenate([F, M + np.cross(r, F)])
+    return certificate(scene, result.times, result.q, node_efforts(result), wrenches,
+                       result.active_contacts)
+
+
+def certificate_metadata(cert) -> dict[str, str]:
+    """The certificate's maxima as metadata strings (MCAP record, service response): torque
+    errors relative to the peak effort away from contact switches and at them, the floating
+    base's residual force (N) and moment (N m) away from switches, and the summary line."""
+    return {"continuous_torque_error": repr(cert.max_torque_calm),
+            "continuous_torque_error_at_switches": repr(cert.max_torque_switch),
+            "continuous_base_force": repr(cert.max_force_calm),
+            "continuous_base_moment": repr(cert.max_moment_calm),
+            "continuous_dynamics": cert.summary()}
 
 
 def summary(outcome: Outcome) -> dict:
@@ -109,6 +140,7 @@ def summary(outcome: Outcome) -> dict:
         "max_constraint_violation": s.max_constraint_violation,
         "max_dynamics_residual": s.max_dynamics_residual,
         "max_friction_violation": s.max_friction_violation,
+        "continuous_dynamics": r.settings.get("continuous_dynamics", ""),
         "nodes": r.n_nodes, "mcap": str(outcome.mcap_path or ""),
         "rrd": str(outcome.rrd_path or ""),
     }

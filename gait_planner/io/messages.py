@@ -367,7 +367,17 @@ def plan_response_fields(result: PlanResult, mcap_path: str | None,
         "max_friction_violation": float(stats.max_friction_violation),
         "trajectory": joint_trajectory(result, stamp_ns),
         "mcap_path": str(mcap_path or ""),
+        "continuous_torque_error": _setting(result, "continuous_torque_error"),
+        "continuous_torque_error_at_switches": _setting(
+            result, "continuous_torque_error_at_switches"),
+        "continuous_base_force": _setting(result, "continuous_base_force"),
+        "continuous_dynamics": str(result.settings.get("continuous_dynamics", "")),
     }
+
+
+def _setting(result: PlanResult, key: str) -> float:
+    """A numeric entry of result.settings, NaN where the plan has none."""
+    return float(result.settings.get(key, "nan"))
 
 
 # ---------------------------------------------------------------------------- rclpy messages

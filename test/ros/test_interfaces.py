@@ -49,6 +49,10 @@ EXPECTED_FIELDS = {
         "max_friction_violation": "double",
         "trajectory": "trajectory_msgs/JointTrajectory",
         "mcap_path": "string",
+        "continuous_torque_error": "double",
+        "continuous_torque_error_at_switches": "double",
+        "continuous_base_force": "double",
+        "continuous_dynamics": "string",
     },
     ContactForces: {
         "header": "std_msgs/Header",

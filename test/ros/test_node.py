@@ -11,6 +11,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from trajectory_msgs.msg import JointTrajectory
 
+from gait_planner.io.mcap_reader import read_plan_mcap
 from gait_planner.ros.node import (SERVICE, TOPIC_FORCES, TOPIC_STATE, TOPIC_TRAJECTORY,
                                    GaitPlannerNode)
 from gait_planner_msgs.msg import ContactForces, MultibodyState
@@ -55,6 +56,11 @@ def test_plan_request_plans_records_and_publishes(setup, spin_until):
     assert nodes > 3 and len(res.phase_scaling) == 1
     assert res.max_constraint_violation < 1e-9 and res.max_dynamics_residual < 1e-6
     assert math.isclose(res.step_length, 0.3)
+    # the continuous-dynamics certificate travels in the response and in the recording
+    assert res.continuous_torque_error < 0.002 and res.continuous_base_force < 1.0
+    assert res.continuous_dynamics.endswith("OK"), res.continuous_dynamics
+    recorded = read_plan_mcap(res.mcap_path).metadata
+    assert float(recorded["continuous_torque_error"]) == res.continuous_torque_error
     assert spin_until(lambda: len(received["state"]) == nodes
                       and len(received["forces"]) == nodes and received["trajectory"])
     assert [m.node for m in received["state"]] == list(range(nodes))
