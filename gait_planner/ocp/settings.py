@@ -39,6 +39,8 @@ class GaitSettings:
     striking at a node (nor released there) stays at least this high, so no swing point
     slides along the ground at zero force; joint_speed_max deg/s (0 = off): every joint's
     relative rotation over an interval stays below joint_speed_max * h_n;
+    twist_regularisation J: weight w of w sum_n h_n sum_joints (1 - (d2_parent . d2_child)^2)
+    added to the cost (sin^2 of a joint's roll or yaw; the J reported excludes it);
     max_iterations, max_solve_time s (IPOPT); tolerance (IPOPT tol);
     constraint_tolerance (IPOPT constr_viol_tol); compiled: build the per-node derivative
     elements as C (`gait_planner.ocp.compile`; a one-time cost per machine, cached).
@@ -59,6 +61,7 @@ class GaitSettings:
     ground_clearance: bool = True
     swing_clearance: float = 0.0
     joint_speed_max: float = 0.0
+    twist_regularisation: float = 0.0
     max_iterations: int = 3000
     max_solve_time: float = 600.0
     tolerance: float = 1e-8
@@ -96,7 +99,7 @@ class GaitSettings:
             raise SettingsError(str(err)) from None
         for name in ("torque_regularisation", "friction_smoothing",
                      "torso_height_min", "foot_half_width", "swing_clearance",
-                     "joint_speed_max"):
+                     "joint_speed_max", "twist_regularisation"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")
 

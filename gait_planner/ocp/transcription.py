@@ -345,6 +345,8 @@ class Transcription:
         # 1e5 and more, walker3d's inertia-free attempt failed). The regulariser's weight,
         # times sum h_n s^2, picks the smallest shares that keep every point in its cone.
         shares = s.torque_regularisation * self._share_squares()
+        if s.twist_regularisation > 0:
+            shares = shares + s.twist_regularisation * self._twist()
         if s.cost == "torque_squared":
             self.cost_without_elements = torque + shares
             return self.cost_without_elements
@@ -356,6 +358,18 @@ class Transcription:
                 None, np.array([s.base_time_step])))
         self.cost_without_elements = s.torque_regularisation * torque + shares
         return kinetic + self.cost_without_elements
+
+    def _twist(self):
+        """sum_n h_n sum_joints (1 - (d2_parent . d2_child)^2) over nodes 0..N-2 (s): the
+        squared sine of the angle between a joint's two lateral axes, zero for any pure
+        pitch (and for a revolute joint about d2), sin^2 of roll or yaw alone otherwise."""
+        mb, N = self.mb, self.N
+        terms = []
+        for j in mb.scene.joints:
+            p, c = (mb.block(b).start + 6 for b in (j.parent, j.child))
+            cos = ca.sum1(self.Q[p : p + 3, 0 : N - 1] * self.Q[c : c + 3, 0 : N - 1])
+            terms.append(1 - cos**2)
+        return ca.sum2(ca.sum1(ca.vertcat(*terms)) * self.h[0 : N - 1].T)
 
     def _share_squares(self):
         """sum over nodes of w_n s^2 (N^2 s) of the full contacts' along-line shares s."""
