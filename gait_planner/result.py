@@ -49,7 +49,9 @@ class PlanResult:
         tau: (N+1, nt) joint torques per node, N m; spherical joints: components along
             the parent's directors; revolute joints: about the joint axis.
         joint_angle_names / joint_angles: (N+1, na) rad, `gait_planner.model.angles`.
-        joint_velocities: (N+1, na) rad/s (central differences of the angles).
+        joint_velocities, joint_accelerations: (N+1, na) rad/s, rad/s^2: three-point
+            central differences of the angles, at nodes 0 and N with the periodic
+            continuation (`gait_planner.ocp.solution.joint_rates`).
         phases: (N+1,) phase name of each node.
         active_contacts: (N+1,) names of the contacts held at each node.
         contact_forces: contact name -> (N+1, 3) ground force on the body, N, world frame;
@@ -77,6 +79,7 @@ class PlanResult:
     joint_angle_names: tuple[str, ...]
     joint_angles: np.ndarray
     joint_velocities: np.ndarray
+    joint_accelerations: np.ndarray
     phases: tuple[str, ...]
     active_contacts: tuple[tuple[str, ...], ...]
     contact_forces: dict[str, np.ndarray]

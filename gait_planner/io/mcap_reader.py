@@ -76,7 +76,7 @@ class RecordedPlan:
     wrench_bodies, wrench_points ((b_n, 3)), wrenches ((b_n, 6): force N, moment N m about
     the wrench point, world) and centers_of_pressure ((b_n, 3)).
     Trajectory (/gait_planner/joint_trajectory, one message): joint_names, trajectory_stamp_ns,
-    time_from_start (N+1,) s, positions, velocities, effort (N+1, na).
+    time_from_start (N+1,) s, positions, velocities, accelerations, effort (N+1, na).
     Joint states: joint_state_position / _velocity / _effort (N+1, na).
     tf: per /tf message a tuple of `Transform`; tf_static: the /tf_static transforms.
     log_times_ns / header_stamps_ns: topic -> (messages,) int64, for every topic whose
@@ -116,6 +116,7 @@ class RecordedPlan:
     time_from_start: np.ndarray
     positions: np.ndarray
     velocities: np.ndarray
+    accelerations: np.ndarray  # (N+1, na); (N+1, 0) in recordings made before they were published
     effort: np.ndarray
     joint_state_position: np.ndarray
     joint_state_velocity: np.ndarray
@@ -251,6 +252,7 @@ def read_plan_mcap(path: str | Path) -> RecordedPlan:
         time_from_start=np.array([_ns(p.time_from_start) * 1e-9 for p in points]),
         positions=_stack([p.positions for p in points], "positions", path),
         velocities=_stack([p.velocities for p in points], "velocities", path),
+        accelerations=np.array([list(p.accelerations) for p in points], dtype=float),
         effort=_stack([p.effort for p in points], "effort", path),
         joint_state_position=_stack([m.position for m in joints], "position", path),
         joint_state_velocity=_stack([m.velocity for m in joints], "velocity", path),

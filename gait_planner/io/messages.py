@@ -155,7 +155,8 @@ def check_result(result: PlanResult, *, finite: bool = True) -> None:
     if names != angle_names(scene):
         fail(f"joint_angle_names {names} differ from the scene's {angle_names(scene)}")
     shapes = {"times": (n,), "q": (n, 12 * nb), "tau": (n, na), "joint_angles": (n, na),
-              "joint_velocities": (n, na), "generalized_force": (n, 12 * nb),
+              "joint_velocities": (n, na), "joint_accelerations": (n, na),
+              "generalized_force": (n, 12 * nb),
               "kinetic_energy": (n,), "potential_energy": (n,)}
     for field, shape in shapes.items():
         value = np.asarray(getattr(result, field), dtype=float)
@@ -195,7 +196,7 @@ def joint_trajectory(result: PlanResult, stamp_ns: int = 0) -> dict[str, Any]:
         {
             "positions": _floats(result.joint_angles[n]),
             "velocities": _floats(result.joint_velocities[n]),
-            "accelerations": [],
+            "accelerations": _floats(result.joint_accelerations[n]),
             "effort": _floats(effort[n]),
             "time_from_start": time_msg(int(round((t[n] - t[0]) * NS_PER_S))),
         }

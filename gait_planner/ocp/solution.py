@@ -67,6 +67,27 @@ def _mirror_forces(tr: Transcription, forces: dict[str, np.ndarray],
         rolls[mirror.get(body, body)][dst] = -rolls[body][src]
 
 
+def joint_rates(tr: Transcription, q: np.ndarray, times: np.ndarray,
+                step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Joint-angle velocities and accelerations (N+1, na), rad/s and rad/s^2: three-point
+    central differences on the non-uniform grid (second order), at nodes 0 and N too, with
+    the periodic continuation as their outer neighbours: q_{-1} = A (q_{N-2} - s e) and
+    q_{N+1} = A q_2 + s e (the mirror of `ocp.mirror`, eqs. 7-9), h_{-1} = h_{N-2},
+    h_N = h_1. The accelerations at inner nodes are those the discrete equations see."""
+    scene, N = tr.mb.scene, tr.N
+    before = tr.A @ (q[N - 2] - step * tr.shift)
+    after = tr.A @ q[2] + step * tr.shift
+    h = np.diff(times)
+    t = np.concatenate([[times[0] - h[N - 2]], times, [times[-1] + h[1]]])
+    theta = np.unwrap(joint_angles(scene, np.vstack([before, q, after])), axis=0)
+    dt = np.diff(t)[:, None]
+    slope = np.diff(theta, axis=0) / dt  # interval rates, (N+2, na)
+    w = dt[:-1] + dt[1:]
+    velocity = (dt[1:] * slope[:-1] + dt[:-1] * slope[1:]) / w
+    acceleration = 2.0 * (slope[1:] - slope[:-1]) / w
+    return velocity, acceleration
+
+
 def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray, *,
                  status: str, iterations: int, solve_time: float, build_time: float,
                  evaluation_time: float, origin: str) -> PlanResult:
@@ -101,6 +122,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
     T_int = 0.5 * np.einsum("ni,i,ni->n", v, mb.mass_diagonal, v)
     T_node = np.concatenate([[T_int[0]], 0.5 * (T_int[:-1] + T_int[1:]), [T_int[-1]]])
     angles = joint_angles(scene, q)
+    rates = joint_rates(tr, q, times, float(p[-2]))
 
     viol = violations(tr, g)
     constraint = max(max(float(np.abs(np.array(mb.constraints(qn))).max()) for qn in q),
@@ -125,7 +147,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
         success=success, message=message, scene=scene, cost_name=s.cost,
         cost_value=cost_value, step_length=float(p[-2]), friction_coefficient=float(p[-1]),
         times=times, q=q, tau=tau, joint_angle_names=angle_names(scene), joint_angles=angles,
-        joint_velocities=np.gradient(angles, times, axis=0),
+        joint_velocities=rates[0], joint_accelerations=rates[1],
         phases=tuple(phases[k].name for k in node_phase), active_contacts=active,
         contact_forces=forces, roll_moments=rolls, generalized_force=gen, kinetic_energy=T_node,
         potential_energy=q @ mech.gravity_gradient, phase_scaling=x[-int(tr.S.shape[0]):].copy(),
@@ -156,7 +178,7 @@ def failed_result(scene: Scene, settings: GaitSettings | None, message: str) -> 
         friction_coefficient=settings.friction_coefficient if settings else float("nan"),
         times=empty, q=np.zeros((0, k)), tau=np.zeros((0, 0)),
         joint_angle_names=angle_names(scene), joint_angles=np.zeros((0, 0)),
-        joint_velocities=np.zeros((0, 0)), phases=(), active_contacts=(), contact_forces={},
+        joint_velocities=np.zeros((0, 0)), joint_accelerations=np.zeros((0, 0)), phases=(), active_contacts=(), contact_forces={},
         roll_moments={},
         generalized_force=np.zeros((0, k)), kinetic_energy=empty, potential_energy=empty,
         phase_scaling=empty, duration=float("nan"),

@@ -97,6 +97,7 @@ def make_result(scene_name: str = "walker3d", intervals: int = 10, **changes) ->
         joint_angle_names=angle_names(scene),
         joint_angles=angles,
         joint_velocities=np.gradient(angles, times, axis=0),
+        joint_accelerations=np.gradient(np.gradient(angles, times, axis=0), times, axis=0),
         phases=phases,
         active_contacts=active,
         contact_forces=forces,

@@ -64,6 +64,7 @@ def test_round_trip(result, recorded, start_ns):
     assert recorded.joint_names == result.joint_angle_names == angle_names(result.scene)
     assert np.array_equal(recorded.positions, result.joint_angles)
     assert np.array_equal(recorded.velocities, result.joint_velocities)
+    assert np.array_equal(recorded.accelerations, result.joint_accelerations)
     assert np.array_equal(recorded.effort, messages.node_efforts(result))
     assert np.array_equal(recorded.joint_state_position, result.joint_angles)
     assert np.allclose(recorded.time_from_start, recorded.times, atol=1e-9)

@@ -109,6 +109,7 @@ def test_joint_trajectory_one_point_per_node_and_effort_convention(result):
         assert point["accelerations"] == []
         assert np.array_equal(point["positions"], result.joint_angles[n])
         assert np.array_equal(point["velocities"], result.joint_velocities[n])
+        assert np.array_equal(point["accelerations"], result.joint_accelerations[n])
         # conjugate torques of tau of the interval starting at the node; the last node
         # repeats the last interval
         tau = result.tau[min(n, len(result.tau) - 1)]

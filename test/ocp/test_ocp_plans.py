@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from gait_planner.io.mcap_reader import read_plan_mcap
+from gait_planner.model.angles import angle_names as scene_angle_names
 from gait_planner.verify import LIMITS, verify_result
 
 SCENES = ["compass", "walker2d", pytest.param("walker3d", marks=pytest.mark.slow)]
@@ -133,3 +134,31 @@ def test_verify_result_goes_through_a_recording(solved):
     assert again.max_dynamics_residual == s.report.max_dynamics_residual
     assert again.cost_recomputed == s.report.cost_recomputed
     assert again.path != str(s.path)
+
+
+def _partner(scene, name: str) -> tuple[int, float]:
+    """(index, sign) of the angle that the mirror maps onto angle `name`: the other side's
+    angle of the same joint, roll and yaw negated."""
+    names = list(scene_angle_names(scene))
+    other = "_".join({"r": "l", "l": "r"}.get(part, part) for part in name.split("_"))
+    sign = -1.0 if name.endswith(("_roll", "_yaw")) else 1.0
+    return names.index(other if other in names else name), sign
+
+
+@pytest.mark.parametrize("name", ["walker2d", pytest.param("walker3d", marks=pytest.mark.slow)])
+def test_joint_rates_are_central_differences_continued_periodically(solved, name):
+    """Accelerations at inner nodes are the second differences the discrete equations see;
+    at node 0 the rates are the mirror images of those at node N-1 (and node N of node 1):
+    the half cycle joins its mirror image without a jump in velocity or acceleration."""
+    r = solved(name).result
+    N, t, theta = r.n_nodes - 1, r.times, r.joint_angles
+    h = np.diff(t)[:, None]
+    slope = np.diff(theta, axis=0) / h
+    inner = 2 * (slope[1:] - slope[:-1]) / (h[:-1] + h[1:])
+    np.testing.assert_allclose(r.joint_accelerations[1:N], inner, rtol=1e-9, atol=1e-9)
+    for i, angle in enumerate(r.joint_angle_names):
+        j, sign = _partner(r.scene, angle)
+        for src, dst in ((0, N - 1), (1, N)):
+            assert theta[dst, i] == pytest.approx(sign * theta[src, j], abs=1e-9)
+            for rate in (r.joint_velocities, r.joint_accelerations):
+                assert rate[dst, i] == pytest.approx(sign * rate[src, j], rel=1e-7, abs=1e-7)
