@@ -59,6 +59,8 @@ def _add_plan_options(parser: argparse.ArgumentParser, scene_default: str | None
     parser.add_argument("--cost", help="kinetic_energy | torque_squared (default: the scene's)")
     parser.add_argument("--intervals", type=int, help="intervals per phase (default: the scene's)")
     parser.add_argument("--mu", type=float, help="friction coefficient (default: the scene's)")
+    parser.add_argument("--steps", type=int, default=1,
+                        help="half cycles to record, joined by the mirror (default 1)")
     parser.add_argument("--max-time", type=float, help="solver time limit, s (default 600)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--no-rrd", action="store_true", help="do not write the rerun .rrd")
@@ -98,7 +100,7 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     request = PlanRequest(scene=args.scene, step_length=args.step_length, cost=args.cost,
                           friction_coefficient=args.mu, intervals_per_phase=args.intervals,
                           max_solve_time=args.max_time, output_name=target.stem,
-                          compiled=args.compile)
+                          compiled=args.compile, steps=args.steps)
     print(f"planning {args.scene} (building the problem takes up to a minute the first "
           "time) ...", file=sys.stderr, flush=True)
     try:
@@ -235,8 +237,49 @@ def _call(args: argparse.Namespace) -> int:
     return 0 if response.get("success") else 1
 
 
+def _add_urdf(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "urdf", help="write a scene's URDF (what /robot_description holds)",
+        description="Write the URDF of SCENE: one link per body (the scene's masses, centres "
+        "of mass and inertias; a non-realisable inertia is replaced by the nearest realisable "
+        "one, with a comment), joints named after the joint angles; it loads in MuJoCo and "
+        "Pinocchio. To stdout unless --out is given.")
+    parser.add_argument("scene", help="scene name (config/scenes/NAME.yaml or "
+                        "GAIT_PLANNER_SCENE_PATH)")
+    parser.add_argument("--out", help="the file to write (default: stdout)")
+    parser.set_defaults(handler=_urdf)
+
+
+def _urdf(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from gait_planner.io.urdf import realisable_inertia, scene_to_urdf
+    from gait_planner.model.loader import SceneError, load_scene
+
+    try:
+        scene = load_scene(args.scene)
+    except SceneError as error:
+        raise CliError(str(error)) from None
+    text = scene_to_urdf(scene)
+    for body in scene.bodies:
+        written = realisable_inertia(body.inertia)
+        if written != tuple(body.inertia):
+            print(f"note: {body.name}'s inertia {tuple(body.inertia)} is not realisable; the "
+                  f"URDF holds the nearest realisable {written} (see its comment)",
+                  file=sys.stderr)
+    if args.out is None:
+        sys.stdout.write(text)
+        return 0
+    try:
+        Path(args.out).write_text(text, encoding="utf-8")
+    except OSError as error:
+        raise CliError(f"cannot write {args.out!r}: {error.strerror or error}") from None
+    print(f"urdf: {args.out}")
+    return 0
+
+
 COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
-    _add_run, _add_plan, _add_report, _add_node, _add_call, add_simulate_parser)
+    _add_run, _add_plan, _add_report, _add_node, _add_call, add_simulate_parser, _add_urdf)
 
 
 # --- entry point -------------------------------------------------------------------------

@@ -18,8 +18,10 @@ import numpy as np
 from gait_planner.model.loader import SceneError, load_scene
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.ocp.walk_on import walk_on
 from gait_planner.result import PlanResult
 
+MAX_STEPS = 100  # half cycles one request may join (60 s of walking for walker3d)
 _OUTPUT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,127}")
 
 
@@ -40,6 +42,7 @@ class PlanRequest:
     output_name: str = ""
     cold_start: bool = False
     compiled: bool = False  # compile the derivative elements (GaitSettings.compiled)
+    steps: int = 1  # half cycles in the result, joined by the mirror (`ocp.walk_on`)
 
 
 @dataclass(frozen=True)
@@ -72,6 +75,9 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
     """Plan `request`; on success write <output_dir>/<stem>.mcap (and .rrd)."""
     for name in ("step_length", "friction_coefficient", "max_solve_time"):
         _finite(name, getattr(request, name))
+    if not 1 <= request.steps <= MAX_STEPS:
+        raise RequestError(f"steps must be a whole number of half cycles from 1 to {MAX_STEPS}, "
+                           f"got {request.steps}")
     try:
         scene = load_scene(request.scene)
         settings = settings_for(
@@ -88,6 +94,7 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
     result = planner.plan(scene, settings, warm_start=not request.cold_start)
     if not result.success:
         return Outcome(result, None, None)
+    result = walk_on(result, request.steps)
     result.settings.update(certificate_metadata(continuous_certificate(result)))
     from gait_planner.io.mcap_writer import write_plan_mcap
 

@@ -69,19 +69,26 @@ def _mirror_forces(tr: Transcription, forces: dict[str, np.ndarray],
 
 def joint_rates(tr: Transcription, q: np.ndarray, times: np.ndarray,
                 step: float) -> tuple[np.ndarray, np.ndarray]:
-    """Joint-angle velocities and accelerations (N+1, na), rad/s and rad/s^2: three-point
-    central differences on the non-uniform grid (second order), at nodes 0 and N too, with
-    the periodic continuation as their outer neighbours: q_{-1} = A (q_{N-2} - s e) and
-    q_{N+1} = A q_2 + s e (the mirror of `ocp.mirror`, eqs. 7-9), h_{-1} = h_{N-2},
-    h_N = h_1. The accelerations at inner nodes are those the discrete equations see."""
-    scene, N = tr.mb.scene, tr.N
+    """Joint-angle velocities and accelerations (N+1, na), rad/s and rad/s^2, of a half
+    cycle: `central_rates` with the periodic continuation as the outer neighbours of nodes
+    0 and N: q_{-1} = A (q_{N-2} - s e) and q_{N+1} = A q_2 + s e (the mirror of
+    `ocp.mirror`, eqs. 7-9), h_{-1} = h_{N-2}, h_N = h_1."""
+    N = tr.N
+    h = np.diff(times)
     before = tr.A @ (q[N - 2] - step * tr.shift)
     after = tr.A @ q[2] + step * tr.shift
-    h = np.diff(times)
-    t = np.concatenate([[times[0] - h[N - 2]], times, [times[-1] + h[1]]])
-    theta = np.unwrap(joint_angles(scene, np.vstack([before, q, after])), axis=0)
+    return central_rates(tr.mb.scene, np.vstack([before, q, after]),
+                         np.concatenate([[times[0] - h[N - 2]], times, [times[-1] + h[1]]]))
+
+
+def central_rates(scene, q: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Three-point central differences (second order on a non-uniform grid) of the joint
+    angles of configurations q (n, k) at times t (n,): velocities and accelerations at the
+    inner nodes 1 .. n-2, (n-2, na). The accelerations are the second differences that the
+    discrete equations see."""
+    theta = np.unwrap(joint_angles(scene, q), axis=0)
     dt = np.diff(t)[:, None]
-    slope = np.diff(theta, axis=0) / dt  # interval rates, (N+2, na)
+    slope = np.diff(theta, axis=0) / dt  # interval rates
     w = dt[:-1] + dt[1:]
     velocity = (dt[1:] * slope[:-1] + dt[:-1] * slope[1:]) / w
     acceleration = 2.0 * (slope[1:] - slope[:-1]) / w

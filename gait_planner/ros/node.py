@@ -53,6 +53,7 @@ def request_from_msg(req, default_scene: str, default_time: float,
         output_name=req.output_name,
         cold_start=req.cold_start,
         compiled=compiled,
+        steps=req.steps if req.steps > 0 else 1,
     )
 
 

@@ -10,6 +10,7 @@ import numpy as np
 from gait_planner.io.mcap_reader import RecordedPlan
 from gait_planner.verify.mechanics import MIRROR, Mechanics, SceneData, parse_scene
 from gait_planner.verify.continuous import certificate_of_recording
+from gait_planner.verify.joined import verify_joined
 from gait_planner.verify.physical import check_physical
 from gait_planner.verify.report import LIMITS, VerificationReport
 
@@ -30,7 +31,10 @@ def _metadata_float(meta: dict, key: str) -> float:
 
 
 def verify_plan(rec: RecordedPlan) -> VerificationReport:
-    """Check an already decoded recording (module docstring)."""
+    """Check an already decoded recording (module docstring); a recording of several
+    joined half cycles goes through `gait_planner.verify.joined`."""
+    if int(rec.metadata.get("steps", "1")) > 1:
+        return verify_joined(rec, verify_plan)
     scene = parse_scene(rec.scene_text)
     mech = Mechanics(scene)
     meta = rec.metadata

@@ -106,7 +106,7 @@ def test_joint_trajectory_one_point_per_node_and_effort_convention(result):
     for n, point in enumerate(traj["points"]):
         assert set(point) == _std("trajectory_msgs/JointTrajectoryPoint")
         assert len(point["positions"]) == len(point["velocities"]) == len(point["effort"]) == na
-        assert point["accelerations"] == []
+        assert len(point["accelerations"]) == na
         assert np.array_equal(point["positions"], result.joint_angles[n])
         assert np.array_equal(point["velocities"], result.joint_velocities[n])
         assert np.array_equal(point["accelerations"], result.joint_accelerations[n])

@@ -33,6 +33,7 @@ EXPECTED_FIELDS = {
         "max_solve_time": "double",
         "output_name": "string",
         "cold_start": "boolean",
+        "steps": "int32",
     },
     PlanGait.Response: {
         "success": "boolean",

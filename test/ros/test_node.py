@@ -71,6 +71,13 @@ def test_plan_request_plans_records_and_publishes(setup, spin_until):
     assert warm.success, warm.message
     assert warm.iterations < res.iterations
 
+    # two half cycles joined by the mirror: one trajectory, recorded and certified whole
+    walk = _call(client, spin_until, step_length=0.32, steps=2, output_name="walk")
+    assert walk.success, walk.message
+    assert len(walk.trajectory.points) == 2 * (nodes - 2) + 2
+    assert read_plan_mcap(walk.mcap_path).metadata["steps"] == "2"
+    assert walk.continuous_dynamics.endswith("OK"), walk.continuous_dynamics
+
 
 @pytest.mark.parametrize("fields, words", [
     ({"scene": "../etc/passwd"}, "bare names"),
