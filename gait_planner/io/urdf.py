@@ -29,6 +29,25 @@ more contact points (feet) are boxes spanning their points (breadth `foot_breadt
 bodies are cylinders of the body's length along d3, starting at its lowest point, with the
 radius of a solid cylinder of the body's mass and axial moment J3 (r = sqrt(2 J3 / m),
 capped).
+
+What simulators need (the URDF loads in MuJoCo's compiler and in Pinocchio, tested):
+
+* Each body link carries the scene's mass, its centre of mass and its principal moments
+  along the link axes (= the directors). A body whose moments violate J_i <= J_j + J_k (the
+  paper's torso) gets the nearest realisable value `realisable_inertia` instead, with an
+  XML comment giving the scene's value and why it is not realisable. Only the URDF changes:
+  the planner keeps the scene's (the paper's) data.
+* The two intermediate links of a spherical joint are massless in the model, but MuJoCo
+  refuses a moving body whose mass or inertia is below mjMINVAL (1e-15): they carry
+  `FRAME_LINK_MASS` and `FRAME_LINK_INERTIA` at the joint point (walker3d: 8 such links,
+  8e-9 kg in all). Contact links stay massless (they are fixed).
+* A ``<mujoco><compiler .../></mujoco>`` element (ignored by other URDF readers) keeps every
+  link a body of its own (``fusestatic="false"``: the root and the contact frames keep their
+  names), keeps the drawing geometry (``discardvisual="false"``, no collision) and takes
+  masses and inertias from the ``<inertial>`` elements only (``inertiafromgeom="false"``).
+  MuJoCo welds a URDF's root to the world; add a free joint to simulate the walker
+  (``spec = mujoco.MjSpec.from_string(urdf); spec.body(root).add_freejoint()``). Pinocchio:
+  ``pinocchio.buildModelFromXML(urdf, pinocchio.JointModelFreeFlyer())``.
 """
 
 from __future__ import annotations
@@ -43,13 +62,20 @@ from gait_planner.model.angles import configuration
 from gait_planner.model.scene import Body, JointType, Scene
 
 __all__ = ["BodyShape", "KinematicJoint", "KinematicTree", "body_shapes", "kinematic_tree",
-           "scene_to_urdf", "FOOT_BREADTH", "WORLD_FRAME"]
+           "realisable_inertia", "scene_to_urdf", "FOOT_BREADTH", "FRAME_LINK_INERTIA",
+           "FRAME_LINK_MASS", "WORLD_FRAME"]
 
 WORLD_FRAME = "world"
 FOOT_BREADTH = 0.0915  # m, paper Table 2; drawing only (the scenes carry no breadth)
 _SPHERICAL_AXES = ((0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, 1.0))  # pitch, roll, yaw
 _MAX_RADIUS_FRACTION = 0.25  # cylinder radius at most this fraction of the body's length
 _MIN_SIZE = 0.01  # m, smallest drawn extent
+# The intermediate links of a spherical joint: massless in the model; MuJoCo needs mass and
+# every principal moment above mjMINVAL = 1e-15 on a moving body. These are 6 and 3 orders
+# above it and far below the data's precision (4 significant digits of kilograms).
+FRAME_LINK_MASS = 1e-9  # kg
+FRAME_LINK_INERTIA = 1e-12  # kg m^2, each principal moment
+_MUJOCO_COMPILER = {"fusestatic": "false", "discardvisual": "false", "inertiafromgeom": "false"}
 _COLORS = {"right": (0.85, 0.25, 0.2, 1.0), "left": (0.2, 0.4, 0.85, 1.0),
            "centre": (0.6, 0.6, 0.6, 1.0)}
 
@@ -212,18 +238,71 @@ def _origin(parent: ET.Element, xyz) -> None:
     ET.SubElement(parent, "origin", xyz=_xyz(xyz), rpy="0 0 0")
 
 
-def _body_link(robot: ET.Element, body: Body, offset: np.ndarray, shape: BodyShape) -> None:
-    link = ET.SubElement(robot, "link", name=body.name)
+def realisable_inertia(inertia) -> tuple[float, float, float]:
+    """The nearest physically realisable principal moments to `inertia` (J1, J2, J3).
+
+    Moments are realisable (some mass distribution has them) iff J_i <= J_j + J_k for every
+    i: the second moment of mass along axis i, (J_j + J_k - J_i) / 2, is then >= 0. With
+    positive moments at most one inequality can fail. The moment that violates it is lowered
+    to J_j + J_k, the other two are kept: the least change of that one moment, and the
+    least total change any fix can make (sum |dJ| = J_i - J_j - J_k, the violation). The
+    result lies on the boundary: all mass in the plane normal to axis i (a lamina), the
+    closest a real body comes. Realisable moments are returned unchanged.
+
+    (The symmetric alternative, the Euclidean projection that moves each moment by a third
+    of the violation, would alter the pitch and yaw moments too: for the paper's torso it
+    changes the torso's rotational kinetic energy over the planned walker3d gait by +6.9 %
+    where this one changes it by -2.0 %, and it would change walker2d's sagittal dynamics,
+    which only J2 enters.)
+    """
+    j = [float(x) for x in inertia]
+    for i in range(3):
+        others = j[(i + 1) % 3] + j[(i + 2) % 3]
+        if j[i] > others:
+            j[i] = others
+    return (j[0], j[1], j[2])
+
+
+def _fmt(values) -> str:
+    return "(" + ", ".join(f"{float(x):.6g}" for x in values) + ")"
+
+
+def _inertial(link: ET.Element, com, mass: float, moments) -> ET.Element:
     inertial = ET.SubElement(link, "inertial")
-    _origin(inertial, -offset)  # the COM in link coordinates; axes = principal axes
-    ET.SubElement(inertial, "mass", value=_num(body.mass))
-    j1, j2, j3 = body.inertia
+    _origin(inertial, com)  # the COM in link coordinates; axes = principal axes
+    ET.SubElement(inertial, "mass", value=_num(mass))
+    j1, j2, j3 = moments
     ET.SubElement(inertial, "inertia", ixx=_num(j1), ixy="0", ixz="0", iyy=_num(j2), iyz="0",
                   izz=_num(j3))
-    if not body.is_realisable:
-        inertial.insert(0, ET.Comment(
-            f" principal moments {tuple(body.inertia)} violate J_i <= J_j + J_k (scene data "
-            f"kept as given; physics engines may reject them) "))
+    return inertial
+
+
+def _nonrealisable_comment(scene: Scene, body: Body, written: tuple[float, ...]) -> str:
+    k = next(i for i in range(3) if written[i] != float(body.inertia[i]))
+    a, b = (k + 1) % 3, (k + 2) % 3
+    names = ("J1", "J2", "J3")
+    given = body.inertia
+    return (
+        f" Scene {scene.name!r} gives {body.name} the principal moments {_fmt(given)} kg m^2 "
+        f"about (d1, d2, d3). They are not physically realisable: {names[k]} = {given[k]:.6g} > "
+        f"{names[a]} + {names[b]} = {given[a] + given[b]:.6g}, so the second moment of mass "
+        f"along d{k + 1}, ({names[a]} + {names[b]} - {names[k]})/2 = "
+        f"{0.5 * (given[a] + given[b] - given[k]):.4g} kg m^2, would be negative; no mass "
+        f"distribution has these moments, and MuJoCo rejects them. Written below is the "
+        f"nearest realisable value {_fmt(written)}: {names[k]} = {names[a]} + {names[b]}, with "
+        f"{names[a]} and {names[b]} kept. That is the least change of the one offending moment "
+        f"and the least total change any fix can make; it puts all mass in the "
+        f"d{a + 1}-d{b + 1} plane. The planner keeps using the scene's values "
+        f"(gait_planner.io.urdf.realisable_inertia). ")
+
+
+def _body_link(robot: ET.Element, scene: Scene, body: Body, offset: np.ndarray,
+               shape: BodyShape) -> None:
+    link = ET.SubElement(robot, "link", name=body.name)
+    moments = realisable_inertia(body.inertia)
+    if moments != tuple(float(x) for x in body.inertia):
+        link.append(ET.Comment(_nonrealisable_comment(scene, body, moments)))
+    _inertial(link, -offset, body.mass, moments)
     visual = ET.SubElement(link, "visual")
     _origin(visual, np.array(shape.centre) - offset)
     geometry = ET.SubElement(visual, "geometry")
@@ -236,8 +315,9 @@ def _body_link(robot: ET.Element, body: Body, offset: np.ndarray, shape: BodySha
 
 
 def scene_to_urdf(scene: Scene, *, foot_breadth: float = FOOT_BREADTH) -> str:
-    """The URDF (XML text) of `scene`: one link per body, massless links for spherical
-    joints and contact points, joints named after the joint angles (module docstring)."""
+    """The URDF (XML text) of `scene`: one link per body, (nearly) massless links for
+    spherical joints and contact points, joints named after the joint angles, loadable by
+    MuJoCo and Pinocchio (module docstring)."""
     tree = kinematic_tree(scene)
     shapes = body_shapes(scene, foot_breadth=foot_breadth)
     robot = ET.Element("robot", name=scene.name)
@@ -245,10 +325,22 @@ def scene_to_urdf(scene: Scene, *, foot_breadth: float = FOOT_BREADTH) -> str:
         f" generated by gait_planner.io.urdf from scene {scene.name!r}; link frames: directors "
         f"(d1, d2, d3) at the COM for the root, at the parent-joint point otherwise; the root "
         f"hangs from frame {WORLD_FRAME!r} by a transform on /tf "))
+    robot.append(ET.Comment(
+        " MuJoCo: keep every link a body (root and contact frames keep their names), keep the "
+        "drawing geometry, masses and inertias from <inertial> only; other URDF readers ignore "
+        "this element "))
+    mujoco = ET.SubElement(robot, "mujoco")
+    ET.SubElement(mujoco, "compiler", _MUJOCO_COMPILER)
     for body in scene.bodies:
-        _body_link(robot, body, tree.link_offsets[body.name], shapes[body.name])
+        _body_link(robot, scene, body, tree.link_offsets[body.name], shapes[body.name])
+    moved = {j.child for j in tree.moving_joints}  # intermediate links; contacts are fixed
     for name in tree.massless_links:
-        ET.SubElement(robot, "link", name=name)
+        link = ET.SubElement(robot, "link", name=name)
+        if name in moved:
+            link.append(ET.Comment(
+                " massless in the model; MuJoCo needs mass and inertia above 1e-15 on a "
+                "moving body "))
+            _inertial(link, (0.0, 0.0, 0.0), FRAME_LINK_MASS, (FRAME_LINK_INERTIA,) * 3)
     for joint in tree.joints:
         element = ET.SubElement(robot, "joint", name=joint.name,
                                 type="fixed" if joint.fixed else "continuous")
