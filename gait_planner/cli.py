@@ -61,6 +61,9 @@ def _add_plan_options(parser: argparse.ArgumentParser, scene_default: str | None
     parser.add_argument("--mu", type=float, help="friction coefficient (default: the scene's)")
     parser.add_argument("--steps", type=int, default=1,
                         help="half cycles to record, joined by the mirror (default 1)")
+    parser.add_argument("--posture", default="", choices=("", "paper", "human"),
+                        help="paper: the scene's ranges; human: also a stance knee of at most "
+                        "20 deg in single support (default: the scene's)")
     parser.add_argument("--max-time", type=float, help="solver time limit, s (default 600)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--no-rrd", action="store_true", help="do not write the rerun .rrd")
@@ -100,7 +103,7 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     request = PlanRequest(scene=args.scene, step_length=args.step_length, cost=args.cost,
                           friction_coefficient=args.mu, intervals_per_phase=args.intervals,
                           max_solve_time=args.max_time, output_name=target.stem,
-                          compiled=args.compile, steps=args.steps)
+                          compiled=args.compile, steps=args.steps, posture=args.posture)
     print(f"planning {args.scene} (building the problem takes up to a minute the first "
           "time) ...", file=sys.stderr, flush=True)
     try:

@@ -43,6 +43,7 @@ class PlanRequest:
     cold_start: bool = False
     compiled: bool = False  # compile the derivative elements (GaitSettings.compiled)
     steps: int = 1  # half cycles in the result, joined by the mirror (`ocp.walk_on`)
+    posture: str = ""  # "paper" or "human" (`model.posture`); empty = the scene's
 
 
 @dataclass(frozen=True)
@@ -85,7 +86,8 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
             friction_coefficient=request.friction_coefficient,
             intervals_per_phase=request.intervals_per_phase,
             max_solve_time=request.max_solve_time,
-            **({"compiled": True} if request.compiled else {}))
+            **({"compiled": True} if request.compiled else {}),
+            **({"posture": request.posture} if request.posture else {}))
     except (SceneError, SettingsError) as err:
         raise RequestError(str(err)) from None
     stem = output_stem(request, scene.name)

@@ -70,6 +70,60 @@ def check_joint_limits(scene: Scene, limits) -> tuple[tuple[str, float, float], 
     return tuple(out)
 
 
+def check_phase_joint_limits(scene: Scene, value) -> tuple[tuple[str, tuple], ...]:
+    """Validated ((phase name, ((angle, lo rad, hi rad), ...)), ...) from
+    {phase name: {angle name: [lo deg, hi deg]}}: ranges that hold only at the nodes that
+    start an interval of that phase (e.g. a straight stance knee in single support)."""
+    if not isinstance(value, Mapping):
+        raise PostureError("phase_joint_limits", "need a mapping {phase: {angle name: "
+                                                 f"[lower, upper]}}, got {type(value).__name__}")
+    phases = [p.name for p in scene.gait.phases] if scene.gait else []
+    out = []
+    for phase, limits in value.items():
+        if phase not in phases:
+            raise PostureError("phase_joint_limits", f"{phase!r} is not a phase of scene "
+                                                     f"{scene.name!r}; known: {', '.join(phases)}")
+        try:
+            out.append((phase, check_joint_limits(scene, limits)))
+        except PostureError as err:
+            raise PostureError(f"phase_joint_limits.{phase}.{err.option}", err.reason) from None
+    return tuple(out)
+
+
+POSTURES = ("paper", "human")
+# Normative human walking (Perry & Burnfield, Gait Analysis, 2nd ed., ch. 7; Winter, The
+# Biomechanics and Motor Control of Human Gait): the stance knee flexes to about 15-20 deg
+# after heel strike and extends to about 5 deg in mid and late stance.
+HUMAN_STANCE_KNEE = (0.0, 20.0)  # deg
+
+
+def human_phase_limits(scene: Scene) -> tuple[tuple[str, tuple], ...]:
+    """`posture: human` as phase joint limits: in every single-support phase (the held
+    contacts on one body), each revolute joint strictly inside the chain from that body to
+    the root (not the one at the stance body, the ankle, nor the one at the root, the hip:
+    the stance knee) within HUMAN_STANCE_KNEE. A scene whose chain has no such joint (the
+    compass: stance leg and hip only) gets none."""
+    parent_joint = {j.child: j for j in scene.joints}
+    body_of = {c.name: c.body for c in scene.contacts}
+    out = []
+    for phase in scene.gait.phases:
+        bodies = {body_of[c] for c in phase.contacts}
+        if len(bodies) != 1:
+            continue
+        stance = body = bodies.pop()
+        names = []
+        while body in parent_joint:
+            joint = parent_joint[body]
+            inner = joint.child != stance and joint.parent in parent_joint
+            if inner and joint.type is JointType.REVOLUTE:
+                names.append(joint.angle_names[0])
+            body = joint.parent
+        if names:
+            lo, hi = (math.radians(v) for v in HUMAN_STANCE_KNEE)
+            out.append((phase.name, tuple((n, lo, hi) for n in names)))
+    return tuple(out)
+
+
 def check_torso_lean_max(value) -> float:
     """The validated torso_lean_max in degrees: a number in [0, 90) (0 = off)."""
     if not _is_number(value):
@@ -86,3 +140,8 @@ def check_posture(scene: Scene, options: Mapping[str, Any]) -> None:
         check_joint_limits(scene, options["joint_limits"])
     if "torso_lean_max" in options:
         check_torso_lean_max(options["torso_lean_max"])
+    if "phase_joint_limits" in options:
+        check_phase_joint_limits(scene, options["phase_joint_limits"])
+    if options.get("posture", "paper") not in POSTURES:
+        raise PostureError("posture", f"unknown posture {options['posture']!r}; known: "
+                                      f"{', '.join(POSTURES)}")

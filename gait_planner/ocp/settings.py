@@ -10,7 +10,8 @@ import math
 from dataclasses import dataclass
 
 from gait_planner.model.scene import Scene
-from gait_planner.model.posture import PostureError, check_joint_limits, check_torso_lean_max
+from gait_planner.model.posture import (PostureError, check_joint_limits, check_phase_joint_limits,
+                                       check_posture, check_torso_lean_max, human_phase_limits)
 
 COSTS = ("kinetic_energy", "torque_squared")
 
@@ -39,7 +40,11 @@ class GaitSettings:
     striking at a node (nor released there) stays at least this high, so no swing point
     slides along the ground at zero force; joint_speed_max deg/s (0 = off): every joint's
     relative rotation over an interval stays below joint_speed_max * h_n;
-    twist_regularisation J: weight w of w sum_n h_n sum_joints (1 - (d2_parent . d2_child)^2)
+    phase_joint_limits: ((phase, ((angle, lo rad, hi rad), ...)), ...) from the option
+    ``phase_joint_limits: {phase: {angle: [lo, hi]}}`` in degrees, ranges at the nodes that
+    start an interval of that phase only; posture "paper" (the scene's declared ranges) or
+    "human" (adds normative stance-knee ranges in single support,
+    `gait_planner.model.posture.human_phase_limits`); twist_regularisation J: weight w of w sum_n h_n sum_joints (1 - (d2_parent . d2_child)^2)
     added to the cost (sin^2 of a joint's roll or yaw; the J reported excludes it);
     max_iterations, max_solve_time s (IPOPT); tolerance (IPOPT tol);
     constraint_tolerance (IPOPT constr_viol_tol); compiled: build the per-node derivative
@@ -62,6 +67,8 @@ class GaitSettings:
     swing_clearance: float = 0.0
     joint_speed_max: float = 0.0
     twist_regularisation: float = 0.0
+    phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
+    posture: str = "paper"
     max_iterations: int = 3000
     max_solve_time: float = 600.0
     tolerance: float = 1e-8
@@ -125,11 +132,21 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
             f"unknown gait option(s) {sorted(unknown)}; known: {sorted(_OPTION_NAMES)}"
         )
     options.update(overrides)
-    if "joint_limits" in options:
-        try:
+    try:
+        if "joint_limits" in options:
             options["joint_limits"] = check_joint_limits(scene, options["joint_limits"])
-        except PostureError as err:
-            raise SettingsError(str(err)) from None
+        if "phase_joint_limits" in options:
+            options["phase_joint_limits"] = check_phase_joint_limits(
+                scene, options["phase_joint_limits"])
+        check_posture(scene, {"posture": options.get("posture", "paper")})
+    except PostureError as err:
+        raise SettingsError(str(err)) from None
+    if options.get("posture") == "human":  # declared phase limits come first
+        declared = tuple(options.get("phase_joint_limits", ()))
+        taken = {(phase, name) for phase, limits in declared for name, _, _ in limits}
+        options["phase_joint_limits"] = declared + tuple(
+            (phase, kept) for phase, limits in human_phase_limits(scene)
+            if (kept := tuple(l for l in limits if (phase, l[0]) not in taken)))
     if max_solve_time is not None:
         options["max_solve_time"] = max_solve_time
     intervals = tuple(p.intervals for p in gait.phases)

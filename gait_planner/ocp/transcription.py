@@ -300,6 +300,12 @@ class Transcription:
         if s.joint_limits:
             margins = joint_limit_margins(mb, s.joint_limits).map(N - 1)(inner)
             self._ineq.append(("joint_limits", ca.vec(margins)))
+        phase_index = {p.name: k for k, p in enumerate(mb.scene.gait.phases)}
+        for phase, limits in s.phase_joint_limits:
+            nodes = [n for n in range(1, N) if self.phase_of_interval[n] == phase_index[phase]]
+            if nodes:
+                margins = joint_limit_margins(mb, limits).map(len(nodes))(self.Q[:, nodes])
+                self._ineq.append((f"joint_limits[{phase}]", ca.vec(margins)))
         if s.joint_speed_max > 0 and mb.scene.joints:
             speed = self._joint_speed_margins().map(N - 1)(
                 self.Q[:, 0 : N - 1], self.Q[:, 1:N], self.h[0 : N - 1].T)

@@ -54,6 +54,7 @@ def request_from_msg(req, default_scene: str, default_time: float,
         cold_start=req.cold_start,
         compiled=compiled,
         steps=req.steps if req.steps > 0 else 1,
+        posture=req.posture,
     )
 
 

@@ -169,3 +169,29 @@ def test_walker2d_plan_is_upright(solved):
         assert angles[knee].min() >= -1e-6
     for name, lo, hi in s.settings.joint_limits:
         assert lo - 1e-6 <= angles[name].min() and angles[name].max() <= hi + 1e-6, name
+
+
+@pytest.mark.parametrize("name", ["walker2d", pytest.param("walker3d", marks=pytest.mark.slow)])
+def test_human_posture_straightens_the_stance_knee(name):
+    """posture: human bounds the stance knee to 0..20 deg in single support; the paper's
+    problem (the default) bends it to 30 deg and more."""
+    from gait_planner.model.loader import load_scene
+    from gait_planner.ocp.settings import settings_for
+    from gait_planner.ocp.solve import Planner
+
+    scene = load_scene(name)
+    result = Planner().plan(scene, settings_for(scene, posture="human"))
+    assert result.success, result.message
+    knee = np.degrees(result.joint_angles[:, list(result.joint_angle_names).index("knee_r")])
+    single = [n for n in range(1, result.n_nodes - 1)
+              if result.phases[n] in ("right_full", "right_forefoot")]
+    assert knee[single].max() <= 20.0 + 1e-6
+    assert knee[single].min() >= -1e-6
+
+
+def test_unknown_posture_is_refused_with_its_name():
+    from gait_planner.model.loader import load_scene
+    from gait_planner.ocp.settings import SettingsError, settings_for
+
+    with pytest.raises(SettingsError, match="posture.*'robot'.*paper, human"):
+        settings_for(load_scene("walker3d"), posture="robot")

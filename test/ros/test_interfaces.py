@@ -34,6 +34,7 @@ EXPECTED_FIELDS = {
         "output_name": "string",
         "cold_start": "boolean",
         "steps": "int32",
+        "posture": "string",
     },
     PlanGait.Response: {
         "success": "boolean",
