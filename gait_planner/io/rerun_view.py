@@ -5,16 +5,26 @@ Entities (timeline ``time``: s from the start of the half cycle, duration type; 
 
 * ``world``: z up; ``world/ground``: a grid on z = 0.
 * ``world/walker/<body>``: the body's drawing primitive (`gait_planner.io.urdf.body_shapes`,
-  box or cylinder, in body coordinates), placed per node by a Transform3D (the COM phi and
-  the directors [d1 d2 d3] from q); ``world/skeleton``: line segments COM -> joint point ->
-  COM along every joint and heel -> forefoot on every foot; ``world/com``: body COMs.
+  box or cylinder, in body coordinates, partly transparent), placed per node by a
+  Transform3D (the COM phi and the directors [d1 d2 d3] from q); ``world/skeleton``: line
+  segments COM -> joint point -> COM along every joint and heel -> forefoot on every foot;
+  ``world/com``: body COMs; ``world/com_total``: the whole-body centre of mass.
+* ``world/trails/<contact>``: each contact point's path up to the node (right foot red,
+  left blue); ``world/trails/com``: the whole-body centre of mass's path and its projection
+  on the ground.
 * ``world/contacts/points`` and ``world/contacts/forces``: the active contact points and
-  the ground forces on them as arrows, `FORCE_SCALE` m per N (1 mm/N).
-* ``plots/joint_angle/<angle>`` (rad), ``plots/joint_torque/<angle>`` (N m, the effort
-  convention of `gait_planner.io.messages`: the node torque),
-  ``plots/contact_force/<contact>/{x,y,z}`` (N, zero while inactive),
-  ``plots/energy/{kinetic,potential,total}`` (J) as Scalars.
+  the ground forces on them as arrows, `FORCE_SCALE` m per N (1.5 mm/N);
+  ``world/contacts/wrenches`` and ``world/contacts/centers_of_pressure``: per foot in
+  contact, its net ground force drawn from its centre of pressure
+  (`gait_planner.io.messages.foot_wrenches`; the label gives the free moment).
+* ``phase``: the gait phase (StateChange at each phase start).
+* ``plots/...``: the time series of `gait_planner.io.rerun_series` (joint angles and
+  torques, contact forces and roll moments, energies, angular momentum about the centre of
+  mass, phase boundaries) as Scalars with their SeriesLines style.
 * ``plan``: a text summary (cost, duration, step length, sigma, solver statistics).
+
+`save_rrd` and `show` also send the layout of `gait_planner.io.rerun_blueprint` as the
+recording's active and default blueprint, so the saved .rrd opens in it.
 """
 
 from __future__ import annotations
@@ -27,27 +37,29 @@ import numpy as np
 import rerun as rr
 
 from gait_planner.io.atomic import atomic_target
-from gait_planner.io.messages import contact_points, node_efforts, quaternion_msg
+from gait_planner.io.messages import contact_points, foot_wrenches, quaternion_msg
+from gait_planner.io.rerun_blueprint import blueprint
+from gait_planner.io.rerun_series import (BOUNDARY_COLOR, phase_boundaries, plot_groups, poses,
+                                          series_color, series_name, series_values, side_of,
+                                          whole_body_com)
 from gait_planner.io.urdf import body_shapes
 from gait_planner.result import PlanResult
 
 __all__ = ["FORCE_SCALE", "APPLICATION_ID", "log_plan", "save_rrd", "show"]
 
 APPLICATION_ID = "gait_planner"
-FORCE_SCALE = 1e-3  # m of arrow per N of force
+FORCE_SCALE = 1.5e-3  # m of arrow per N of force
 _GROUND_HALF_SIZE, _GROUND_STEP = 1.5, 0.25  # m
 _CONTACT_COLOR = (20, 160, 60)
+_WRENCH_COLOR = (230, 120, 0)
+_BODY_ALPHA = 150  # the bodies let the arrows, trails and skeleton inside them show
 _SKELETON_COLOR = (40, 40, 40)
+_COM_TRAIL_COLOR = (190, 0, 170)
+_SIDE_COLORS = {"right": (200, 60, 60), "left": (50, 90, 200)}
 
 
 def _rgb(color) -> tuple[int, int, int]:
     return tuple(int(round(255 * c)) for c in color[:3])  # type: ignore[return-value]
-
-
-def _poses(result: PlanResult) -> tuple[np.ndarray, np.ndarray]:
-    """(N+1, nb, 3) COMs and (N+1, nb, 3, 3) director matrices D = [d1 d2 d3]."""
-    q = np.asarray(result.q, dtype=float).reshape(result.n_nodes, -1, 12)
-    return q[:, :, :3], np.transpose(q[:, :, 3:].reshape(result.n_nodes, -1, 3, 3), (0, 1, 3, 2))
 
 
 def _log_static(result: PlanResult, rec: rr.RecordingStream) -> None:
@@ -59,7 +71,7 @@ def _log_static(result: PlanResult, rec: rr.RecordingStream) -> None:
     rec.log("world/ground", rr.LineStrips3D(lines, radii=0.001, colors=(150, 150, 150)),
             static=True)
     for name, shape in body_shapes(result.scene).items():
-        color = _rgb(shape.color)
+        color = (*_rgb(shape.color), _BODY_ALPHA)
         if shape.kind == "box":
             geometry = rr.Boxes3D(sizes=[shape.size], centers=[shape.centre], colors=[color],
                                   fill_mode="solid")
@@ -99,8 +111,44 @@ def _skeleton(result: PlanResult, phi: np.ndarray, D: np.ndarray) -> list[np.nda
     return strips
 
 
+def _trail_points(result: PlanResult) -> dict[str, np.ndarray]:
+    """Contact name -> (N+1, 3) world path of the contact point."""
+    names = [c.name for c in result.scene.contacts]
+    paths = np.array([contact_points(result, n, names) for n in range(result.n_nodes)])
+    return {name: paths[:, k] for k, name in enumerate(names)}
+
+
+def _log_contacts(result: PlanResult, rec: rr.RecordingStream, n: int) -> None:
+    """Node n's contact points and point forces, and per foot its net force drawn from its
+    centre of pressure (the wrench of `foot_wrenches`)."""
+    names = list(result.active_contacts[n])
+    points = np.array(contact_points(result, n, names)).reshape(-1, 3)
+    forces = np.array([np.asarray(result.contact_forces[c], dtype=float)[n]
+                       for c in names]).reshape(-1, 3)
+    labels = [f"{c}: {np.linalg.norm(f):.0f} N" for c, f in zip(names, forces)]
+    rec.log("world/contacts/points", rr.Points3D(points, radii=0.012, colors=_CONTACT_COLOR,
+                                                 labels=names, show_labels=False))
+    rec.log("world/contacts/forces", rr.Arrows3D(origins=points, vectors=forces * FORCE_SCALE,
+                                                 colors=_CONTACT_COLOR, labels=labels,
+                                                 radii=0.006, show_labels=False))
+    wrenches = foot_wrenches(result, n)
+    cops = np.array([w[4] for w in wrenches]).reshape(-1, 3)
+    totals = np.array([w[2] for w in wrenches]).reshape(-1, 3)
+    rec.log("world/contacts/centers_of_pressure",
+            rr.Points3D(cops, radii=0.02, colors=_WRENCH_COLOR,
+                        labels=[w[0] for w in wrenches], show_labels=False))
+    rec.log("world/contacts/wrenches", rr.Arrows3D(
+        origins=cops, vectors=totals * FORCE_SCALE, colors=_WRENCH_COLOR, radii=0.012,
+        show_labels=False,  # the free moment: the wrench's moment about the COP, z
+        labels=[f"{body}: {np.linalg.norm(F):.0f} N, free moment "
+                f"{(M + np.cross(r - cop, F))[2]:.2f} N m" for body, r, F, M, cop in wrenches]))
+
+
 def _log_motion(result: PlanResult, rec: rr.RecordingStream) -> None:
-    phi, D = _poses(result)
+    phi, D = poses(result)
+    com = whole_body_com(result, phi)
+    trails = _trail_points(result)
+    side = {c.name: side_of(c.body) for c in result.scene.contacts}
     t = np.asarray(result.times, dtype=float) - float(result.times[0])
     for i, body in enumerate(result.body_names):
         quaternions = [[v["x"], v["y"], v["z"], v["w"]]
@@ -117,15 +165,20 @@ def _log_motion(result: PlanResult, rec: rr.RecordingStream) -> None:
                                                   colors=_SKELETON_COLOR))
         rec.log("world/com", rr.Points3D(phi[n], radii=0.015, colors=_SKELETON_COLOR,
                                          labels=list(result.body_names), show_labels=False))
-        names = list(result.active_contacts[n])
-        points = np.array(contact_points(result, n, names)).reshape(-1, 3)
-        forces = np.array([np.asarray(result.contact_forces[c], dtype=float)[n]
-                           for c in names]).reshape(-1, 3)
-        labels = [f"{c}: {np.linalg.norm(f):.0f} N" for c, f in zip(names, forces)]
-        rec.log("world/contacts/points", rr.Points3D(points, radii=0.012, colors=_CONTACT_COLOR,
-                                                     labels=names, show_labels=False))
-        rec.log("world/contacts/forces", rr.Arrows3D(origins=points, vectors=forces * FORCE_SCALE,
-                                                     colors=_CONTACT_COLOR, labels=labels))
+        rec.log("world/com_total", rr.Points3D(com[n], radii=0.025, colors=_COM_TRAIL_COLOR,
+                                               labels="centre of mass", show_labels=False))
+        ground = com[: n + 1] * [1.0, 1.0, 0.0] + [0.0, 0.0, 0.002]  # above the grid
+        rec.log("world/trails/com", rr.LineStrips3D([com[: n + 1], ground], radii=[0.007, 0.004],
+                                                    colors=_COM_TRAIL_COLOR))
+        for name, path in trails.items():
+            rec.log(f"world/trails/{name}", rr.LineStrips3D([path[: n + 1]], radii=0.005,
+                                                            colors=_SIDE_COLORS.get(
+                                                                side[name], _SKELETON_COLOR)))
+        _log_contacts(result, rec, n)
+    phases = list(result.phases)
+    changes = [n for n in range(result.n_nodes) if n == 0 or phases[n] != phases[n - 1]]
+    rec.send_columns("phase", indexes=[rr.TimeColumn("time", duration=t[changes])],
+                     columns=rr.StateChange.columns(state=[phases[n] for n in changes]))
 
 
 def _series(rec: rr.RecordingStream, path: str, t: np.ndarray, values: np.ndarray) -> None:
@@ -135,20 +188,25 @@ def _series(rec: rr.RecordingStream, path: str, t: np.ndarray, values: np.ndarra
 
 def _log_series(result: PlanResult, rec: rr.RecordingStream) -> None:
     t = np.asarray(result.times, dtype=float) - float(result.times[0])
-    angles = np.asarray(result.joint_angles, dtype=float)
-    torques = node_efforts(result)
-    for k, name in enumerate(result.joint_angle_names):
-        _series(rec, f"plots/joint_angle/{name}", t, angles[:, k])
-        _series(rec, f"plots/joint_torque/{name}", t, torques[:, k])
-    for contact in result.scene.contacts:
-        forces = np.asarray(result.contact_forces.get(contact.name, np.zeros((len(t), 3))))
-        for axis, column in zip("xyz", forces.T):
-            _series(rec, f"plots/contact_force/{contact.name}/{axis}", t, column)
-    kinetic = np.asarray(result.kinetic_energy, dtype=float)
-    potential = np.asarray(result.potential_energy, dtype=float)
-    for name, values in (("kinetic", kinetic), ("potential", potential),
-                         ("total", kinetic + potential)):
-        _series(rec, f"plots/energy/{name}", t, values)
+    values = series_values(result)
+    boundaries = phase_boundaries(result)
+    for group in plot_groups(result):
+        for path in group.paths:
+            rec.log(path, rr.SeriesLines(colors=series_color(result, path),
+                                         names=series_name(result, path),
+                                         widths=1.5), static=True)
+            _series(rec, path, t, values[path])
+        data = np.concatenate([values[p] for p in group.paths])
+        low, high = float(data.min()), float(data.max())
+        if high - low < 1e-9:
+            low, high = low - 1.0, high + 1.0
+        # one polyline of vertical segments: (t_b, low) -> (t_b + 1 us, high), then a gap
+        times = np.repeat(boundaries, 3) + np.tile([0.0, 1e-6, 2e-6], len(boundaries))
+        heights = np.tile([low, high, np.nan], len(boundaries))
+        rec.log(group.boundary_path, rr.SeriesLines(  # not averaged within a pixel
+            colors=BOUNDARY_COLOR, widths=1.0, names="phase boundaries",
+            aggregation_policy="Off"), static=True)
+        _series(rec, group.boundary_path, times, heights)
 
 
 def log_plan(result: PlanResult, recording: rr.RecordingStream) -> None:
@@ -173,6 +231,7 @@ def save_rrd(result: PlanResult, path: str | os.PathLike) -> Path:
     with atomic_target(target) as tmp:
         try:
             rec.save(tmp)
+            rec.send_blueprint(blueprint(result))  # active and the default: part of the file
             log_plan(result, rec)
             rec.flush()
         finally:
@@ -192,6 +251,7 @@ def show(result: PlanResult) -> rr.RecordingStream:
                            "on; save the plan with save_rrd() and open it with `rerun FILE.rrd`")
     rec = _recording(result)
     rec.spawn()
+    rec.send_blueprint(blueprint(result))
     log_plan(result, rec)
     rec.flush()
     return rec

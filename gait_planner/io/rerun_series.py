@@ -1,0 +1,203 @@
+"""The time series of a plan's rerun view: their values, plots, colours and legend names.
+
+`series_values` holds every series as an entity path -> (N+1,) values at the nodes:
+
+* ``plots/joint_angle/<angle>`` (deg), ``plots/joint_torque/<angle>`` (N m, the effort
+  convention of `gait_planner.io.messages`: the node torque);
+* ``plots/contact_force/<contact>/{x,y,z}`` (N, zero while inactive: each point force is a
+  contact multiplier); ``plots/roll_moment/<foot>`` (N m, the full contact's moment about the
+  heel-toe line, its sixth multiplier; 3D scenes only);
+* ``plots/energy/{kinetic,potential,total}`` (J; potential and total less V at node 0);
+* ``plots/angular_momentum/{x,y,z}`` (kg m^2/s): `angular_momentum`, about the whole-body
+  centre of mass.
+
+`plot_groups` says which series share a plot: joint angles and joint torques per leg
+(right, left; angles of no side, e.g. compass's hip, in a group of their own), ground forces
+per foot (heel and forefoot), roll moments, energies, angular momentum components. Each
+plot also draws the phase boundaries (`phase_boundaries`) as grey vertical lines, the
+series ``plots/phase_boundaries/<group key>``.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from gait_planner.io.messages import node_efforts
+from gait_planner.result import PlanResult
+
+__all__ = ["BOUNDARY_COLOR", "PlotGroup", "angular_momentum", "phase_boundaries", "plot_groups",
+           "poses", "series_color", "series_name", "series_values", "side_of",
+           "whole_body_com"]
+
+# Colours of the series: joints by their place in the leg (the same for right and left);
+# x, y, z components red, green, blue (forefoot forces lighter than heel forces).
+_JOINT_PALETTE = ((31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40),
+                  (148, 103, 189), (140, 86, 75), (227, 119, 194), (127, 127, 127))
+_AXIS_COLORS = ((214, 39, 40), (44, 160, 44), (31, 119, 180))
+_LIGHT_AXIS_COLORS = ((250, 140, 130), (140, 220, 120), (120, 180, 240))
+_ENERGY_COLORS = {"kinetic": (214, 39, 40), "potential": (31, 119, 180), "total": (40, 40, 40)}
+BOUNDARY_COLOR = (150, 150, 150)
+
+
+@dataclass(frozen=True)
+class PlotGroup:
+    """Series (entity paths, no leading slash) shown in one time-series view."""
+
+    key: str
+    title: str
+    paths: tuple[str, ...]
+
+    @property
+    def boundary_path(self) -> str:
+        return f"plots/phase_boundaries/{self.key}"
+
+
+def side_of(name: str) -> str:
+    """"right", "left" or "joints" (no side) of a joint-angle or body name (``_r``/``_l``)."""
+    if re.search(r"_r(_|$)", name):
+        return "right"
+    if re.search(r"_l(_|$)", name):
+        return "left"
+    return "joints"
+
+
+def _feet(result: PlanResult) -> dict[str, list[str]]:
+    feet: dict[str, list[str]] = {}
+    for contact in result.scene.contacts:
+        feet.setdefault(contact.body, []).append(contact.name)
+    return feet
+
+
+def plot_groups(result: PlanResult) -> list[PlotGroup]:
+    """The plots of `result`'s time series, in the order of the layout."""
+    sides: dict[str, list[str]] = {}
+    for name in result.joint_angle_names:
+        sides.setdefault(side_of(name), []).append(name)
+    order = [s for s in ("right", "left", "joints") if s in sides]
+    groups = [PlotGroup(f"joint_angle_{s}", f"joint angles, {s} (deg)" if s != "joints"
+                        else "joint angles (deg)",
+                        tuple(f"plots/joint_angle/{a}" for a in sides[s])) for s in order]
+    groups += [PlotGroup(f"joint_torque_{s}", f"joint torques, {s} (N m)" if s != "joints"
+                         else "joint torques (N m)",
+                         tuple(f"plots/joint_torque/{a}" for a in sides[s])) for s in order]
+    feet = _feet(result)
+    groups += [PlotGroup(f"contact_force_{body}", f"ground force on {body} (N)",
+                         tuple(f"plots/contact_force/{c}/{axis}" for c in contacts
+                               for axis in "xyz"))
+               for body, contacts in feet.items()]
+    groups.append(PlotGroup("energy", "energy (J; potential and total - V(0))",
+                            tuple(f"plots/energy/{e}" for e in ("kinetic", "potential", "total"))))
+    groups.append(PlotGroup("angular_momentum",
+                            "angular momentum about the COM (kg m^2/s)",
+                            tuple(f"plots/angular_momentum/{axis}" for axis in "xyz")))
+    if not result.scene.planar:
+        groups.append(PlotGroup("roll_moment", "roll moment of a full contact (N m)",
+                                tuple(f"plots/roll_moment/{body}" for body in feet)))
+    return groups
+
+
+def series_color(result: PlanResult, path: str) -> tuple[int, int, int]:
+    """The colour of the series at `path` (a path of `plot_groups`)."""
+    parts = path.split("/")
+    kind, name = parts[1], parts[2]
+    if kind in ("joint_angle", "joint_torque"):
+        same_side = [a for a in result.joint_angle_names if side_of(a) == side_of(name)]
+        return _JOINT_PALETTE[same_side.index(name) % len(_JOINT_PALETTE)]
+    if kind == "contact_force":
+        axis = "xyz".index(parts[3])
+        body = result.scene.contact(name).body
+        first = _feet(result)[body][0] == name
+        return (_AXIS_COLORS if first else _LIGHT_AXIS_COLORS)[axis]
+    if kind == "angular_momentum":
+        return _AXIS_COLORS["xyz".index(name)]
+    if kind == "energy":
+        return _ENERGY_COLORS[name]
+    bodies = list(_feet(result))
+    return _JOINT_PALETTE[bodies.index(name) % len(_JOINT_PALETTE)]
+
+
+def series_name(result: PlanResult, path: str) -> str:
+    """The legend entry of the series at `path`: its name without the plot's title, e.g.
+    "hip pitch" for plots/joint_angle/hip_r_pitch, "heel z" for .../foot_r_heel/z."""
+    parts = path.split("/")
+    kind, name = parts[1], parts[2]
+    if kind in ("joint_angle", "joint_torque"):
+        return re.sub(r"_[rl](_|$)", r"\1", name).replace("_", " ").strip()
+    if kind == "contact_force":
+        point = result.scene.contact(name).point
+        return f"{point} {parts[3]}"
+    return name
+
+
+def poses(result: PlanResult) -> tuple[np.ndarray, np.ndarray]:
+    """(N+1, nb, 3) COMs and (N+1, nb, 3, 3) director matrices D = [d1 d2 d3]."""
+    q = np.asarray(result.q, dtype=float).reshape(result.n_nodes, -1, 12)
+    return q[:, :, :3], np.transpose(q[:, :, 3:].reshape(result.n_nodes, -1, 3, 3), (0, 1, 3, 2))
+
+
+def whole_body_com(result: PlanResult, phi: np.ndarray) -> np.ndarray:
+    """(N+1, 3) whole-body centre of mass from the bodies' COMs phi (N+1, nb, 3)."""
+    masses = np.array([b.mass for b in result.scene.bodies])
+    return np.einsum("b,nbk->nk", masses, phi) / masses.sum()
+
+
+def angular_momentum(result: PlanResult) -> np.ndarray:
+    """(N+1, 3) angular momentum of the whole body about its centre of mass c, kg m^2/s.
+
+    Per body, in director coordinates, L = m (phi - c) x (phi_dot - c_dot)
+    + sum_i E_i d_i x d_i_dot (E_i the Euler-tensor values). Like the kinetic energy of
+    `gait_planner.ocp.solution`, it is evaluated per interval, with the interval velocities
+    (q_{n+1} - q_n) / h_n and the interval midpoints (q_n + q_{n+1}) / 2, and averaged to
+    the nodes (nodes 0 and N take their one interval's value). Each term is then
+    a_n x a_{n+1} / h_n; without gravity and ground forces the variational integrator
+    conserves this interval value exactly (its discrete momentum map).
+    """
+    phi, D = poses(result)
+    c = whole_body_com(result, phi)
+    h = np.diff(np.asarray(result.times, dtype=float))
+    r = phi - c[:, None, :]
+    masses = np.array([b.mass for b in result.scene.bodies])
+    euler = np.array([b.euler_tensor for b in result.scene.bodies])  # (nb, 3)
+    translation = np.einsum("b,nbk->nk", masses, np.cross(r[:-1], r[1:]))
+    rotation = np.einsum("bi,nbki->nk", euler, np.cross(D[:-1], D[1:], axis=2))
+    per_interval = (translation + rotation) / h[:, None]
+    return np.concatenate([per_interval[:1], 0.5 * (per_interval[:-1] + per_interval[1:]),
+                           per_interval[-1:]])
+
+
+def phase_boundaries(result: PlanResult) -> np.ndarray:
+    """Times (from t_0) where a phase starts, after the first, and the half cycle's end."""
+    t = np.asarray(result.times, dtype=float) - float(result.times[0])
+    phases = list(result.phases)
+    starts = [t[n] for n in range(1, result.n_nodes) if phases[n] != phases[n - 1]]
+    return np.array(starts + [result.duration])
+
+
+def series_values(result: PlanResult) -> dict[str, np.ndarray]:
+    """Entity path -> (N+1,) values of every series of `plot_groups` (module docstring)."""
+    values: dict[str, np.ndarray] = {}
+    angles = np.degrees(np.asarray(result.joint_angles, dtype=float))
+    torques = node_efforts(result)
+    for k, name in enumerate(result.joint_angle_names):
+        values[f"plots/joint_angle/{name}"] = angles[:, k]
+        values[f"plots/joint_torque/{name}"] = torques[:, k]
+    zero = np.zeros((result.n_nodes, 3))
+    for contact in result.scene.contacts:
+        forces = np.asarray(result.contact_forces.get(contact.name, zero), dtype=float)
+        for axis, column in zip("xyz", forces.T):
+            values[f"plots/contact_force/{contact.name}/{axis}"] = column
+    for body in {c.body: None for c in result.scene.contacts} if not result.scene.planar else ():
+        values[f"plots/roll_moment/{body}"] = np.asarray(
+            result.roll_moments.get(body, zero[:, 0]), dtype=float)
+    kinetic = np.asarray(result.kinetic_energy, dtype=float)
+    potential = np.asarray(result.potential_energy, dtype=float)
+    potential = potential - potential[0]
+    for name, v in (("kinetic", kinetic), ("potential", potential),
+                    ("total", kinetic + potential)):
+        values[f"plots/energy/{name}"] = v
+    for axis, column in zip("xyz", angular_momentum(result).T):
+        values[f"plots/angular_momentum/{axis}"] = column
+    return values
