@@ -152,13 +152,13 @@ class Transcription:
                 continue
             q0, q1, q2 = (ca.SX.sym(s, mb.k) for s in ("q_prev", "q", "q_next"))
             h0, h1 = ca.SX.sym("h_prev"), ca.SX.sym("h")
-            t1 = ca.SX.sym("tau", mb.nt)
+            tau = ca.SX.sym("tau", mb.nt)  # node n's torque acts on both its half intervals
             lam = ca.SX.sym("lambda", C.shape[0])
             w = 0.5 * (h0 + h1)
-            r = self.mech.discrete_euler_lagrange(q0, q1, q2, h0, h1, t1, t1)
+            r = self.mech.discrete_euler_lagrange(q0, q1, q2, h0, h1, tau, tau)
             contact = mb.null_space_transpose(q1, ca.mtimes(ca.DM(C).T, lam)) / FORCE_SCALE
             res = mb.null_space_transpose(q1, r) / (w * FORCE_SCALE) + contact
-            f = ca.Function(f"dynamics_phase{k}", [q0, q1, q2, h0, h1, t1, lam], [res])
+            f = ca.Function(f"dynamics_phase{k}", [q0, q1, q2, h0, h1, tau, lam], [res])
             idx = np.array(nodes)
             lam_cols = ca.horzcat(*[self._row_multipliers(n) for n in nodes]) if C.shape[0] \
                 else ca.DM.zeros(0, len(nodes))
@@ -294,7 +294,8 @@ class Transcription:
         root = mb.block(mb.scene.root.body).start
         inner = self.Q[:, 1:N]
         if s.torso_lean_max > 0:
-            self._ineq.append(("torso_lean", ca.vec(inner[root + 11, :] - np.cos(np.radians(s.torso_lean_max)))))
+            lean = np.cos(np.radians(s.torso_lean_max))
+            self._ineq.append(("torso_lean", ca.vec(inner[root + 11, :] - lean)))
         if s.torso_height_min > 0:
             self._ineq.append(("torso_height", ca.vec(inner[root + 2, :] - s.torso_height_min)))
         if s.joint_limits:
