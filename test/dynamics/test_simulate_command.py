@@ -1,4 +1,4 @@
-"""``gait-planner simulate`` and `gait_planner.dynamics.commands.simulate`.
+"""``gait-planner simulate`` and `gait_planner.cli.simulate.simulate`.
 
 In process through `gait_planner.cli.main` (fast), plus one real process through the
 installed console script: JSON keys and values, the readable table, pinned runs, and one
@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from gait_planner import cli
-from gait_planner.dynamics.commands import simulate
+from gait_planner.cli.simulate import simulate
 from gait_planner.dynamics.free_motion import FreeMotionReport
 
 REQUIRED_KEYS = {

@@ -19,15 +19,12 @@ import sys
 from importlib import metadata
 from typing import Callable, NoReturn, Sequence
 
-from gait_planner.dynamics.commands import add_simulate_parser
+from gait_planner.cli.errors import CliError
+from gait_planner.cli.simulate import add_simulate_parser
 
 PROG = "gait-planner"
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
-
-
-class CliError(Exception):
-    """A failure the user can act on; its message is printed as one line (exit code 2)."""
 
 
 class _Parser(argparse.ArgumentParser):

@@ -18,6 +18,8 @@ import json
 import math
 from typing import Any
 
+from gait_planner.cli.errors import CliError
+
 # The numerics (CasADi) are imported when a simulation runs, so that registering the command
 # keeps `gait-planner --help` fast.
 
@@ -136,7 +138,6 @@ def add_simulate_parser(subparsers: argparse._SubParsersAction) -> argparse.Argu
 
 
 def _simulate_command(args: argparse.Namespace) -> int:
-    from gait_planner.cli import CliError  # here, not at import: cli imports this module
     from gait_planner.dynamics.simulate import SimulationError
 
     try:
