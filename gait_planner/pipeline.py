@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from gait_planner.model.loader import SceneError, load_scene
+from gait_planner.ocp.request_ranges import RangeError, check_request
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.walk_on import walk_on
@@ -81,6 +82,10 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
                            f"got {request.steps}")
     try:
         scene = load_scene(request.scene)
+        check_request(scene, step_length=request.step_length,
+                      friction_coefficient=request.friction_coefficient,
+                      intervals_per_phase=request.intervals_per_phase,
+                      max_solve_time=request.max_solve_time)
         settings = settings_for(
             scene, step_length=request.step_length, cost=request.cost or None,
             friction_coefficient=request.friction_coefficient,
@@ -88,7 +93,7 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
             max_solve_time=request.max_solve_time,
             **({"compiled": True} if request.compiled else {}),
             **({"posture": request.posture} if request.posture else {}))
-    except (SceneError, SettingsError) as err:
+    except (SceneError, SettingsError, RangeError) as err:
         raise RequestError(str(err)) from None
     stem = output_stem(request, scene.name)
     folder = Path(output_dir)

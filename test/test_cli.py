@@ -27,12 +27,24 @@ def test_plan_json_summary(tmp_path, capsys):
     assert data["mcap"] == str(out.resolve()) or data["mcap"] == str(out)
 
 
-def test_impossible_plan_exits_1_and_writes_nothing(tmp_path, capsys):
-    out = tmp_path / "far.mcap"
-    code = main(["plan", "--scene", "compass", "--step-length", "3", "--max-time", "20",
-                 "--out", str(out), "--no-rrd"])
+def test_failed_plan_exits_1_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "short.mcap"
+    code = main(["plan", "--scene", "compass", "--max-time", "0.001", "--out", str(out),
+                 "--no-rrd"])
     assert code == 1
-    assert "success" in capsys.readouterr().out
+    assert "time limit" in capsys.readouterr().out
+    assert not out.exists()
+
+
+def test_impossible_request_is_refused_in_one_line(tmp_path, capsys):
+    out = tmp_path / "far.mcap"
+    code = main(["plan", "--scene", "compass", "--step-length", "3", "--out", str(out),
+                 "--no-rrd"])
+    assert code == 2
+    errors = [line for line in capsys.readouterr().err.splitlines() if "error" in line]
+    assert len(errors) == 1
+    assert errors[0].startswith("gait-planner: error: step_length = 3.0 is outside the range")
+    assert "(0, 2.000] m" in errors[0]
     assert not out.exists()
 
 

@@ -6,7 +6,7 @@ Thin adapter: a request is converted to a `PlanRequest`, planned and recorded by
 failed plans are answered with success = False and a message; the node keeps serving.
 
 Parameters: ``default_scene`` (string, "walker3d"), ``output_dir`` (string, folder of the
-recordings, "runs"), ``max_solve_time`` (double, s, 600.0: used when a request gives <= 0).
+recordings, "runs"), ``max_solve_time`` (double, s, 60.0: used when a request gives <= 0).
 Topics (reliable; volatile so a restarting controller never re-runs an old plan):
 ``/gait_planner/joint_trajectory`` (one message per plan), ``/gait_planner/state`` and
 ``/gait_planner/contact_forces`` (one message per node).
@@ -65,7 +65,7 @@ class GaitPlannerNode(Node):
         super().__init__("gait_planner", **kwargs)
         self.declare_parameter("default_scene", "walker3d")
         self.declare_parameter("output_dir", "runs")
-        self.declare_parameter("max_solve_time", 600.0)
+        self.declare_parameter("max_solve_time", 60.0)
         # compile the derivative elements to C (a one-time cost per scene and machine)
         self.declare_parameter("compile_derivatives", False)
         self._planner = planner or Planner(progress=self._progress)
