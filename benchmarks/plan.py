@@ -36,7 +36,7 @@ def bench(name: str, mode: str, spread: list[float]) -> dict:
     nominal = settings_for(scene, compiled=mode == "compiled")
     planner = Planner()
     start = time.perf_counter()
-    planner._build(scene, nominal)
+    planner.prepare(scene, nominal)
     build = time.perf_counter() - start
     cold = {}
     for factor in spread:

@@ -54,3 +54,10 @@ def test_user_errors_are_one_line(tmp_path, capsys):
     assert err.startswith("gait-planner: error: --out must name a .mcap file")
     assert main(["plan", "--scene", "no_such_scene", "--out", str(tmp_path / "x.mcap")]) == 2
     assert "gait-planner: error:" in capsys.readouterr().err
+
+
+def test_prepare_compiles_and_refuses_unknown_scenes(capsys):
+    assert main(["prepare", "compass"]) == 0
+    assert "compass: per-node elements compiled to C" in capsys.readouterr().out
+    assert main(["prepare", "no_such_scene"]) == 2
+    assert "gait-planner: error:" in capsys.readouterr().err

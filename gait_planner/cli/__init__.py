@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from importlib import metadata
 from typing import Callable, NoReturn, Sequence
 
@@ -279,8 +280,36 @@ def _urdf(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_prepare(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "prepare", help="compile the scenes' derivatives now (make setup runs it)",
+        description="Build each SCENE's default problem with compiled derivatives, so that "
+        "the C libraries are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) and "
+        "no first request compiles. Takes about a minute for walker3d the first time, a few "
+        "seconds when cached.")
+    parser.add_argument("scenes", nargs="+", help="scene names")
+    parser.set_defaults(handler=_prepare)
+
+
+def _prepare(args: argparse.Namespace) -> int:
+    from gait_planner.model.loader import SceneError, load_scene
+    from gait_planner.ocp.settings import SettingsError, settings_for
+    from gait_planner.ocp.solve import Planner
+
+    for name in args.scenes:
+        start = time.perf_counter()
+        try:
+            scene = load_scene(name)
+            used = Planner().prepare(scene, settings_for(scene, compiled=True))
+        except (SceneError, SettingsError) as error:
+            raise CliError(str(error)) from None
+        print(f"{name}: {used} ({time.perf_counter() - start:.1f} s)", flush=True)
+    return 0
+
+
 COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
-    _add_run, _add_plan, _add_report, _add_node, _add_call, add_simulate_parser, _add_urdf)
+    _add_run, _add_plan, _add_report, _add_node, _add_call, add_simulate_parser, _add_urdf,
+    _add_prepare)
 
 
 # --- entry point -------------------------------------------------------------------------

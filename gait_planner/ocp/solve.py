@@ -124,6 +124,12 @@ class Planner:
         self.progress = progress
         self._built: dict = {}
 
+    def prepare(self, scene: Scene, settings: GaitSettings) -> str:
+        """Build the problem of (scene, settings) now, compiling its derivative elements if
+        the settings ask for it (cached on disk for later processes), so that a first plan
+        spends no time on it. Returns how the derivatives are evaluated, in words."""
+        return self._build(scene, settings).derivatives_used
+
     def _build(self, scene: Scene, s: GaitSettings) -> _Built:
         key = _key(scene, s)
         if key not in self._built:

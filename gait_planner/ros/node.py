@@ -6,7 +6,9 @@ Thin adapter: a request is converted to a `PlanRequest`, planned and recorded by
 failed plans are answered with success = False and a message; the node keeps serving.
 
 Parameters: ``default_scene`` (string, "walker3d"), ``output_dir`` (string, folder of the
-recordings, "runs"), ``max_solve_time`` (double, s, 60.0: used when a request gives <= 0).
+recordings, "runs"), ``max_solve_time`` (double, s, 60.0: used when a request gives <= 0),
+``compile_derivatives`` (bool, true: compiled derivative elements, which `make setup`
+compiles for the shipped scenes with ``gait-planner prepare``).
 Topics (reliable; volatile so a restarting controller never re-runs an old plan):
 ``/gait_planner/joint_trajectory`` (one message per plan), ``/gait_planner/state`` and
 ``/gait_planner/contact_forces`` (one message per node).
@@ -67,7 +69,7 @@ class GaitPlannerNode(Node):
         self.declare_parameter("output_dir", "runs")
         self.declare_parameter("max_solve_time", 60.0)
         # compile the derivative elements to C (a one-time cost per scene and machine)
-        self.declare_parameter("compile_derivatives", False)
+        self.declare_parameter("compile_derivatives", True)
         self._planner = planner or Planner(progress=self._progress)
         self._lock = threading.Lock()
         group = ReentrantCallbackGroup()
