@@ -61,3 +61,13 @@ def test_prepare_compiles_and_refuses_unknown_scenes(capsys):
     assert "compass: per-node elements compiled to C" in capsys.readouterr().out
     assert main(["prepare", "no_such_scene"]) == 2
     assert "gait-planner: error:" in capsys.readouterr().err
+
+
+def test_node_takes_the_ros_arguments_in_order(monkeypatch):
+    import gait_planner.ros.node as node
+
+    seen = []
+    monkeypatch.setattr(node, "main", lambda args: seen.append(args) or 0)
+    assert main(["node", "--ros-args", "-p", "output_dir:=runs", "-p", "max_solve_time:=30.0"]) == 0
+    assert seen[0][1:] == ["--ros-args", "-p", "output_dir:=runs", "-p", "max_solve_time:=30.0"]
+    assert main(["plan", "--scene", "compass", "--out", "x.mcap", "--bogus"]) == 2

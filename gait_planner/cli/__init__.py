@@ -337,8 +337,15 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``gait-planner`` with `argv` (default: sys.argv[1:]); returns the exit code."""
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if args.command == "node":
+            # everything after `node` is the node's, in order ("--ros-args -p a:=b": argparse's
+            # REMAINDER does not take arguments that start with '-')
+            args.ros_args = argv[argv.index("node") + 1:]
+        elif extra:
+            parser.error(f"unrecognized arguments: {' '.join(extra)}")
     except SystemExit as exit_:  # --help, --version and usage errors
         return exit_.code if isinstance(exit_.code, int) else EXIT_USAGE
     try:

@@ -21,6 +21,8 @@ def request_msg(args: argparse.Namespace) -> PlanGait.Request:
     req.max_solve_time = float(args.max_time or 0.0)
     req.output_name = args.output_name
     req.cold_start = bool(args.cold)
+    req.steps = int(args.steps or 0)
+    req.posture = args.posture or ""
     return req
 
 
@@ -47,6 +49,10 @@ def call_plan_gait(args: argparse.Namespace, *, timeout: float) -> dict:
             "max_dynamics_residual": res.max_dynamics_residual,
             "max_friction_violation": res.max_friction_violation,
             "trajectory_points": len(res.trajectory.points), "mcap_path": res.mcap_path,
+            "continuous_torque_error": res.continuous_torque_error,
+            "continuous_torque_error_at_switches": res.continuous_torque_error_at_switches,
+            "continuous_base_force": res.continuous_base_force,
+            "continuous_dynamics": res.continuous_dynamics,
         }
     finally:
         node.destroy_node()
