@@ -82,3 +82,39 @@ def joint_limit_margins(mb: Multibody, limits: tuple[tuple[str, float, float], .
         c = ca.sum1(ca.sum2(ca.DM(C) * R))
         rows += [s * math.cos(lo) - c * math.sin(lo), c * math.sin(hi) - s * math.cos(hi)]
     return ca.Function("joint_limit_margins", [q], [ca.vertcat(*rows)], ["q"], ["margins"])
+
+
+def _relative_rotation(mb: Multibody, q, joint):
+    """R_rel = D_parent^T D_child (3, 3) of `joint` at configuration q (SX)."""
+    D = [ca.reshape(q[mb.block(b).start + 3 : mb.block(b).start + 12], 3, 3)
+         for b in (joint.parent, joint.child)]
+    return ca.mtimes(D[0].T, D[1])
+
+
+def joint_speed_margins(mb: Multibody, speed_max: float, base_time_step: float) -> ca.Function:
+    """CasADi Function (q_n, q_{n+1}, h_n) -> one margin (>= 0) per joint of interval n.
+
+    The rotation R_rel(q_n)^T R_rel(q_{n+1}) of the child relative to its parent, by an angle
+    theta, has |R_rel(q_{n+1}) - R_rel(q_n)|_F^2 = 8 sin^2(theta/2), so
+    8 sin^2(w h_n / 2) - |dR_rel|_F^2 >= 0 bounds theta by w h_n (w = speed_max, deg/s,
+    converted): a mean relative angular speed, whatever the joint's axes. Rows are divided
+    by (w base_time_step)^2 to be O(1)."""
+    q0, q1, h = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h")
+    w = math.radians(speed_max)
+    bound = 8 * ca.sin(0.5 * w * h) ** 2
+    rows = [(bound - ca.sumsqr(_relative_rotation(mb, q1, j) - _relative_rotation(mb, q0, j)))
+            / (w * base_time_step) ** 2 for j in mb.scene.joints]
+    return ca.Function("joint_speed_margins", [q0, q1, h], [ca.vertcat(*rows)],
+                       ["q", "q_next", "h"], ["margin"])
+
+
+def twist_squares(mb: Multibody) -> ca.Function:
+    """CasADi Function q -> sum over joints of 1 - (d2_parent . d2_child)^2: the squared sine
+    of the angle between each joint's two lateral axes, zero for any pure pitch (and for a
+    revolute joint about d2), sin^2 of roll or yaw alone otherwise (the twist regulariser)."""
+    q = ca.SX.sym("q", mb.k)
+    total = 0
+    for j in mb.scene.joints:
+        p, c = (mb.block(b).start + 6 for b in (j.parent, j.child))
+        total += 1 - ca.dot(q[p : p + 3], q[c : c + 3]) ** 2
+    return ca.Function("twist_squares", [q], [total], ["q"], ["twist"])

@@ -45,7 +45,7 @@ import numpy as np
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.ocp.contacts import BodyContact, body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import configuration_mirror, torque_mirror
-from gait_planner.ocp.posture import joint_limit_margins
+from gait_planner.ocp.posture import joint_limit_margins, joint_speed_margins, twist_squares
 from gait_planner.ocp.settings import GaitSettings
 
 TORQUE_SCALE = 100.0  # N m
@@ -308,32 +308,9 @@ class Transcription:
                 margins = joint_limit_margins(mb, limits).map(len(nodes))(self.Q[:, nodes])
                 self._ineq.append((f"joint_limits[{phase}]", ca.vec(margins)))
         if s.joint_speed_max > 0 and mb.scene.joints:
-            speed = self._joint_speed_margins().map(N - 1)(
+            speed = joint_speed_margins(mb, s.joint_speed_max, s.base_time_step).map(N - 1)(
                 self.Q[:, 0 : N - 1], self.Q[:, 1:N], self.h[0 : N - 1].T)
             self._ineq.append(("joint_speed", ca.vec(speed)))
-
-    def _joint_speed_margins(self) -> ca.Function:
-        """(q_n, q_{n+1}, h_n) -> one margin (>= 0) per joint of interval n: the rotation
-        R_rel(q_n)^T R_rel(q_{n+1}) of the child relative to its parent, by an angle theta,
-        has |R_rel(q_{n+1}) - R_rel(q_n)|_F^2 = 8 sin^2(theta/2), so
-        8 sin^2(w h_n / 2) - |dR_rel|_F^2 >= 0 bounds theta by w h_n (w = joint_speed_max,
-        rad/s): a mean relative angular speed, whatever the joint's axes. Rows are divided
-        by (w base_time_step)^2 to be O(1)."""
-        mb, k = self.mb, self.mb.k
-        q0, q1, h = ca.SX.sym("q", k), ca.SX.sym("q_next", k), ca.SX.sym("h")
-        w = np.radians(self.settings.joint_speed_max)
-        scale = (w * self.settings.base_time_step) ** 2
-
-        def relative(q, joint):
-            D = [ca.reshape(q[mb.block(b).start + 3 : mb.block(b).start + 12], 3, 3)
-                 for b in (joint.parent, joint.child)]
-            return ca.mtimes(D[0].T, D[1])
-
-        bound = 8 * ca.sin(0.5 * w * h) ** 2
-        rows = [(bound - ca.sumsqr(relative(q1, j) - relative(q0, j))) / scale
-                for j in mb.scene.joints]
-        return ca.Function("joint_speed_margins", [q0, q1, h], [ca.vertcat(*rows)],
-                           ["q", "q_next", "h"], ["margin"])
 
     def _cost(self):
         """J over the half cycle t_0..t_{N-1} (intervals 0..N-2), plus the torque
@@ -353,7 +330,8 @@ class Transcription:
         # times sum h_n s^2, picks the smallest shares that keep every point in its cone.
         shares = s.torque_regularisation * self._share_squares()
         if s.twist_regularisation > 0:
-            shares = shares + s.twist_regularisation * self._twist()
+            twist = twist_squares(self.mb).map(N - 1)(self.Q[:, 0 : N - 1])
+            shares = shares + s.twist_regularisation * ca.sum2(twist * self.h[0 : N - 1].T)
         if s.cost == "torque_squared":
             self.cost_without_elements = torque + shares
             return self.cost_without_elements
@@ -365,18 +343,6 @@ class Transcription:
                 None, np.array([s.base_time_step])))
         self.cost_without_elements = s.torque_regularisation * torque + shares
         return kinetic + self.cost_without_elements
-
-    def _twist(self):
-        """sum_n h_n sum_joints (1 - (d2_parent . d2_child)^2) over nodes 0..N-2 (s): the
-        squared sine of the angle between a joint's two lateral axes, zero for any pure
-        pitch (and for a revolute joint about d2), sin^2 of roll or yaw alone otherwise."""
-        mb, N = self.mb, self.N
-        terms = []
-        for j in mb.scene.joints:
-            p, c = (mb.block(b).start + 6 for b in (j.parent, j.child))
-            cos = ca.sum1(self.Q[p : p + 3, 0 : N - 1] * self.Q[c : c + 3, 0 : N - 1])
-            terms.append(1 - cos**2)
-        return ca.sum2(ca.sum1(ca.vertcat(*terms)) * self.h[0 : N - 1].T)
 
     def _share_squares(self):
         """sum over nodes of w_n s^2 (N^2 s) of the full contacts' along-line shares s."""

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import math
-from typing import Sequence
 
 import numpy as np
 
 from gait_planner.io.mcap_reader import RecordedPlan
 from gait_planner.verify.mechanics import MIRROR, Mechanics, SceneData, parse_scene
+from gait_planner.verify.actuation import (effort_couples, effort_slots, joint_couples,
+                                           periodic_torque_error)
 from gait_planner.verify.continuous import certificate_of_recording
 from gait_planner.verify.joined import verify_joined
 from gait_planner.verify.physical import check_physical
@@ -234,14 +235,14 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         node = int(np.abs(couples.sum(axis=1)).max(axis=1).argmax())
         fail(f"the actuation has a net moment at node {node}: {net:.3e} of the largest body "
              f"couple (limit {L['actuation']:.0e})")
-    joint_couples = _joint_couples(scene, couples)  # (N+1, nj, 3)
+    couples_j = joint_couples(scene, couples)  # (N+1, nj, 3)
     off_axis, mismatch = 0.0, 0.0
     off_at = mismatch_at = None
     for n in range(n_nodes):
         for ji, j in enumerate(scene.joints):
             if j.axis is not None:
                 axis = mech.directors(q[n], j.parent) @ j.axis
-                m = joint_couples[n, ji]
+                m = couples_j[n, ji]
                 off = _norm(m - (m @ axis) * axis) / couple_scale
                 if off > off_axis:
                     off_axis, off_at = off, (j.name, n)
@@ -249,7 +250,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         fail(f"the couple of revolute joint {off_at[0]} at node {off_at[1]} is not along its "
              f"axis: off by {off_axis:.3e} (relative; limit {L['actuation']:.0e})")
     effort = np.asarray(rec.effort, dtype=float)
-    slots = _effort_slots(scene, tuple(rec.joint_names))
+    slots = effort_slots(scene, tuple(rec.joint_names))
     torques = None  # (N+1, nj, 3): the couple of node n in its parent's directors
     if isinstance(slots, str):
         fail(slots)
@@ -257,14 +258,14 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         fail(f"JointTrajectory effort has shape {effort.shape}, expected "
              f"({n_nodes}, {len(rec.joint_names)})")
     else:
-        effort_couples = _effort_couples(scene, mech, q, effort, slots)  # (N+1, nj, 3)
-        torques = np.array([[mech.directors(q[n], j.parent).T @ effort_couples[n, ji]
+        couples_e = effort_couples(scene, mech, q, effort, slots)  # (N+1, nj, 3)
+        torques = np.array([[mech.directors(q[n], j.parent).T @ couples_e[n, ji]
                              for ji, j in enumerate(scene.joints)] for n in range(n_nodes)])
         half = 0.5 * (np.concatenate([[0.0], h]) + np.concatenate([h, [0.0]]))  # w_n
         for n in range(n_nodes):
             for ji, j in enumerate(scene.joints):
-                expected = half[n] * effort_couples[n, ji]
-                error = _norm(joint_couples[n, ji] - expected) / couple_scale
+                expected = half[n] * couples_e[n, ji]
+                error = _norm(couples_j[n, ji] - expected) / couple_scale
                 if error > mismatch:
                     mismatch, mismatch_at = error, (j.name, n)
         if mismatch > L["actuation"]:
@@ -300,7 +301,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
              f"N-1, 1: off by {periodic_force:.3e} (relative; limit {L['periodic_force']:.0e})")
     periodic_torque = 0.0
     if torques is not None:
-        periodic_torque = _periodic_torque_error(scene, effort_couples, N)
+        periodic_torque = periodic_torque_error(scene, couples_e, N)
         if periodic_torque > L["actuation"]:
             fail(f"the joint couples of nodes N-1, N are not the mirror images of those of "
                  f"nodes 0, 1: off by {periodic_torque:.3e} (relative; limit "
@@ -365,82 +366,6 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         max_potential_energy_error=energy_error,
         failures=tuple(failures), notes=tuple(notes), physical=physical, continuous=continuous,
     )
-
-
-def _joint_couples(scene: SceneData, couples: np.ndarray) -> np.ndarray:
-    """Joint couples (nodes, nj, 3) from body couples (nodes, nb, 3) on the tree: a joint
-    acts +m_j on its child and -m_j on its parent, so, leaves first,
-    m_j = m_child + sum of the couples of the joints whose parent is the child."""
-    index = {j.name: i for i, j in enumerate(scene.joints)}
-    out = np.zeros((couples.shape[0], len(scene.joints), 3))
-    for j in reversed(scene.joints):  # tree order reversed: children before parents
-        m = couples[:, scene.body_index(j.child)].copy()
-        for k in scene.joints:
-            if k.parent == j.child:
-                m += out[:, index[k.name]]
-        out[:, index[j.name]] = m
-    return out
-
-
-def _effort_couples(scene: SceneData, mech: Mechanics, q: np.ndarray, effort: np.ndarray,
-                    slots: dict) -> np.ndarray:
-    """World couples (N+1, nj, 3) of the recorded efforts, node n expressed with q_n.
-
-    The recording's efforts are conjugate to the joint angles (gait_planner.io.messages):
-    revolute, the torque about the axis D_p n; spherical, the couple's projections on the
-    pitch axis d2 of the parent, the roll axis and the yaw axis d3 of the child. For
-    R_rel = Ry(pitch) Rx(roll) Rz(yaw) the roll axis Ry(pitch) e1 (parent components) is
-    normal to the other two: in world components it is (d2_p x d3_c) / cos(roll). The
-    couple follows from the 3x3 system A^T m = effort, A = [d2_p, roll axis, d3_c]."""
-    out = np.zeros((q.shape[0], len(scene.joints), 3))
-    for n in range(q.shape[0]):
-        for ji, j in enumerate(scene.joints):
-            Dp = mech.directors(q[n], j.parent)
-            e = effort[n, slots[j.name]]
-            if j.axis is not None:
-                out[n, ji] = float(e[0]) * (Dp @ j.axis)
-                continue
-            pitch_axis, yaw_axis = Dp[:, 1], mech.directors(q[n], j.child)[:, 2]
-            roll_axis = np.cross(pitch_axis, yaw_axis)
-            roll_axis = roll_axis / max(_norm(roll_axis), 1e-300)
-            A = np.column_stack([pitch_axis, roll_axis, yaw_axis])
-            out[n, ji] = np.linalg.lstsq(A.T, e, rcond=None)[0]
-    return out
-
-
-def _effort_slots(scene: SceneData, names: Sequence[str]) -> dict[str, list[int]] | str:
-    """joint -> indices of its effort components in the JointTrajectory, or a failure."""
-    slots = {}
-    for j in scene.joints:
-        wanted = [j.name] if j.axis is not None else [f"{j.name}_{a}"
-                                                      for a in ("pitch", "roll", "yaw")]
-        missing = [w for w in wanted if w not in names]
-        if missing:
-            return f"the JointTrajectory names no effort slots {missing} of joint {j.name}"
-        slots[j.name] = [list(names).index(w) for w in wanted]
-    return slots
-
-
-def _periodic_torque_error(scene: SceneData, couples: np.ndarray, N: int) -> float:
-    """Largest relative difference between the joint couples of nodes N-1, N (world, at
-    q_{N-1}, q_N) and the mirror images of those of nodes 0, 1: a couple m mirrors to
-    -S m on the partner joint, or to +S m when the mirror swaps the joint's parent and child
-    (the couple then acts on the other body)."""
-    by_bodies = {(j.parent, j.child): i for i, j in enumerate(scene.joints)}
-    scale = max(float(np.abs(couples[[0, 1, N - 1, N]]).max()), 1e-300)
-    error = 0.0
-    for i, j in enumerate(scene.joints):
-        p, c = scene.mirror[j.parent], scene.mirror[j.child]
-        if (p, c) in by_bodies:
-            sign, partner = -1.0, by_bodies[(p, c)]
-        elif (c, p) in by_bodies:
-            sign, partner = 1.0, by_bodies[(c, p)]
-        else:
-            return math.inf
-        for src, dst in ((0, N - 1), (1, N)):
-            image = sign * MIRROR * couples[src, i]
-            error = max(error, _norm(couples[dst, partner] - image) / scale)
-    return error
 
 
 def _interval_error(scene: SceneData, rec: RecordedPlan, meta: dict, h: np.ndarray,
