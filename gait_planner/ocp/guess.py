@@ -16,6 +16,7 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.model.angles import configuration
+from gait_planner.ocp.mirror import contact_partners
 from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
 
 LIFT = 0.05  # m, swing lift of a free contact point at the middle of its gap
@@ -26,7 +27,6 @@ _W_CONTACT, _W_ROOT, _W_UPRIGHT, _W_SMALL = 1.0, 0.1, 0.3, 1e-3
 def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[str, np.ndarray]:
     """Target world positions (N+1, 3) of every contact point."""
     mb, N = tr.mb, tr.N
-    mirror = dict(mb.scene.gait.mirror)
     S = np.diag([1.0, -1.0, 1.0])
     held = {c.name: [n for n in range(N) if c.name in
                      {p for bc in tr.contacts[tr.phase_of_interval[n]] for p in bc.points}]
@@ -37,17 +37,13 @@ def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[
         x[2] = 0.0
         ground[c.name] = x + (0 if 0 in held[c.name] else step) * np.array([1.0, 0, 0])
 
-    def partner(name):
-        c = mb.scene.contact(name)
-        body = mirror.get(c.body, c.body)
-        return next(d.name for d in mb.scene.contacts if d.body == body and d.point == c.point)
-
+    partner = contact_partners(mb.scene)
     samples = {}
     for c in mb.scene.contacts:
         own = {}
         for n in held[c.name]:
             own[n] = own[n + 1] = ground[c.name]
-        other = partner(c.name)
+        other = partner[c.name]
         for n in held[other]:
             image = S @ ground[other]
             for m in (n, n + 1):

@@ -14,10 +14,19 @@ from __future__ import annotations
 import numpy as np
 
 from gait_planner.model.multibody import Multibody
-from gait_planner.model.scene import JointType
+from gait_planner.model.scene import JointType, Scene
 
 _S = np.diag([1.0, -1.0, 1.0])
 _F = np.diag([1.0, -1.0, 1.0])
+
+
+def contact_partners(scene: Scene) -> dict[str, str]:
+    """contact name -> the contact at the same point of the mirror-partner body (whose
+    mirror image it is; a body without a partner is its own)."""
+    mirror = dict(scene.gait.mirror) if scene.gait else {}
+    return {c.name: next(d.name for d in scene.contacts
+                         if d.body == mirror.get(c.body, c.body) and d.point == c.point)
+            for c in scene.contacts}
 
 
 def configuration_mirror(mb: Multibody) -> tuple[np.ndarray, np.ndarray]:

@@ -7,6 +7,7 @@ import numpy as np
 
 from gait_planner.model.angles import angle_names, joint_angles
 from gait_planner.model.scene import Scene
+from gait_planner.ocp.mirror import contact_partners
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
 from gait_planner.result import PlanResult, SolverStats
@@ -59,10 +60,8 @@ def _mirror_forces(tr: Transcription, forces: dict[str, np.ndarray],
     scene = tr.mb.scene
     mirror = dict(scene.gait.mirror)
     S = np.array([1.0, -1.0, 1.0])
-    for c in scene.contacts:
-        body = mirror.get(c.body, c.body)
-        partner = next(d.name for d in scene.contacts if d.body == body and d.point == c.point)
-        forces[partner][dst] = S * forces[c.name][src]
+    for name, partner in contact_partners(scene).items():
+        forces[partner][dst] = S * forces[name][src]
     for body in rolls:
         rolls[mirror.get(body, body)][dst] = -rolls[body][src]
 

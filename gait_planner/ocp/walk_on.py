@@ -22,7 +22,7 @@ import numpy as np
 
 from gait_planner.model.angles import joint_angles
 from gait_planner.model.multibody import Multibody
-from gait_planner.ocp.mirror import configuration_mirror, torque_mirror
+from gait_planner.ocp.mirror import configuration_mirror, contact_partners, torque_mirror
 from gait_planner.ocp.solution import central_rates
 from gait_planner.result import PlanResult
 
@@ -42,9 +42,7 @@ def walk_on(result: PlanResult, steps: int) -> PlanResult:
     A, shift = configuration_mirror(mb)
     B = torque_mirror(mb)
     mirror = dict(scene.gait.mirror)
-    partner = {c.name: next(d.name for d in scene.contacts
-                            if d.body == mirror.get(c.body, c.body) and d.point == c.point)
-               for c in scene.contacts}
+    partner = contact_partners(scene)
 
     parts: dict[str, list] = {key: [] for key in ("q", "tau", "gen", "times", "kinetic",
                                                   "potential", "active", "phases")}
