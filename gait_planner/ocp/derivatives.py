@@ -29,10 +29,11 @@ from typing import Callable
 import casadi as ca
 import numpy as np
 
+from gait_planner.ocp.compile import Source
 from gait_planner.ocp.transcription import ElementGroup, Transcription
 
-# Given the element derivative Functions, returns them (e.g. compiled) in the same order.
-Compiler = Callable[[list[ca.Function]], list[ca.Function]]
+# Given the element derivatives to form, returns them (e.g. compiled) in the same order.
+Compiler = Callable[[list[Source]], list[ca.Function]]
 
 
 def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict[str, ca.Function]:
@@ -49,12 +50,11 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     rest_hess = ca.Function("nlp_rest_hess_l", [x_sx, p_sx, lam_f_sx, lam_g_sx],
                             [ca.triu(ca.hessian(lagrangian, x_sx)[0])])
 
-    pairs = [_element_derivatives(group) for group in tr.elements]
-    if compiler is not None:  # only what runs at more than one node is worth compiling
-        chosen = [fn for group, pair in zip(tr.elements, pairs) if group.z_index.shape[1] > 1
-                  for fn in pair]
-        done = dict(zip([fn.name() for fn in chosen], compiler(chosen)))
-        pairs = [tuple(done.get(fn.name(), fn) for fn in pair) for pair in pairs]
+    if compiler is None:
+        pairs = [(_element_jacobian(group), _element_hessian(group)) for group in tr.elements]
+    else:  # every element, also those of one node: a cached library is loaded, not formed
+        done = iter(compiler([source for group in tr.elements for source in _sources(group)]))
+        pairs = [(next(done), next(done)) for _ in tr.elements]
 
     x, p = ca.MX.sym("x", nx), ca.MX.sym("p", int(tr.p.shape[0]))
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
@@ -84,18 +84,33 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     }
 
 
-def _element_derivatives(group: ElementGroup) -> tuple[ca.Function, ca.Function]:
-    """(jacobian(z, pz) -> dr/dz, hessian(z, pz, y) -> d2(y . r)/dz2) of one element,
-    both sparse (the Hessian as a full symmetric matrix)."""
-    fn = group.function
+def _sources(group: ElementGroup) -> tuple[Source, Source]:
+    """The element's Jacobian and Hessian (`_element_jacobian`, `_element_hessian`) to
+    compile, identified by the element's serialisation."""
+    name, key = group.function.name(), group.function.serialize()
+    return (Source(f"{name}_jac", f"jacobian\n{key}", lambda: _element_jacobian(group)),
+            Source(f"{name}_hess", f"hessian\n{key}", lambda: _element_hessian(group)))
+
+
+def _symbols(fn: ca.Function):
     z, pz, c = (ca.SX.sym(name, fn.sparsity_in(i)) for i, name in enumerate(("z", "pz", "c")))
-    r = fn(z, pz, c)
+    return z, pz, c, fn(z, pz, c)
+
+
+def _element_jacobian(group: ElementGroup) -> ca.Function:
+    """jacobian(z, pz, c) -> dr/dz of one element, sparse."""
+    z, pz, c, r = _symbols(group.function)
+    return ca.Function(f"{group.function.name()}_jac", [z, pz, c], [ca.jacobian(r, z)],
+                       ["z", "pz", "c"], ["jac"])
+
+
+def _element_hessian(group: ElementGroup) -> ca.Function:
+    """hessian(z, pz, c, y) -> d2(y . r)/dz2 of one element, sparse, as a full symmetric
+    matrix."""
+    z, pz, c, r = _symbols(group.function)
     y = ca.SX.sym("y", r.shape[0])
-    name = fn.name()
-    return (ca.Function(f"{name}_jac", [z, pz, c], [ca.jacobian(r, z)], ["z", "pz", "c"],
-                        ["jac"]),
-            ca.Function(f"{name}_hess", [z, pz, c, y], [ca.hessian(ca.dot(y, r), z)[0]],
-                        ["z", "pz", "c", "y"], ["hess"]))
+    return ca.Function(f"{group.function.name()}_hess", [z, pz, c, y],
+                       [ca.hessian(ca.dot(y, r), z)[0]], ["z", "pz", "c", "y"], ["hess"])
 
 
 def _scatter(mapped: ca.MX, pattern: ca.Sparsity, row_index: np.ndarray,

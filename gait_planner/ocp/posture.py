@@ -60,28 +60,44 @@ def _angle_parts(scene: Scene) -> dict[str, tuple[str, str, np.ndarray, np.ndarr
     return out
 
 
-def joint_limit_margins(mb: Multibody, limits: tuple[tuple[str, float, float], ...]):
-    """CasADi Function `joint_limit_margins`: q (k,) -> margins (2 * len(limits),), each
-    >= 0 exactly when its angle lies in its range (module docstring); limits in radians,
-    as returned by `gait_planner.model.posture.check_joint_limits`."""
+def joint_limit_margins(mb: Multibody, names: tuple[str, ...],
+                        function_name: str = "joint_limits") -> ca.Function:
+    """CasADi Function `function_name`: (q (k,), c (6 len(names),)) -> margins
+    (2 len(names),), each >= 0 exactly when its angle lies in its range (module docstring),
+    with the ranges given by c = `joint_limit_constants(limits)` (an input, so that one
+    compiled function serves any range of the same angles)."""
     parts = _angle_parts(mb.scene)
-    q = ca.SX.sym("q", mb.k)
+    q, c = ca.SX.sym("q", mb.k), ca.SX.sym("c", 6 * len(names))
 
     def directors(body):
         start = mb.block(body).start
         return ca.reshape(q[start + 3 : start + 12], 3, 3)  # columns d1, d2, d3
 
     rows = []
-    for name, lo, hi in limits:
+    for i, name in enumerate(names):
         parent, child, S, C = parts[name]
         R = ca.mtimes(directors(parent).T, directors(child))
-        s = ca.sum1(ca.sum2(ca.DM(S) * R))
-        if C is None:
-            rows += [s - math.sin(lo), math.sin(hi) - s]
-            continue
-        c = ca.sum1(ca.sum2(ca.DM(C) * R))
-        rows += [s * math.cos(lo) - c * math.sin(lo), c * math.sin(hi) - s * math.cos(hi)]
-    return ca.Function("joint_limit_margins", [q], [ca.vertcat(*rows)], ["q"], ["margins"])
+        sin_part = ca.sum1(ca.sum2(ca.DM(S) * R))
+        cos_part = 0 if C is None else ca.sum1(ca.sum2(ca.DM(C) * R))
+        a = c[6 * i : 6 * i + 6]
+        rows += [a[0] * sin_part + a[1] * cos_part + a[2],
+                 a[3] * sin_part + a[4] * cos_part + a[5]]
+    return ca.Function(function_name, [q, c], [ca.vertcat(*rows)], ["q", "c"], ["margins"])
+
+
+def joint_limit_constants(mb: Multibody, limits: tuple[tuple[str, float, float], ...]) -> np.ndarray:
+    """c (6 len(limits),) of `joint_limit_margins` for (angle, lower rad, upper rad) ranges,
+    as returned by `gait_planner.model.posture.check_joint_limits`: per angle the
+    coefficients (a, b, d) of the lower and the upper margin a k sin + b k cos + d, i.e.
+    k sin(theta - lo) and k sin(hi - theta), or sin(roll) - sin lo and sin hi - sin(roll)."""
+    parts = _angle_parts(mb.scene)
+    out = []
+    for name, lo, hi in limits:
+        if parts[name][3] is None:
+            out += [1.0, 0.0, -math.sin(lo), -1.0, 0.0, math.sin(hi)]
+        else:
+            out += [math.cos(lo), -math.sin(lo), 0.0, -math.cos(hi), math.sin(hi), 0.0]
+    return np.array(out)
 
 
 def _relative_rotation(mb: Multibody, q, joint):
@@ -91,30 +107,37 @@ def _relative_rotation(mb: Multibody, q, joint):
     return ca.mtimes(D[0].T, D[1])
 
 
-def joint_speed_margins(mb: Multibody, speed_max: float, base_time_step: float) -> ca.Function:
-    """CasADi Function (q_n, q_{n+1}, h_n) -> one margin (>= 0) per joint of interval n.
+def joint_speed_margins(mb: Multibody) -> ca.Function:
+    """CasADi Function (q_n, q_{n+1}, h_n, c) -> one margin (>= 0) per joint of interval n,
+    c = (base time step s, speed_max rad/s): settings enter as an input, so one compiled
+    function serves every limit.
 
     The rotation R_rel(q_n)^T R_rel(q_{n+1}) of the child relative to its parent, by an angle
     theta, has |R_rel(q_{n+1}) - R_rel(q_n)|_F^2 = 8 sin^2(theta/2), so
-    8 sin^2(w h_n / 2) - |dR_rel|_F^2 >= 0 bounds theta by w h_n (w = speed_max, deg/s,
-    converted): a mean relative angular speed, whatever the joint's axes. Rows are divided
-    by (w base_time_step)^2 to be O(1)."""
+    8 sin^2(w h_n / 2) - |dR_rel|_F^2 >= 0 bounds theta by w h_n (w = speed_max): a mean
+    relative angular speed, whatever the joint's axes. Rows are divided by
+    (w base_time_step)^2 to be O(1)."""
     q0, q1, h = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h")
-    w = math.radians(speed_max)
+    c = ca.SX.sym("c", 2)
+    w = c[1]
     bound = 8 * ca.sin(0.5 * w * h) ** 2
     rows = [(bound - ca.sumsqr(_relative_rotation(mb, q1, j) - _relative_rotation(mb, q0, j)))
-            / (w * base_time_step) ** 2 for j in mb.scene.joints]
-    return ca.Function("joint_speed_margins", [q0, q1, h], [ca.vertcat(*rows)],
-                       ["q", "q_next", "h"], ["margin"])
+            / (w * c[0]) ** 2 for j in mb.scene.joints]
+    return ca.Function("joint_speed", [q0, q1, h, c], [ca.vertcat(*rows)],
+                       ["q", "q_next", "h", "c"], ["margin"])
 
 
 def twist_squares(mb: Multibody) -> ca.Function:
-    """CasADi Function q -> sum over joints of 1 - (d2_parent . d2_child)^2: the squared sine
-    of the angle between each joint's two lateral axes, zero for any pure pitch (and for a
-    revolute joint about d2), sin^2 of roll or yaw alone otherwise (the twist regulariser)."""
-    q = ca.SX.sym("q", mb.k)
+    """CasADi Function (q_n, q_{n+1}, h_n, c) -> c[1] h_n sum over joints of
+    1 - (d2_parent . d2_child)^2 at q_n (J s for the weight c[1] in J; c[0] the base time
+    step, unused): the squared sine of the angle between each joint's two lateral axes,
+    zero for any pure pitch (and for a revolute joint about d2), sin^2 of roll or yaw alone
+    otherwise (the twist regulariser's term of interval n)."""
+    q, q_next, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
+        ca.SX.sym("c", 2)
     total = 0
     for j in mb.scene.joints:
-        p, c = (mb.block(b).start + 6 for b in (j.parent, j.child))
-        total += 1 - ca.dot(q[p : p + 3], q[c : c + 3]) ** 2
-    return ca.Function("twist_squares", [q], [total], ["q"], ["twist"])
+        p, ch = (mb.block(b).start + 6 for b in (j.parent, j.child))
+        total += 1 - ca.dot(q[p : p + 3], q[ch : ch + 3]) ** 2
+    return ca.Function("twist", [q, q_next, h, c], [c[1] * h * total],
+                       ["q", "q_next", "h", "c"], ["twist"])

@@ -18,7 +18,7 @@ import numpy as np
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
-from gait_planner.ocp.compile import CompileError, compile_functions
+from gait_planner.ocp.compile import CompileError, compile_sources
 from gait_planner.ocp.derivatives import nlp_derivatives
 from gait_planner.ocp.guess import initial_multipliers, kinematic_guess
 from gait_planner.ocp.settings import GaitSettings
@@ -145,7 +145,7 @@ class Planner:
             derivatives, used = None, "CasADi, whole SX graph"
             if s.compiled:
                 try:
-                    derivatives = nlp_derivatives(tr, compile_functions)
+                    derivatives = nlp_derivatives(tr, compile_sources)
                     used = "per-node elements compiled to C"
                 except CompileError as err:
                     used += f" (not compiled: {err})"

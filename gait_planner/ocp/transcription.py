@@ -37,15 +37,18 @@ and the friction coefficient.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import casadi as ca
+
 import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.ocp.contacts import BodyContact, body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import configuration_mirror, torque_mirror
-from gait_planner.ocp.posture import joint_limit_margins, joint_speed_margins, twist_squares
+from gait_planner.ocp.posture import (joint_limit_constants, joint_limit_margins,
+                                      joint_speed_margins, twist_squares)
 from gait_planner.ocp.settings import GaitSettings
 
 TORQUE_SCALE = 100.0  # N m
@@ -70,7 +73,7 @@ class ElementGroup:
     z_index: np.ndarray  # (nz, n) int
     p_index: np.ndarray  # (np, n) int
     rows: np.ndarray | None  # (nr, n) int; None: a term of the cost
-    constants: np.ndarray  # (nc,) c: the base time step (s)
+    constants: np.ndarray  # (nc,) c: the base time step (s), then settings values
 
 
 class Transcription:
@@ -298,51 +301,51 @@ class Transcription:
             self._ineq.append(("torso_lean", ca.vec(inner[root + 11, :] - lean)))
         if s.torso_height_min > 0:
             self._ineq.append(("torso_height", ca.vec(inner[root + 2, :] - s.torso_height_min)))
-        if s.joint_limits:
-            margins = joint_limit_margins(mb, s.joint_limits).map(N - 1)(inner)
-            self._ineq.append(("joint_limits", ca.vec(margins)))
         phase_index = {p.name: k for k, p in enumerate(mb.scene.gait.phases)}
-        for phase, limits in s.phase_joint_limits:
-            nodes = [n for n in range(1, N) if self.phase_of_interval[n] == phase_index[phase]]
-            if nodes:
-                margins = joint_limit_margins(mb, limits).map(len(nodes))(self.Q[:, nodes])
-                self._ineq.append((f"joint_limits[{phase}]", ca.vec(margins)))
+        ranges = [("joint_limits", "joint_limits", list(range(1, N)), s.joint_limits)] + [
+            (f"joint_limits[{phase}]", f"joint_limits_phase{phase_index[phase]}",
+             [n for n in range(1, N) if self.phase_of_interval[n] == phase_index[phase]],
+             limits) for phase, limits in s.phase_joint_limits]
+        for name, function_name, nodes, limits in ranges:
+            if nodes and limits:
+                first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
+                margins = self._node_terms(
+                    joint_limit_margins(mb, tuple(a for a, _, _ in limits), function_name),
+                    joint_limit_constants(mb, limits), first_row, nodes)
+                self._ineq.append((name, ca.vec(margins)))
+                self._without_elements[name] = ca.MX(margins.numel(), 1)
         if s.joint_speed_max > 0 and mb.scene.joints:
-            speed = joint_speed_margins(mb, s.joint_speed_max, s.base_time_step).map(N - 1)(
-                self.Q[:, 0 : N - 1], self.Q[:, 1:N], self.h[0 : N - 1].T)
+            first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
+            speed = self._interval_terms(joint_speed_margins(mb), math.radians(s.joint_speed_max),
+                                         first_row)
             self._ineq.append(("joint_speed", ca.vec(speed)))
+            self._without_elements["joint_speed"] = ca.MX(speed.numel(), 1)
 
     def _cost(self):
         """J over the half cycle t_0..t_{N-1} (intervals 0..N-2), plus the torque
         regulariser; returns the MX cost and stores the named parts. The kinetic energy is
         also declared as elements (`_kinetic_element`), for `ocp.derivatives`."""
         N, s = self.N, self.settings
-        M = ca.DM(self.mb.mass_diagonal)
-        dq = self.Q[:, 1:N] - self.Q[:, 0 : N - 1]
         h = self.h[0 : N - 1].T
-        kinetic = ca.sum2(0.5 * ca.sum1(dq * (M * dq)) / h)
         squares = ca.sum1(self.TAU[:, 0:N] ** 2)  # nodes 0..N-1
         torque = ca.sum2(0.5 * (squares[0 : N - 1] + squares[1:N]) * h)  # trapezoidal
+        kinetic = ca.sum2(self._interval_terms(self._kinetic_energy(), 0.0, None
+                                               if s.cost == "kinetic_energy" else False))
         self.cost_parts = {"kinetic_energy": kinetic, "torque_squared": torque}
         # The along-line shares of full contacts (`ocp.contacts`) move no equation: without
         # curvature of their own IPOPT's steps in them were unbounded (constraint violation
         # 1e5 and more, walker3d's inertia-free attempt failed). The regulariser's weight,
         # times sum h_n s^2, picks the smallest shares that keep every point in its cone.
         shares = s.torque_regularisation * self._share_squares()
+        twist = 0.0
         if s.twist_regularisation > 0:
-            twist = twist_squares(self.mb).map(N - 1)(self.Q[:, 0 : N - 1])
-            shares = shares + s.twist_regularisation * ca.sum2(twist * self.h[0 : N - 1].T)
+            twist = ca.sum2(self._interval_terms(twist_squares(self.mb), s.twist_regularisation,
+                                                 None))
         if s.cost == "torque_squared":
             self.cost_without_elements = torque + shares
-            return self.cost_without_elements
-        for next_mirrored, intervals in ((False, range(N - 2)), (True, [N - 2])):
-            self.elements.append(ElementGroup(
-                self._kinetic_element(next_mirrored),
-                np.stack([self._kinetic_z_index(n) for n in intervals], 1),
-                np.stack([self._kinetic_p_index(n) for n in intervals], 1),
-                None, np.array([s.base_time_step])))
+            return self.cost_without_elements + twist
         self.cost_without_elements = s.torque_regularisation * torque + shares
-        return kinetic + self.cost_without_elements
+        return kinetic + self.cost_without_elements + twist
 
     def _share_squares(self):
         """sum over nodes of w_n s^2 (N^2 s) of the full contacts' along-line shares s."""
@@ -356,26 +359,78 @@ class Transcription:
                     terms.append(w * lam[offset - 1] ** 2)
         return ca.sum1(ca.vertcat(*terms)) if terms else 0.0
 
-    def _kinetic_element(self, next_mirrored: bool) -> ca.Function:
-        """h_n times the discrete kinetic energy of interval n,
-        0.5 (q_{n+1} - q_n)^T M (q_{n+1} - q_n) / h_n (J s), as an SX Function of
-        z = (u_n, u_{n+1}, sigma_n), pz = (qref_n, qref_{n+1}, step length) and
-        c = (base time step)."""
+    def _kinetic_energy(self) -> ca.Function:
+        """(q_n, q_{n+1}, h_n, c) -> h_n times the discrete kinetic energy of interval n,
+        0.5 (q_{n+1} - q_n)^T M (q_{n+1} - q_n) / h_n (J s); c unused."""
+        q0, q1 = ca.SX.sym("q", self.mb.k), ca.SX.sym("q_next", self.mb.k)
+        h, c = ca.SX.sym("h"), ca.SX.sym("c", 2)
+        dq = q1 - q0
+        kinetic = 0.5 * ca.dot(dq, ca.DM(self.mb.mass_diagonal) * dq) / h
+        return ca.Function("kinetic", [q0, q1, h, c], [kinetic], ["q", "q_next", "h", "c"], ["J"])
+
+    def _interval_terms(self, fn: ca.Function, constant: float, first_row):
+        """fn(q_n, q_{n+1}, h_n, c) (r,) of intervals 0..N-2 as an MX (r, N-1), with
+        c = (base time step, constant). Declared as elements of the NLP (`ElementGroup`,
+        `_interval_element`): rows first_row + r n + (0..r-1) of g, or with first_row None
+        terms of the cost; first_row False declares nothing (a term not in the NLP)."""
+        N = self.N
+        c = np.array([self.settings.base_time_step, constant])
+        if first_row is not False:
+            size = int(fn.size1_out(0))
+            for next_mirrored, intervals in ((False, range(N - 2)), (True, [N - 2])):
+                rows = None if first_row is None else np.stack(
+                    [first_row + size * n + np.arange(size) for n in intervals], 1)
+                self.elements.append(ElementGroup(
+                    self._interval_element(fn, next_mirrored),
+                    np.stack([self._interval_z_index(n) for n in intervals], 1),
+                    np.stack([self._interval_p_index(n) for n in intervals], 1), rows, c))
+        return fn.map(N - 1)(self.Q[:, 0 : N - 1], self.Q[:, 1:N], self.h[0 : N - 1].T,
+                             ca.repmat(ca.DM(c), 1, N - 1))
+
+    def _node_terms(self, fn: ca.Function, c: np.ndarray, first_row: int, nodes: list[int]):
+        """fn(q_n, c) (r,) at `nodes` (within 1..N-1) as an MX (r, len(nodes)), declared as
+        elements of the NLP: rows first_row + r j + (0..r-1) of g for the j-th node."""
+        size = int(fn.size1_out(0))
+        for mirrored in (False, True):
+            chosen = [(j, n) for j, n in enumerate(nodes) if (n == self.N - 1) == mirrored]
+            if chosen:
+                self.elements.append(ElementGroup(
+                    self._node_element(fn, mirrored),
+                    np.stack([self._u_index(n) for _, n in chosen], 1),
+                    np.stack([np.append(self._qref_index(n), self.Qref.numel())
+                              for _, n in chosen], 1),
+                    np.stack([first_row + size * j + np.arange(size) for j, _ in chosen], 1), c))
+        return fn.map(len(nodes))(self.Q[:, nodes], ca.repmat(ca.DM(c), 1, len(nodes)))
+
+    def _node_element(self, fn: ca.Function, mirrored: bool) -> ca.Function:
+        """fn of node n as an SX Function of z = u_n, pz = (qref_n, step length) and c (node
+        N-1, mirrored, is the image of node 0)."""
         mb, nd, k = self.mb, self.mb.ndof, self.mb.k
-        z, pz, c = ca.SX.sym("z", 2 * nd + 1), ca.SX.sym("pz", 2 * k + 1), ca.SX.sym("c", 1)
+        z, pz = ca.SX.sym("z", nd), ca.SX.sym("pz", k + 1)
+        c = ca.SX.sym("c", fn.sparsity_in(1))
+        q = mb.reparametrise(z, pz[0:k])
+        if mirrored:
+            q = ca.mtimes(ca.DM(self.A), q) + pz[k] * ca.DM(self.shift)
+        name = f"{fn.name()}_element" + ("_mirrored" if mirrored else "")
+        return ca.Function(name, [z, pz, c], [fn(q, c)], ["z", "pz", "c"], ["r"])
+
+    def _interval_element(self, fn: ca.Function, next_mirrored: bool) -> ca.Function:
+        """fn of interval n as an SX Function of z = (u_n, u_{n+1}, sigma_n),
+        pz = (qref_n, qref_{n+1}, step length) and c = (base time step, constant)."""
+        mb, nd, k = self.mb, self.mb.ndof, self.mb.k
+        z, pz, c = ca.SX.sym("z", 2 * nd + 1), ca.SX.sym("pz", 2 * k + 1), ca.SX.sym("c", 2)
         q0 = mb.reparametrise(z[0:nd], pz[0:k])
         q1 = mb.reparametrise(z[nd : 2 * nd], pz[k : 2 * k])
         if next_mirrored:
             q1 = ca.mtimes(ca.DM(self.A), q1) + pz[2 * k] * ca.DM(self.shift)
-        dq = q1 - q0
-        kinetic = 0.5 * ca.dot(dq, ca.DM(self.mb.mass_diagonal) * dq) / (c[0] * z[2 * nd])
-        name = "kinetic_element" + ("_next_mirrored" if next_mirrored else "")
-        return ca.Function(name, [z, pz, c], [kinetic], ["z", "pz", "c"], ["J"])
+        name = f"{fn.name()}_element" + ("_next_mirrored" if next_mirrored else "")
+        return ca.Function(name, [z, pz, c], [fn(q0, q1, c[0] * z[2 * nd], c)],
+                           ["z", "pz", "c"], ["r"])
 
-    def _kinetic_z_index(self, n: int) -> np.ndarray:
+    def _interval_z_index(self, n: int) -> np.ndarray:
         return np.concatenate([self._u_index(n), self._u_index(n + 1), [self._scaling_index(n)]])
 
-    def _kinetic_p_index(self, n: int) -> np.ndarray:
+    def _interval_p_index(self, n: int) -> np.ndarray:
         return np.concatenate([self._qref_index(n), self._qref_index(n + 1), [self.Qref.numel()]])
 
     def _phase_name(self, k: int) -> str:
@@ -394,8 +449,7 @@ class Transcription:
     @property
     def g_without_elements(self):
         """g with the element rows' element parts left out (g minus the `elements`)."""
-        return ca.vertcat(*[self._without_elements.get(n, e) for n, e in self._eq],
-                          *[e for _, e in self._ineq])
+        return ca.vertcat(*[self._without_elements.get(n, e) for n, e in self._eq + self._ineq])
 
     def constraint_groups(self):
         """[(name, size, is_equality)] in the order of g."""

@@ -41,11 +41,17 @@ def _dense(m) -> np.ndarray:
     return np.array(ca.densify(ca.DM(m)))
 
 
-@pytest.mark.parametrize("name, cost", [("compass", "kinetic_energy"),
-                                        ("walker2d", "kinetic_energy"),
-                                        ("walker2d", "torque_squared")])
-def test_element_derivatives_equal_casadi_whole_graph(name, cost):
-    tr, x, p, lam_g = _problem(name, cost=cost)
+# walker2d "human": phase joint limits (node elements of a phase's nodes) and the twist
+# regulariser (interval elements of the cost) besides joint limits and joint speeds
+HUMAN = {"posture": "human", "twist_regularisation": 0.5}
+
+
+@pytest.mark.parametrize("name, overrides", [("compass", {"cost": "kinetic_energy"}),
+                                             ("walker2d", {"cost": "kinetic_energy"}),
+                                             ("walker2d", {"cost": "torque_squared"}),
+                                             ("walker2d", HUMAN)])
+def test_element_derivatives_equal_casadi_whole_graph(name, overrides):
+    tr, x, p, lam_g = _problem(name, **overrides)
     mine = nlp_derivatives(tr)
     xs, ps = ca.SX.sym("x", tr.x.shape[0]), ca.SX.sym("p", tr.p.shape[0])
     f, g = ca.Function("fg", [tr.x, tr.p], [tr.cost, tr.g]).expand()(xs, ps)
@@ -62,8 +68,11 @@ def test_element_derivatives_equal_casadi_whole_graph(name, cost):
     assert my_hess.sparsity().is_triu()
 
 
-def test_elements_and_rest_sum_to_g_and_cost():
-    tr, x, p, _ = _problem("walker2d")
+@pytest.mark.parametrize("overrides", [{}, HUMAN])
+def test_elements_and_rest_sum_to_g_and_cost(overrides):
+    tr, x, p, _ = _problem("walker2d", **overrides)
+    assert {"joint_speed_element", "joint_limits_element_mirrored"} <= {
+        group.function.name() for group in tr.elements}
     g, g_rest, f, f_rest = (np.array(v).ravel() for v in ca.Function(
         "parts", [tr.x, tr.p], [tr.g, tr.g_without_elements, tr.cost, tr.cost_without_elements]
     )(x, p))

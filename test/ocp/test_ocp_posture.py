@@ -20,13 +20,19 @@ from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.posture import PostureError, check_joint_limits
 from gait_planner.model.scene import InitialPose, JointType
-from gait_planner.ocp.posture import joint_limit_margins
+from gait_planner.ocp.posture import joint_limit_constants, joint_limit_margins
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.transcription import Transcription
 
 _SCENE = load_scene("walker3d")
 _MB = Multibody(_SCENE)
 _NAMES = [n for j in _SCENE.joints for n in j.angle_names]
+
+
+def _margins(limits, q):
+    """The margins of `limits` ((angle, lo, hi) in rad) at configuration q."""
+    names = tuple(name for name, _, _ in limits)
+    return joint_limit_margins(_MB, names)(q, joint_limit_constants(_MB, limits))
 
 
 def _pose(values):
@@ -56,7 +62,7 @@ def test_margins_have_the_sign_and_size_of_the_distance_to_the_bounds(values, ra
     checked = check_joint_limits(_SCENE, limits)
     q = configuration(_SCENE, _pose(values))
     theta = dict(zip(_NAMES, joint_angles(_SCENE, q)))
-    margins = np.array(joint_limit_margins(_MB, checked)(q)).ravel()
+    margins = np.array(_margins(checked, q)).ravel()
     for i, (name, lo, hi) in enumerate(checked):
         t = theta[name]
         if _is_roll(name):
@@ -76,8 +82,8 @@ def test_upright_pose_is_inside_symmetric_ranges_and_outside_shifted_ones():
     q = configuration(_SCENE)
     inside = check_joint_limits(_SCENE, {n: (-10, 10) for n in _NAMES})
     outside = check_joint_limits(_SCENE, {n: (5, 10) for n in _NAMES})
-    assert np.all(np.array(joint_limit_margins(_MB, inside)(q)) > 0.1)
-    low = np.array(joint_limit_margins(_MB, outside)(q)).ravel()[0::2]
+    assert np.all(np.array(_margins(inside, q)) > 0.1)
+    low = np.array(_margins(outside, q)).ravel()[0::2]
     assert np.all(low < -0.08)
 
 
@@ -86,7 +92,7 @@ def test_revolute_axis_of_any_direction():
     q = configuration(_SCENE, _pose([0.0] * 3 + [0.7] + [0.0] * 10))
     assert joint_angles(_SCENE, q)[3] == pytest.approx(0.7)
     limits = check_joint_limits(_SCENE, {knee.angle_names[0]: (0, 40)})
-    below, above = np.array(joint_limit_margins(_MB, limits)(q)).ravel()
+    below, above = np.array(_margins(limits, q)).ravel()
     assert below == pytest.approx(math.sin(0.7)) and above == pytest.approx(
         math.sin(math.radians(40) - 0.7))
 
