@@ -3,9 +3,9 @@
 `write_plan_mcap(result, path)` writes
 
 * ``ros2msg`` schemas in rosbag2's concatenated form (`gait_planner.io.ros_definitions`),
-  ``cdr`` messages (encoded by mcap_ros2's dynamic encoder from the dicts of
-  `gait_planner.io.messages`), and on every channel the metadata ``offered_qos_profiles``
-  as rosbag2 (Jazzy and later) serialises it: a YAML sequence with one profile;
+  ``cdr`` messages (the dicts of `gait_planner.io.messages`, encoded as `CdrEncoder`
+  says), and on every channel the metadata ``offered_qos_profiles`` as rosbag2 (Jazzy and
+  later) serialises it: a YAML sequence with one profile;
 * the topics of `TOPICS`: /robot_description, /tf_static (transient_local, reliable, depth
   1, as robot_state_publisher offers them), /gait_planner/joint_trajectory (one message),
   and per time node /gait_planner/state, /gait_planner/contact_forces, /tf and
@@ -16,11 +16,13 @@
 
 The file appears atomically: it is written to a hidden temporary file in the target folder
 and renamed over `path` (replacing an existing file) only when complete; on any error the
-temporary file is removed and an existing file at `path` is left as it was.
+temporary file is removed and an existing file at `path` is left as it was. A process
+killed while writing leaves only the temporary file, which
+`gait_planner.io.atomic.remove_stale_temporaries` removes later.
 
-CDR encoding uses ``mcap_ros2._dynamic.serialize_dynamic`` (mcap-ros2-support 0.6): its
-public Writer cannot attach channel metadata, which the ROS 2 profile requires. Chunks are
-zstd-compressed (the ``zstandard`` package, a dependency of mcap).
+Schemas, channels (with their metadata, which mcap_ros2's Writer cannot attach) and records
+are written with mcap's `Writer`; chunks are zstd-compressed (the ``zstandard`` package, a
+dependency of mcap).
 """
 
 from __future__ import annotations
@@ -28,12 +30,16 @@ from __future__ import annotations
 import os
 import time
 from dataclasses import dataclass
+from functools import lru_cache
 from importlib import metadata as importlib_metadata
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
+import numpy as np
 from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import CompressionType, Writer
+from rosbags.interfaces import Nodetype
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from gait_planner.io import messages
 from gait_planner.io.atomic import atomic_target
@@ -41,8 +47,8 @@ from gait_planner.io.ros_definitions import STANDARD_DEFINITIONS, custom_definit
 from gait_planner.io.urdf import kinematic_tree
 from gait_planner.result import PlanResult
 
-__all__ = ["METADATA_NAME", "TOPICS", "QosProfile", "plan_metadata", "qos_yaml",
-           "write_plan_mcap"]
+__all__ = ["METADATA_NAME", "TOPICS", "CdrEncoder", "QosProfile", "encoder_for", "plan_metadata",
+           "qos_yaml", "write_plan_mcap"]
 
 METADATA_NAME = "gait_planner.plan"
 DEFAULT_PERIODICITY = (
@@ -140,7 +146,61 @@ def _library() -> str:
         version = importlib_metadata.version("gait_planner")
     except importlib_metadata.PackageNotFoundError:
         version = "unknown"
-    return f"gait_planner {version}; mcap {importlib_metadata.version('mcap')}"
+    return (f"gait_planner {version}; mcap {importlib_metadata.version('mcap')}; "
+            f"rosbags {importlib_metadata.version('rosbags')}")
+
+
+class CdrEncoder:
+    """CDR encoder of message dicts (the layouts of `gait_planner.io.messages`).
+
+    A rosbags type store (`Typestore.serialize_cdr`, public API) holding exactly the types
+    parsed from `schemas` (ROS type "pkg/msg/Type" -> schema text), the texts the recording
+    stores: the bytes follow the schema a reader gets. Padding is zeroed, so a plan's
+    recording is the same bytes every time. (rclpy's `serialize_message` was not used:
+    tf2_msgs has no PyPI wheel, Fast CDR leaves padding bytes uninitialised (heap bytes in
+    the file), and filling rclpy messages from the dicts took three times as long as this.)
+    Building one costs about 0.1 s (parsing, code generation), so `encoder_for` builds it
+    once per set of schemas; afterwards it is only read, so threads may share it.
+    """
+
+    _NUMPY = {"byte": "uint8", "char": "uint8"}  # ROS 2 primitives not named as numpy's
+
+    def __init__(self, schemas: Mapping[str, str]) -> None:
+        self._store = get_typestore(Stores.EMPTY)
+        for ros_type, text in schemas.items():
+            self._store.register(get_types_from_msg(text, ros_type))
+        for ros_type in self._store.fielddefs:
+            self._store.get_msgdef(ros_type)  # generates the (de)serialisers now
+
+    def encode(self, ros_type: str, data: Mapping[str, Any]) -> bytes:
+        """The CDR bytes (little endian, with the encapsulation header) of `data`."""
+        return bytes(self._store.serialize_cdr(self._message(ros_type, data), ros_type))
+
+    def _message(self, ros_type: str, data: Mapping[str, Any]) -> object:
+        fields = self._store.fielddefs[ros_type][1]
+        names = [name for name, _ in fields]
+        if set(data) != set(names):
+            raise ValueError(f"{ros_type} has the fields {names}; the message dict has "
+                             f"{sorted(data)}")
+        values = {}
+        for name, (kind, desc) in fields:
+            value = data[name]
+            if kind == Nodetype.NAME:
+                value = self._message(desc, value)
+            elif kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
+                (element_kind, element), _ = desc
+                if element_kind == Nodetype.NAME:
+                    value = [self._message(element, item) for item in value]
+                elif element[0] != "string":
+                    value = np.asarray(value, dtype=self._NUMPY.get(element[0], element[0]))
+            values[name] = value
+        return self._store.types[ros_type](**values)
+
+
+@lru_cache(maxsize=4)
+def encoder_for(schemas: tuple[tuple[str, str], ...]) -> CdrEncoder:
+    """The `CdrEncoder` of these (ROS type, schema text) pairs, built on first use."""
+    return CdrEncoder(dict(schemas))
 
 
 def _check_path(path: Path, allowed_dirs: Sequence[str | os.PathLike] | None) -> Path:
@@ -183,29 +243,27 @@ def _records(result: PlanResult, start_ns: int) -> Iterable[tuple[int, int, str,
 
 
 def _write(result: PlanResult, stream, start_ns: int) -> None:
-    from mcap_ros2._dynamic import serialize_dynamic  # mcap_ros2's CDR encoder of dicts
-
     definitions = {**STANDARD_DEFINITIONS, **custom_definitions()}
     records = sorted(_records(result, start_ns), key=lambda r: (r[0], r[1]))
     writer = Writer(stream, compression=CompressionType.ZSTD)
     writer.start(profile="ros2", library=_library())
-    schemas: dict[str, tuple[int, Any]] = {}  # ROS type -> (schema id, CDR encoder)
-    channels: dict[str, tuple[int, Any]] = {}  # topic -> (channel id, CDR encoder)
+    texts = {ros_type: schema_text(ros_type, definitions) for ros_type, _ in TOPICS.values()}
+    encoder = encoder_for(tuple(texts.items()))
+    schemas: dict[str, int] = {}  # ROS type -> schema id
+    channels: dict[str, int] = {}  # topic -> channel id
     for topic, (ros_type, qos) in TOPICS.items():
         if ros_type not in schemas:
-            text = schema_text(ros_type, definitions)
-            schema = writer.register_schema(ros_type, SchemaEncoding.ROS2, text.encode("utf-8"))
-            schemas[ros_type] = (schema, serialize_dynamic(ros_type, text)[ros_type])
-        schema, encoder = schemas[ros_type]
-        channel = writer.register_channel(topic, MessageEncoding.CDR, schema,
-                                          metadata={"offered_qos_profiles": qos_yaml(qos)})
-        channels[topic] = (channel, encoder)
+            schemas[ros_type] = writer.register_schema(ros_type, SchemaEncoding.ROS2,
+                                                       texts[ros_type].encode("utf-8"))
+        channels[topic] = writer.register_channel(
+            topic, MessageEncoding.CDR, schemas[ros_type],
+            metadata={"offered_qos_profiles": qos_yaml(qos)})
     sequence = dict.fromkeys(TOPICS, 0)
     for log_time, _, topic, message in records:
-        channel, encoder = channels[topic]
         sequence[topic] += 1
-        writer.add_message(channel, log_time=log_time, publish_time=log_time,
-                           sequence=sequence[topic], data=encoder(message))
+        writer.add_message(channels[topic], log_time=log_time, publish_time=log_time,
+                           sequence=sequence[topic],
+                           data=encoder.encode(TOPICS[topic][0], message))
     writer.add_metadata(METADATA_NAME, plan_metadata(result))
     writer.add_attachment(create_time=start_ns, log_time=start_ns,
                           name=f"{result.scene.name}.yaml", media_type="application/yaml",

@@ -1,10 +1,11 @@
 """A `PlanResult` as ROS message layouts: plain nested dicts and lists, no ROS import.
 
 The one place that converts a plan into messages. The MCAP writer serialises these dicts
-(mcap_ros2 encodes dicts), and the ROS node copies them into rclpy messages with
-`fill_message`. Field names are exactly those of the .msg/.srv definitions (DESIGN.md
-section 7); builtin_interfaces/Time and Duration are ``{"sec": int, "nanosec": int}``;
-arrays are lists of Python floats/ints/strs.
+(`gait_planner.io.mcap_writer.CdrEncoder`, which refuses a dict whose keys differ from the
+type's fields), and the ROS node copies them into rclpy messages with `fill_message`.
+Field names are exactly those of the .msg/.srv definitions (DESIGN.md section 7);
+builtin_interfaces/Time and Duration are ``{"sec": int, "nanosec": int}``; arrays are
+lists of Python floats/ints/strs.
 
 Conventions:
 

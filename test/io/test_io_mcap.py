@@ -16,6 +16,7 @@ from mcap.reader import make_reader
 from gait_planner.io import mcap_writer, messages
 from gait_planner.io.mcap_reader import read_plan_mcap
 from gait_planner.io.mcap_writer import TOPICS, write_plan_mcap
+from gait_planner.io.ros_definitions import schema_text
 from gait_planner.model.angles import angle_names
 
 RERUN = Path(sys.executable).with_name("rerun")
@@ -226,3 +227,19 @@ def test_planar_scenes_round_trip(scene_name, make_result, tmp_path):
     assert recorded.joint_names == result.joint_angle_names
     assert recorded.scene_text == result.scene.source
     assert recorded.metadata["scene"] == scene_name
+
+
+def test_same_plan_same_bytes(result, tmp_path):
+    """Encoding zeroes CDR padding: recording a plan twice gives the same file."""
+    first = write_plan_mcap(result, tmp_path / "a.mcap", 5 * 10**9)
+    again = write_plan_mcap(result, tmp_path / "b.mcap", 5 * 10**9)
+    assert first.read_bytes() == again.read_bytes()
+
+
+def test_encoder_takes_exactly_the_fields_of_the_type():
+    string = "std_msgs/msg/String"
+    encoder = mcap_writer.encoder_for(((string, schema_text(string)),))
+    assert encoder.encode(string, {"data": "ab"}) == b"\x00\x01\x00\x00\x03\x00\x00\x00ab\x00"
+    for wrong in ({}, {"data": "ab", "extra": 1}):
+        with pytest.raises(ValueError, match=r"has the fields \['data'\]"):
+            encoder.encode(string, wrong)
