@@ -12,6 +12,7 @@ import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -73,8 +74,11 @@ def output_stem(request: PlanRequest, scene_name: str) -> str:
 
 
 def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Path, *,
-                    rrd: bool = True) -> Outcome:
-    """Plan `request`; on success write <output_dir>/<stem>.mcap (and .rrd)."""
+                    rrd: bool = True, stage: Callable[[str], None] | None = None) -> Outcome:
+    """Plan `request`; on success write <output_dir>/<stem>.mcap (and .rrd).
+
+    stage: called with "recording" once the plan is found, before anything is written (an
+    exception it raises ends the request with nothing recorded)."""
     for name in ("step_length", "friction_coefficient", "max_solve_time"):
         _finite(name, getattr(request, name))
     if not 1 <= request.steps <= MAX_STEPS:
@@ -101,6 +105,8 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
     result = planner.plan(scene, settings, warm_start=not request.cold_start)
     if not result.success:
         return Outcome(result, None, None)
+    if stage is not None:
+        stage("recording")
     result = walk_on(result, request.steps)
     result.settings.update(certificate_metadata(continuous_certificate(result)))
     from gait_planner.io.mcap_writer import write_plan_mcap

@@ -121,7 +121,7 @@ if ! is_current msg_defs "$msg_hash" || [[ ! -f "$venv/share/gait_planner_msgs/p
       | xargs -r -d '\n' rm -f
     rm -f "$old_manifest"
   fi
-  "$py" -c 'from gait_planner_msgs.srv import PlanGait; from gait_planner_msgs.msg import ContactForces, MultibodyState' \
+  "$py" -c 'from gait_planner_msgs.srv import PlanGait; from gait_planner_msgs.action import PlanGait as PlanGaitAction; from gait_planner_msgs.msg import ContactForces, MultibodyState' \
     || die "gait_planner_msgs was built but does not import; see $log"
   mark msg_defs "$msg_hash"
 fi

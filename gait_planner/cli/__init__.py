@@ -204,26 +204,60 @@ def _report(args: argparse.Namespace) -> int:
 
 def _add_node(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
-        "node", help="run the ROS 2 node (service /gait_planner/plan_gait)",
-        description="Run the gait_planner node until interrupted. ROS arguments "
-        "(--ros-args -p output_dir:=runs ...) follow.")
+        "node", help="run the ROS 2 node (service and action /gait_planner/plan_gait)",
+        description="Run the gait_planner node until SIGINT or SIGTERM. ROS arguments "
+        "(--ros-args -p output_dir:=runs ...) follow; values given there override the "
+        "parameters file.")
+    parser.add_argument("--params-file", metavar="YAML",
+                        help="node parameters in the ROS 2 format, e.g. "
+                        "config/gait_planner.yaml")
     parser.add_argument("ros_args", nargs=argparse.REMAINDER, help="arguments for rclpy")
     parser.set_defaults(handler=_node)
 
 
+def _node_arguments(argv: list[str]) -> tuple[str | None, list[str]]:
+    """Split what follows ``node`` into the parameters file (``--params-file F`` or
+    ``--params-file=F`` before any ROS argument) and the ROS arguments, kept in order."""
+    params_file, rest = None, list(argv)
+    if rest and rest[0].startswith("--params-file="):
+        params_file, rest = rest[0].partition("=")[2], rest[1:]
+    elif rest[:1] == ["--params-file"]:
+        if len(rest) < 2:
+            raise CliError("--params-file needs a file name")
+        params_file, rest = rest[1], rest[2:]
+    return params_file, rest
+
+
 def _node(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    params_file, ros_args = _node_arguments(args.ros_args)
+    if params_file is not None:
+        if not Path(params_file).is_file():
+            raise CliError(f"--params-file {params_file!r} is not a file")
+        # a ROS argument section of its own ("--" ends it); -p values override the file
+        ros_args = ["--ros-args", "--params-file", params_file, "--", *ros_args]
+    from rclpy.exceptions import ParameterException
+
     from gait_planner.ros.node import main as node_main
 
-    return node_main(args=[sys.argv[0], *args.ros_args])
+    try:
+        return node_main(args=[sys.argv[0], *ros_args])
+    except ParameterException as error:
+        raise CliError(f"a node parameter was refused: {error}") from None
 
 
 def _add_call(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "call", help="ask a running node for a plan (ros2cli is not on PyPI)",
-        description="Call /gait_planner/plan_gait and print the response.")
+        description="Call /gait_planner/plan_gait and print the response. With --action, "
+        "send it as a goal of the action: feedback lines (phase, iteration, cost, constraint "
+        "violation) go to stderr as they arrive, Ctrl-C cancels the goal.")
     _add_plan_options(parser, "")
     parser.add_argument("--output-name", default="", help="recording file stem")
     parser.add_argument("--cold", action="store_true", help="do not warm start")
+    parser.add_argument("--action", action="store_true",
+                        help="use the action: print feedback, Ctrl-C cancels")
     parser.add_argument("--timeout", type=float, default=900.0, help="s to wait for an answer")
     parser.set_defaults(handler=_call)
 
@@ -231,9 +265,10 @@ def _add_call(commands: argparse._SubParsersAction) -> None:
 def _call(args: argparse.Namespace) -> int:
     import json
 
-    from gait_planner.ros.client import call_plan_gait
+    from gait_planner.ros.client import call_plan_gait, call_plan_gait_action
 
-    response = call_plan_gait(args, timeout=args.timeout)
+    response = (call_plan_gait_action if args.action else call_plan_gait)(
+        args, timeout=args.timeout)
     print(json.dumps(response, indent=2) if args.json else
           "\n".join(f"{k}: {v}" for k, v in response.items()))
     return 0 if response.get("success") else 1

@@ -27,6 +27,9 @@ from gait_planner.ocp.transcription import Transcription
 from gait_planner.result import PlanResult
 
 Progress = Callable[[int, float, float, float], None]  # iteration, cost, violation, seconds
+Stage = Callable[[str], None]  # the phase a plan enters ("building", "cold stage 1", ...)
+Stop = Callable[[], bool]  # polled every iteration: True stops the plan (nothing is kept)
+STOPPED = "stopped on request"  # the message of a plan ended by `Planner.stop`
 
 # Inertia-free curvature test (Chiang & Zavala 2016; IPOPT recommends 1e-12 to 1e-11): a
 # step is accepted when it has positive curvature, instead of regularising the Hessian
@@ -56,7 +59,8 @@ WARM_ATTEMPTS = ([("warm", False, False)],)
 
 
 class _IterationCallback(ca.Callback):
-    """Called by IPOPT every iteration: reports progress, stops at the deadline."""
+    """Called by IPOPT every iteration: reports progress, stops at the deadline or when
+    `stop` says so (IPOPT then ends with User_Requested_Stop after this iteration)."""
 
     def __init__(self, nx: int, ng: int, lbg: np.ndarray, ubg: np.ndarray):
         ca.Callback.__init__(self)
@@ -65,6 +69,7 @@ class _IterationCallback(ca.Callback):
         self.started = time.perf_counter()
         self.iteration = 0
         self.report: Progress | None = None
+        self.stop: Stop | None = None
         self.construct("iteration_callback", {})
 
     def get_n_in(self):
@@ -96,7 +101,8 @@ class _IterationCallback(ca.Callback):
             cost = float(arg[ca.nlpsol_out().index("f")])
             self.report(self.iteration, cost, viol, time.perf_counter() - self.started)
         self.iteration += 1
-        return [1 if time.perf_counter() > self.deadline else 0]
+        stopped = self.stop is not None and self.stop()
+        return [1 if stopped or time.perf_counter() > self.deadline else 0]
 
 
 @dataclasses.dataclass
@@ -118,10 +124,16 @@ def _key(scene: Scene, s: GaitSettings):
 
 
 class Planner:
-    """Plans gaits; keeps built problems and previous plans for warm starts."""
+    """Plans gaits; keeps built problems and previous plans for warm starts.
 
-    def __init__(self, *, progress: Progress | None = None):
-        self.progress = progress
+    progress: called every IPOPT iteration; stage: called when a plan enters a phase;
+    stop: polled every iteration and between phases: once it returns True the plan ends
+    within one iteration as a failed result with the message `STOPPED` (a problem being
+    built is finished first and kept for later plans)."""
+
+    def __init__(self, *, progress: Progress | None = None, stage: Stage | None = None,
+                 stop: Stop | None = None):
+        self.progress, self.stage, self.stop = progress, stage or (lambda name: None), stop
         self._built: dict = {}
 
     def prepare(self, scene: Scene, settings: GaitSettings) -> str:
@@ -208,6 +220,8 @@ class Planner:
         The time limit (settings.max_solve_time) covers the guess and the solve; building a
         problem the planner has not seen before comes on top (stats.build_time).
         """
+        stopped = self.stop or (lambda: False)
+        self.stage("building")
         try:
             built = self._build(scene, settings)
             warm_start = warm_start and bool(built.stored)
@@ -216,6 +230,8 @@ class Planner:
                 self._solver(built, settings, variant)
         except (ValueError, RuntimeError) as err:
             return failed_result(scene, settings, f"could not build the problem: {err}")
+        if stopped():
+            return failed_result(scene, settings, STOPPED)
         start = time.perf_counter()
         tr, step, mu = built.tr, settings.step_length, settings.friction_coefficient
         nsig = int(tr.S.shape[0])
@@ -225,6 +241,7 @@ class Planner:
             duals_start = {"lam_x0": lam_x, "lam_g0": lam_g}
             origin = f"warm start from the plan for step length {step0:.4f} m, mu {mu0:.3g}"
         else:
+            self.stage("initial guess")
             qref = kinematic_guess(tr, step)[: tr.N - 1]
             x_start = np.concatenate([
                 np.zeros(tr.U.numel() + tr.T.numel()), initial_multipliers(tr),
@@ -242,11 +259,13 @@ class Planner:
         lbx, ubx, lbg, ubg = built.bounds
         built.callback.deadline = start + settings.max_solve_time
         built.callback.started, built.callback.iteration = start, 0
-        built.callback.report = self.progress
+        built.callback.report, built.callback.stop = self.progress, stopped
         iterations, status, g, evaluation = 0, "not started", None, 0.0
         for number, attempt in enumerate(attempts):
             x0, duals, success = x_start, duals_start, False
-            for variant, fix_sigma, relaxed in attempt:
+            for k, (variant, fix_sigma, relaxed) in enumerate(attempt):
+                self.stage("warm" if variant == "warm" else
+                           f"cold stage {k + 1}" + (" (inertia test)" if number else ""))
                 solver = self._solver(built, settings, variant)
                 lb, ub = lbx.copy(), ubx.copy()
                 if fix_sigma:
@@ -263,11 +282,13 @@ class Planner:
                 success = bool(stats.get("success", False))
                 if not success:
                     break
-            if success or time.perf_counter() > built.callback.deadline \
+            if success or stopped() or time.perf_counter() > built.callback.deadline \
                     or number + 1 == len(attempts):
                 break
             origin += (f"; the inertia-free attempt stopped ({STATUS_WORDS.get(status, status)})"
                        f" after {iterations} iterations, restarted with IPOPT's inertia test")
+        if stopped():
+            return failed_result(scene, settings, STOPPED)
         result = build_result(tr, x0, p, g, status=status, iterations=iterations,
                               solve_time=time.perf_counter() - start,
                               build_time=built.build_time, evaluation_time=evaluation,

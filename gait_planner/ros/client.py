@@ -1,18 +1,33 @@
-"""A minimal service client (ros2cli is not on PyPI): ``gait-planner call``."""
+"""A minimal client of the node (ros2cli is not on PyPI): ``gait-planner call [--action]``."""
 
 from __future__ import annotations
 
 import argparse
+import math
+import sys
+import time
+from typing import Callable, TextIO
 
 import rclpy
+from action_msgs.msg import GoalStatus
+from rclpy.action import ActionClient
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
 
+from gait_planner.ros.action_server import ACTION
 from gait_planner.ros.node import SERVICE
+from gait_planner_msgs.action import PlanGait as PlanGaitAction
 from gait_planner_msgs.srv import PlanGait
 
+REJECTED = ("rejected: busy (the node plans one request at a time and is planning another "
+            "one; try again later)")
+CANCEL_WAIT = 10.0  # s to wait for the node to answer a cancel request
 
-def request_msg(args: argparse.Namespace) -> PlanGait.Request:
-    """PlanGait.Request from command-line options (unset = the node's/scene's defaults)."""
-    req = PlanGait.Request()
+
+def request_msg(args: argparse.Namespace, kind=PlanGait.Request):
+    """PlanGait.Request (or the action's Goal: `kind`) from command-line options (unset = the
+    node's/scene's defaults)."""
+    req = kind()
     req.scene = args.scene or ""
     req.step_length = float(args.step_length or 0.0)
     req.cost = args.cost or ""
@@ -24,6 +39,24 @@ def request_msg(args: argparse.Namespace) -> PlanGait.Request:
     req.steps = int(args.steps or 0)
     req.posture = args.posture or ""
     return req
+
+
+def answer_dict(res) -> dict:
+    """The scalar fields of a PlanGait response or action result as a dict."""
+    return {
+        "success": res.success, "message": res.message, "solver_status": res.solver_status,
+        "cost": res.cost, "step_length": res.step_length, "duration": res.duration,
+        "phase_scaling": list(res.phase_scaling), "solve_time": res.solve_time,
+        "iterations": res.iterations,
+        "max_constraint_violation": res.max_constraint_violation,
+        "max_dynamics_residual": res.max_dynamics_residual,
+        "max_friction_violation": res.max_friction_violation,
+        "trajectory_points": len(res.trajectory.points), "mcap_path": res.mcap_path,
+        "continuous_torque_error": res.continuous_torque_error,
+        "continuous_torque_error_at_switches": res.continuous_torque_error_at_switches,
+        "continuous_base_force": res.continuous_base_force,
+        "continuous_dynamics": res.continuous_dynamics,
+    }
 
 
 def call_plan_gait(args: argparse.Namespace, *, timeout: float) -> dict:
@@ -39,21 +72,68 @@ def call_plan_gait(args: argparse.Namespace, *, timeout: float) -> dict:
         rclpy.spin_until_future_complete(node, future, timeout_sec=timeout)
         if not future.done():
             raise RuntimeError(f"no answer from {SERVICE} within {timeout} s")
-        res = future.result()
-        return {
-            "success": res.success, "message": res.message, "solver_status": res.solver_status,
-            "cost": res.cost, "step_length": res.step_length, "duration": res.duration,
-            "phase_scaling": list(res.phase_scaling), "solve_time": res.solve_time,
-            "iterations": res.iterations,
-            "max_constraint_violation": res.max_constraint_violation,
-            "max_dynamics_residual": res.max_dynamics_residual,
-            "max_friction_violation": res.max_friction_violation,
-            "trajectory_points": len(res.trajectory.points), "mcap_path": res.mcap_path,
-            "continuous_torque_error": res.continuous_torque_error,
-            "continuous_torque_error_at_switches": res.continuous_torque_error_at_switches,
-            "continuous_base_force": res.continuous_base_force,
-            "continuous_dynamics": res.continuous_dynamics,
-        }
+        return answer_dict(future.result())
     finally:
         node.destroy_node()
         rclpy.shutdown()
+
+
+def feedback_line(feedback: PlanGaitAction.Feedback) -> str:
+    """One line per feedback message: elapsed s, phase, and (once the solver iterates)
+    iteration, cost and constraint violation."""
+    line = f"{feedback.elapsed:7.2f} s  {feedback.phase}"
+    if not math.isnan(feedback.cost):  # NaN: a phase change, no iteration yet
+        line += (f"  iteration {feedback.iteration}  cost {feedback.cost:.6g}  "
+                 f"violation {feedback.constraint_violation:.2e}")
+    return line
+
+
+def _spin_until(node: Node, done: Callable[[], bool], timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while not done():
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"no {what} from {ACTION} within {timeout:g} s")
+        rclpy.spin_once(node, timeout_sec=0.1)
+
+
+def call_plan_gait_action(args: argparse.Namespace, *, timeout: float,
+                          out: TextIO = sys.stderr) -> dict:
+    """Send one goal to the action, print each feedback to `out` as it arrives, and return
+    the result's scalar fields plus "status" (succeeded, aborted, canceled, rejected).
+    Ctrl-C (KeyboardInterrupt) cancels the goal and waits for its result (canceled); a
+    second Ctrl-C leaves at once."""
+    # Python's own SIGINT handler, so that Ctrl-C raises here and the cancel can still be sent
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    node = rclpy.create_node("gait_planner_action_client")
+    try:
+        client = ActionClient(node, PlanGaitAction, ACTION)
+        if not client.wait_for_server(timeout_sec=min(timeout, 10.0)):
+            raise RuntimeError(f"no action {ACTION}: is `gait-planner node` running "
+                               "(same ROS_DOMAIN_ID)?")
+        sent = client.send_goal_async(
+            request_msg(args, PlanGaitAction.Goal),
+            feedback_callback=lambda msg: print(feedback_line(msg.feedback), file=out,
+                                                flush=True))
+        _spin_until(node, sent.done, 10.0, "goal response")
+        goal = sent.result()
+        if not goal.accepted:
+            return {"status": "rejected", "success": False, "message": REJECTED}
+        result = goal.get_result_async()
+        try:
+            _spin_until(node, result.done, timeout, "result")
+        except KeyboardInterrupt:
+            print("canceling the goal ...", file=out, flush=True)
+            canceled = goal.cancel_goal_async()
+            _spin_until(node, canceled.done, CANCEL_WAIT, "cancel response")
+            print("cancel refused (the plan is being recorded); waiting for the result"
+                  if not canceled.result().goals_canceling else
+                  "cancel accepted; waiting for the node to stop (a problem being built is "
+                  "finished first; Ctrl-C again leaves at once)", file=out, flush=True)
+            _spin_until(node, result.done, timeout, "result after the cancel")
+        answer = result.result()
+        status = {GoalStatus.STATUS_SUCCEEDED: "succeeded", GoalStatus.STATUS_ABORTED: "aborted",
+                  GoalStatus.STATUS_CANCELED: "canceled"}.get(answer.status, str(answer.status))
+        return {"status": status, **answer_dict(answer.result)}
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()

@@ -1,32 +1,40 @@
-"""The ROS 2 node ``gait_planner``: service ``/gait_planner/plan_gait`` -> plan -> topics.
+"""The ROS 2 node ``gait_planner``: service and action ``/gait_planner/plan_gait`` -> plan
+-> topics.
 
 Thin adapter: a request is converted to a `PlanRequest`, planned and recorded by
 `gait_planner.pipeline`, and the plain result is converted to messages by
 `gait_planner.io.messages` (the one module that owns message layouts). Bad requests and
 failed plans are answered with success = False and a message; the node keeps serving.
 
-Parameters: ``default_scene`` (string, "walker3d"), ``output_dir`` (string, folder of the
-recordings, "runs"), ``max_solve_time`` (double, s, 60.0: used when a request gives <= 0),
-``compile_derivatives`` (bool, true: compiled derivative elements, which `make setup`
-compiles for the shipped scenes with ``gait-planner prepare``).
+One plan at a time (`gait_planner.ros.worker`): a service request that arrives while a plan
+runs is answered at once with success = False and a message starting "busy"; a goal of the
+action (`gait_planner.ros.action_server`, feedback and cancel) is rejected. Parameters:
+`gait_planner.ros.parameters` (typed, ranged, checked when set; ``config/gait_planner.yaml``).
 Topics (reliable; volatile so a restarting controller never re-runs an old plan):
 ``/gait_planner/joint_trajectory`` (one message per plan), ``/gait_planner/state`` and
-``/gait_planner/contact_forces`` (one message per node).
+``/gait_planner/contact_forces`` (one message per node). SIGINT and SIGTERM stop a running
+solve within one iteration and end the node (`main`). At start the node removes temporary
+recording files that killed processes left in its output folder.
 """
 
 from __future__ import annotations
 
-import threading
+import os
+import sys
 
 import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import MultiThreadedExecutor
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from gait_planner.io import messages
-from gait_planner.ocp.solve import Planner
+from gait_planner.io.atomic import remove_stale_temporaries
+from gait_planner.ocp.solve import STOPPED, Planner
 from gait_planner.pipeline import PlanRequest, RequestError, plan_and_record
+from gait_planner.ros import parameters
+from gait_planner.ros.action_server import PlanGaitActionServer
+from gait_planner.ros.worker import Closed, PlanWorker, Stopped
 from gait_planner_msgs.msg import ContactForces, MultibodyState
 from gait_planner_msgs.srv import PlanGait
 from trajectory_msgs.msg import JointTrajectory
@@ -35,6 +43,9 @@ SERVICE = "/gait_planner/plan_gait"
 TOPIC_TRAJECTORY = "/gait_planner/joint_trajectory"
 TOPIC_STATE = "/gait_planner/state"
 TOPIC_FORCES = "/gait_planner/contact_forces"
+BUSY = "busy: another plan is running (the node plans one request at a time); try again later"
+EXECUTOR_THREADS = 4  # a waiting plan request holds one; busy answers and cancels need others
+EXIT_GRACE = 0.5  # s a stopped plan gets to end at shutdown before the process leaves anyway
 
 
 def _given(value: float) -> float | None:
@@ -44,7 +55,8 @@ def _given(value: float) -> float | None:
 
 def request_from_msg(req, default_scene: str, default_time: float,
                      compiled: bool = False) -> PlanRequest:
-    """PlanGait.Request -> PlanRequest (<= 0 or empty fields: the scene's values)."""
+    """PlanGait.Request (or the action's Goal) -> PlanRequest (<= 0 or empty fields: the
+    scene's values)."""
     return PlanRequest(
         scene=req.scene or default_scene,
         step_length=_given(req.step_length),
@@ -61,25 +73,43 @@ def request_from_msg(req, default_scene: str, default_time: float,
 
 
 class GaitPlannerNode(Node):
-    """Serves plan requests one at a time (later requests wait for the running one)."""
+    """Serves plan requests (service and action) one at a time; a request that arrives
+    while a plan runs is answered "busy" at once. `planner` replaces the node's own (tests);
+    the node's stage and stop hooks are then not wired to it."""
 
     def __init__(self, *, planner: Planner | None = None, **kwargs):
+        self._worker, self._action = PlanWorker(), None  # (destroy_node may run early)
         super().__init__("gait_planner", **kwargs)
-        self.declare_parameter("default_scene", "walker3d")
-        self.declare_parameter("output_dir", "runs")
-        self.declare_parameter("max_solve_time", 60.0)
-        # compile the derivative elements to C (a one-time cost per scene and machine)
-        self.declare_parameter("compile_derivatives", True)
-        self._planner = planner or Planner(progress=self._progress)
-        self._lock = threading.Lock()
+        parameters.declare(self)
+        for path in remove_stale_temporaries(self._param("output_dir")):
+            self.get_logger().info(f"removed the stale temporary file {path}")
+        self._planner = planner or Planner(progress=self._progress, stage=self._worker.enter,
+                                           stop=self._worker.stopped)
         group = ReentrantCallbackGroup()
         qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         self._pub_trajectory = self.create_publisher(JointTrajectory, TOPIC_TRAJECTORY, 10)
         self._pub_state = self.create_publisher(MultibodyState, TOPIC_STATE, qos)
         self._pub_forces = self.create_publisher(ContactForces, TOPIC_FORCES, qos)
         self.create_service(PlanGait, SERVICE, self._on_plan, callback_group=group)
+        self._action = PlanGaitActionServer(self, self._worker, self._plan_into, group)
+
+    def close(self) -> None:
+        """Stop a running plan and release the callbacks waiting for it (shutdown)."""
+        self._worker.close()
+
+    def wait_idle(self, timeout: float) -> bool:
+        """Wait up to `timeout` s for a running plan to end; True if none runs."""
+        return self._worker.wait_idle(timeout)
+
+    def destroy_node(self) -> None:
+        """Stop a running plan, then destroy the action server and the node."""
+        self.close()
+        if self._action is not None:
+            self._action.destroy()
+        super().destroy_node()
 
     def _progress(self, iteration: int, cost: float, violation: float, seconds: float) -> None:
+        self._worker.progress(iteration, cost, violation)
         if iteration % 25 == 0:
             self.get_logger().info(
                 f"iteration {iteration}: cost {cost:.6g}, constraint violation "
@@ -89,35 +119,54 @@ class GaitPlannerNode(Node):
         return self.get_parameter(name).value
 
     def _on_plan(self, request: PlanGait.Request, response: PlanGait.Response):
-        with self._lock:
-            try:
-                plan_request = request_from_msg(
-                    request, self._param("default_scene"), self._param("max_solve_time"),
-                    self._param("compile_derivatives"))
-                outcome = plan_and_record(self._planner, plan_request, self._param("output_dir"))
-            except (RequestError, OSError) as err:
-                response.success, response.message = False, str(err)
-                self.get_logger().warning(f"plan request refused: {err}")
-                return response
-            except Exception as err:  # noqa: BLE001  (a bug must not stop the service)
-                response.success = False
-                response.message = f"internal error ({type(err).__name__}): {err}"
-                self.get_logger().error(f"plan request failed: {response.message}")
-                return response
-            result = outcome.result
-            stamp = self.get_clock().now().nanoseconds
-            messages.fill_message(response, messages.plan_response_fields(
-                result, str(outcome.mcap_path or ""), stamp) if result.success else {
-                    "success": False, "message": result.message,
-                    "solver_status": result.stats.status})
-            if result.success:
-                self._publish(result, stamp)
-                self.get_logger().info(
-                    f"planned {result.scene.name}: cost {result.cost_value:.6g}, duration "
-                    f"{result.duration:.4f} s, recorded {outcome.mcap_path}")
-            else:
-                self.get_logger().warning(f"plan failed: {result.message}")
+        if not self._worker.try_reserve():
+            response.success, response.message = False, BUSY
+            self.get_logger().warning("plan request answered busy")
             return response
+        try:
+            self._worker.run(lambda: self._plan_into(request, response))
+        except Closed as err:
+            response.success, response.message = False, str(err)
+        return response
+
+    def _plan_into(self, request, answer) -> None:
+        """Plan `request` (service request or action goal), record and publish the plan,
+        and fill `answer` (service response or action result: the same fields). Runs in
+        the worker's plan thread."""
+        try:
+            plan_request = request_from_msg(
+                request, self._param("default_scene"), self._param("max_solve_time"),
+                self._param("compile_derivatives"))
+            outcome = plan_and_record(self._planner, plan_request, self._param("output_dir"),
+                                      stage=self._worker.enter)
+        except Stopped:
+            answer.success, answer.message = False, STOPPED
+            self.get_logger().info("plan stopped on request: nothing recorded")
+            return
+        except (RequestError, OSError) as err:
+            answer.success, answer.message = False, str(err)
+            self.get_logger().warning(f"plan request refused: {err}")
+            return
+        except Exception as err:  # noqa: BLE001  (a bug must not stop the service)
+            answer.success = False
+            answer.message = f"internal error ({type(err).__name__}): {err}"
+            self.get_logger().error(f"plan request failed: {answer.message}")
+            return
+        result = outcome.result
+        stamp = self.get_clock().now().nanoseconds
+        messages.fill_message(answer, messages.plan_response_fields(
+            result, str(outcome.mcap_path or ""), stamp) if result.success else {
+                "success": False, "message": result.message,
+                "solver_status": result.stats.status})
+        if result.success:
+            self._publish(result, stamp)
+            self.get_logger().info(
+                f"planned {result.scene.name}: cost {result.cost_value:.6g}, duration "
+                f"{result.duration:.4f} s, recorded {outcome.mcap_path}")
+        elif result.message == STOPPED:
+            self.get_logger().info("plan stopped on request: nothing recorded")
+        else:
+            self.get_logger().warning(f"plan failed: {result.message}")
 
     def _publish(self, result, start_ns: int) -> None:
         self._pub_trajectory.publish(messages.fill_message(
@@ -129,19 +178,32 @@ class GaitPlannerNode(Node):
 
 
 def main(args=None) -> int:
-    """Run the node until interrupted (``gait-planner node``)."""
+    """Run the node until SIGINT or SIGTERM (``gait-planner node``). rclpy's signal
+    handlers shut the context down, which ends the spin; a running solve is then stopped
+    within one iteration. A problem being built cannot be interrupted, and CasADi aborts
+    the process if the interpreter is finalised under it: if the plan thread has not ended
+    `EXIT_GRACE` s after the ROS shutdown, the process ends at once (`os._exit`; nothing is
+    being written then, or only a temporary file, which the next start removes)."""
     rclpy.init(args=args)
-    node = GaitPlannerNode()
-    executor = MultiThreadedExecutor()
+    try:
+        node = GaitPlannerNode()
+    except Exception:
+        rclpy.try_shutdown()
+        raise
+    executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
     executor.add_node(node)
-    node.get_logger().info(f"serving {SERVICE}")
+    node.get_logger().info(f"serving the service and the action {SERVICE}")
     try:
         executor.spin()
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        node.close()
         executor.shutdown()
         node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
+        rclpy.try_shutdown()
+    if not node.wait_idle(EXIT_GRACE):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)
     return 0

@@ -6,6 +6,10 @@ keeps discovery on this host and writes ROS logs to a temporary directory, so pa
 on one machine neither see each other nor a running gait_planner node. Every test gets its own
 rclpy Context on that domain, shut down afterwards together with its nodes and executor.
 Waits in these tests are bounded by `TIMEOUT` seconds.
+
+`planner_node` serves a real `GaitPlannerNode` on its own multi-threaded executor (as
+`gait-planner node` does), `node_process` runs `gait-planner node` as a process, and
+`wait_for_feedback` waits for a matching action feedback message.
 """
 
 from __future__ import annotations
@@ -13,10 +17,13 @@ from __future__ import annotations
 import fcntl
 import os
 import random
+import subprocess
+import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
-from typing import IO, Callable, Iterator
+from typing import IO, Any, Callable, Iterator
 
 import pytest
 import rclpy
@@ -26,6 +33,8 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 TIMEOUT = 15.0  # s, longest wait for discovery or a message
+REPO = Path(__file__).resolve().parents[2]
+GAIT_PLANNER = Path(sys.executable).parent / "gait-planner"  # the venv's command
 
 
 def _claim_domain_id() -> tuple[int, IO[str]]:
@@ -126,3 +135,76 @@ def spin_until(executor: SingleThreadedExecutor) -> Callable[..., bool]:
         return done()
 
     return spin
+
+
+@pytest.fixture
+def planner_node(ros_context: Context, tmp_path: Path) -> Iterator[Callable[..., Node]]:
+    """``planner_node(**parameters)``: a `GaitPlannerNode` writing to `tmp_path` (its only
+    allowed output folder), served by its own multi-threaded executor on a background thread
+    as `gait-planner node` serves it, so a test's client spins apart from it. Closed, shut
+    down and destroyed after the test."""
+    from rclpy.executors import MultiThreadedExecutor
+    from rclpy.parameter import Parameter
+
+    from gait_planner.ros.node import EXECUTOR_THREADS, GaitPlannerNode
+
+    started: list[tuple[Node, MultiThreadedExecutor, threading.Thread]] = []
+
+    def start(**parameters) -> Node:
+        values = {"output_dir": str(tmp_path), "allowed_output_dirs": [str(tmp_path)],
+                  **parameters}
+        node = GaitPlannerNode(context=ros_context, parameter_overrides=[
+            Parameter(name, value=value) for name, value in values.items()])
+        serving = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS, context=ros_context)
+        serving.add_node(node)
+        thread = threading.Thread(target=serving.spin, daemon=True)
+        thread.start()
+        started.append((node, serving, thread))
+        return node
+
+    try:
+        yield start
+    finally:
+        for node, serving, thread in started:
+            node.close()
+            serving.shutdown(timeout_sec=TIMEOUT)
+            thread.join(TIMEOUT)
+            node.destroy_node()
+
+
+@pytest.fixture
+def node_process(ros_domain_id: int, tmp_path: Path) -> Iterator[Callable[..., subprocess.Popen]]:
+    """``node_process(*arguments)``: ``gait-planner node ARGUMENTS`` started in the
+    repository (so config/gait_planner.yaml resolves), on the session's domain, its output
+    in `tmp_path`/node.log; killed after the test if it still runs."""
+    processes: list[subprocess.Popen] = []
+
+    def start(*arguments: str) -> subprocess.Popen:
+        log = open(tmp_path / "node.log", "ab")
+        process = subprocess.Popen([str(GAIT_PLANNER), "node", *arguments], cwd=REPO,
+                                   stdout=log, stderr=subprocess.STDOUT)
+        log.close()
+        processes.append(process)
+        return process
+
+    try:
+        yield start
+    finally:
+        for process in processes:
+            if process.poll() is None:
+                process.kill()
+                process.wait(TIMEOUT)
+
+
+@pytest.fixture
+def wait_for_feedback(spin_until: Callable[..., bool]) -> Callable[..., Any]:
+    """``wait_for_feedback(feedback, done, timeout=60)``: spin until a message in the list
+    `feedback` satisfies `done`, and return the first that does."""
+
+    def wait(feedback: list, done: Callable[[Any], bool], timeout: float = 60.0) -> Any:
+        assert spin_until(lambda: any(done(f) for f in feedback), timeout), (
+            f"no such feedback within {timeout} s; got phases "
+            f"{sorted({f.phase for f in feedback})}")
+        return next(f for f in feedback if done(f))
+
+    return wait

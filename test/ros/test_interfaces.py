@@ -14,6 +14,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from gait_planner_msgs.action import PlanGait as PlanGaitAction
 from gait_planner_msgs.msg import ContactForces, MultibodyState
 from gait_planner_msgs.srv import PlanGait
 
@@ -81,6 +82,13 @@ EXPECTED_FIELDS = {
         "potential_energy": "double",
     },
 }
+
+# The action's goal and result are the service's request and response; its feedback:
+EXPECTED_FIELDS[PlanGaitAction.Goal] = EXPECTED_FIELDS[PlanGait.Request]
+EXPECTED_FIELDS[PlanGaitAction.Result] = EXPECTED_FIELDS[PlanGait.Response]
+EXPECTED_FIELDS[PlanGaitAction.Feedback] = {
+    "phase": "string", "iteration": "int32", "cost": "double",
+    "constraint_violation": "double", "elapsed": "double"}
 
 
 def roundtrip(message):
@@ -228,3 +236,9 @@ def test_multibody_state_roundtrips_any_values(node, time, phase, contacts, bodi
         potential_energy=data.draw(finite),
     )
     assert roundtrip(message) == message
+
+
+def test_action_feedback_survives_serialisation():
+    feedback = PlanGaitAction.Feedback(phase="cold stage 2", iteration=57, cost=21.2283,
+                                       constraint_violation=7.22e-07, elapsed=12.77)
+    assert roundtrip(feedback) == feedback

@@ -24,6 +24,7 @@ pytestmark = pytest.mark.timeout(300)
 def setup(ros_context, make_node, executor, tmp_path):
     server = GaitPlannerNode(context=ros_context, parameter_overrides=[
         Parameter("output_dir", value=str(tmp_path)),
+        Parameter("allowed_output_dirs", value=[str(tmp_path)]),
         Parameter("default_scene", value="compass")])
     client_node = make_node("plan_client")
     received = {"trajectory": [], "state": [], "forces": []}
@@ -115,6 +116,7 @@ def test_an_unexpected_error_is_answered_and_the_node_keeps_serving(
         ros_context, make_node, executor, tmp_path, spin_until):
     server = GaitPlannerNode(context=ros_context, planner=_FailingOnce(), parameter_overrides=[
         Parameter("output_dir", value=str(tmp_path)),
+        Parameter("allowed_output_dirs", value=[str(tmp_path)]),
         Parameter("default_scene", value="compass")])
     client_node = make_node("fault_client")
     executor.add_node(server)

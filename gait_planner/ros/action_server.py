@@ -1,0 +1,92 @@
+"""The action ``/gait_planner/plan_gait`` (gait_planner_msgs/action/PlanGait): the service's
+request and answer, with feedback while the plan is made and cancel.
+
+* One plan at a time: a goal that arrives while a plan runs (from the action or the service)
+  is rejected at once. A ROS 2 goal rejection carries no reason; this node rejects goals for
+  no other reason than "busy" (a bad request is accepted and aborted with its message) and
+  logs it, and `gait-planner call --action` prints it.
+* Feedback: the phase at every phase change and iteration, cost and constraint violation
+  every ``feedback_every`` IPOPT iterations, with the seconds since the goal was accepted.
+* Cancel: accepted while the problem is built or solved, refused while the found plan is
+  being recorded (a second or two). An accepted cancel stops IPOPT within one iteration, and
+  the goal ends canceled with nothing recorded or published.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Callable
+
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.action.server import ServerGoalHandle
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.node import Node
+
+from gait_planner.ocp.solve import STOPPED
+from gait_planner.ros.worker import Closed, PlanWorker
+from gait_planner_msgs.action import PlanGait as PlanGaitAction
+
+ACTION = "/gait_planner/plan_gait"
+
+# plan(request, answer): plans a request and fills the answer (Response or Result fields)
+Plan = Callable[[object, object], None]
+
+
+class PlanGaitActionServer:
+    """Wires the action's goal, cancel and execute callbacks to a `PlanWorker`."""
+
+    def __init__(self, node: Node, worker: PlanWorker, plan: Plan, callback_group):
+        self._node, self._worker, self._plan = node, worker, plan
+        self._server = ActionServer(
+            node, PlanGaitAction, ACTION, execute_callback=self._execute,
+            goal_callback=self._on_goal, cancel_callback=self._on_cancel,
+            callback_group=callback_group)
+
+    def destroy(self) -> None:
+        """Destroy the action server (before its node)."""
+        self._server.destroy()
+
+    def _on_goal(self, goal: PlanGaitAction.Goal) -> GoalResponse:
+        if self._worker.try_reserve():
+            return GoalResponse.ACCEPT
+        self._node.get_logger().warning(
+            "plan goal rejected: busy (one plan at a time; the running plan goes on)")
+        return GoalResponse.REJECT
+
+    def _on_cancel(self, goal_handle: ServerGoalHandle) -> CancelResponse:
+        if self._worker.request_stop():
+            self._node.get_logger().info("plan goal canceled: stopping the solver")
+            return CancelResponse.ACCEPT
+        self._node.get_logger().info("cancel refused: the plan is being recorded")
+        return CancelResponse.REJECT
+
+    def _execute(self, goal_handle: ServerGoalHandle) -> PlanGaitAction.Result:
+        started = time.monotonic()
+        every = max(1, int(self._node.get_parameter("feedback_every").value))
+
+        def feedback(phase: str, iteration: int, cost: float, violation: float) -> None:
+            if iteration % every and not math.isnan(cost):  # phase changes always go
+                return
+            try:
+                goal_handle.publish_feedback(PlanGaitAction.Feedback(
+                    phase=phase, iteration=iteration, cost=cost,
+                    constraint_violation=violation, elapsed=time.monotonic() - started))
+            except _rclpy.RCLError:  # shutting down (SIGINT, SIGTERM): the solve stops next
+                pass
+
+        result = PlanGaitAction.Result()
+        try:
+            self._worker.run(lambda: self._plan(goal_handle.request, result), feedback)
+        except Closed as err:
+            result.success, result.message = False, str(err)
+        try:
+            if goal_handle.is_cancel_requested and result.message == STOPPED:
+                goal_handle.canceled()
+            elif result.success:
+                goal_handle.succeed()
+            else:
+                goal_handle.abort()
+        except _rclpy.RCLError:  # the context is shut down (SIGINT, SIGTERM): nobody to tell
+            pass
+        return result

@@ -1,0 +1,115 @@
+"""The parameters of the node ``gait_planner``: declared with type, range and description,
+and checked whenever they are set (at start, from ``--params-file`` or ``-p``, and at run
+time).
+
+A value that fails a check is refused with a reason: at start the node does not start (the
+reason is the error), at run time the set-parameters call answers successful = False with
+the reason and the old value stays. The shipped values are ``config/gait_planner.yaml``.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any, Callable
+
+from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
+                                ParameterType, SetParametersResult)
+from rclpy.node import Node
+
+from gait_planner.model.loader import available_scenes
+
+MAX_SOLVE_TIME = 3600.0  # s, the largest time limit a request may ask for (request_ranges)
+
+
+def _descriptor(kind: int, description: str, **extra) -> ParameterDescriptor:
+    return ParameterDescriptor(type=kind, description=description, **extra)
+
+
+# name -> (default, descriptor); declared in this order (allowed_output_dirs before
+# output_dir, whose check reads it)
+DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
+    "allowed_output_dirs": (["."], _descriptor(
+        ParameterType.PARAMETER_STRING_ARRAY,
+        "Folders output_dir must be inside (relative ones: to the node's working folder); "
+        "fixed at start", read_only=True)),
+    "output_dir": ("runs", _descriptor(
+        ParameterType.PARAMETER_STRING,
+        "Folder of the recordings (MCAP, .rrd), created if missing; must be writable and "
+        "inside one of allowed_output_dirs")),
+    "default_scene": ("walker3d", _descriptor(
+        ParameterType.PARAMETER_STRING,
+        "Scene planned when a request names none (a file config/scenes/<name>.yaml)")),
+    "max_solve_time": (60.0, _descriptor(
+        ParameterType.PARAMETER_DOUBLE,
+        "Time limit of a solve in s when a request gives <= 0; must be > 0",
+        floating_point_range=[FloatingPointRange(from_value=0.0, to_value=MAX_SOLVE_TIME)])),
+    "compile_derivatives": (True, _descriptor(
+        ParameterType.PARAMETER_BOOL,
+        "Evaluate derivatives with per-node elements compiled to C (cached; `make setup` "
+        "compiles the shipped scenes)")),
+    "feedback_every": (1, _descriptor(
+        ParameterType.PARAMETER_INTEGER,
+        "Action feedback every this many IPOPT iterations (and at every phase change)",
+        integer_range=[IntegerRange(from_value=1, to_value=1000, step=1)])),
+}
+
+
+def check_output_dir(value: str, allowed: list[str]) -> str | None:
+    """Why `value` cannot be the output folder (None if it can): it must resolve inside one
+    of the `allowed` folders, and it or its nearest existing parent must be a writable
+    folder (a missing folder is created at the first plan)."""
+    if not value:
+        return "output_dir must name a folder"
+    folder = Path(value).expanduser().resolve()
+    roots = [Path(root).expanduser().resolve() for root in allowed]
+    if not any(folder == root or root in folder.parents for root in roots):
+        return (f"output_dir {value!r} ({folder}) is outside the allowed folders "
+                f"{[str(root) for root in roots]} (parameter allowed_output_dirs, set at start)")
+    existing = next(p for p in (folder, *folder.parents) if p.exists())
+    if not existing.is_dir():
+        return f"output_dir {value!r}: {existing} is not a folder"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"output_dir {value!r}: {existing} is not writable by this process"
+    return None
+
+
+def _check_scene(value: str) -> str | None:
+    scenes = available_scenes()
+    return None if value in scenes else (
+        f"default_scene {value!r} is not a known scene; available: {', '.join(scenes)}")
+
+
+def _check_solve_time(value: float) -> str | None:
+    return None if 0.0 < value <= MAX_SOLVE_TIME else (
+        f"max_solve_time must be > 0 and <= {MAX_SOLVE_TIME:g} s, got {value}")
+
+
+def declare(node: Node) -> None:
+    """Declare the parameters of `DECLARATIONS` on `node`, checked by `validator` from
+    now on (also the values given at start: a refused one raises, the node does not start)."""
+    node.add_on_set_parameters_callback(validator(node))
+    for name, (default, descriptor) in DECLARATIONS.items():
+        node.declare_parameter(name, default, descriptor)
+
+
+def validator(node: Node) -> Callable[[list], SetParametersResult]:
+    """The set-parameters callback of `node`: refuses a value with the reason."""
+    checks: dict[str, Callable[[Any], str | None]] = {
+        "default_scene": _check_scene,
+        "max_solve_time": _check_solve_time,
+        "output_dir": lambda value: check_output_dir(
+            value, list(node.get_parameter("allowed_output_dirs").value)),
+        "allowed_output_dirs": lambda value: None if len(value) else (
+            "allowed_output_dirs must name at least one folder"),
+    }
+
+    def on_set(parameters: list) -> SetParametersResult:
+        for parameter in parameters:
+            check = checks.get(parameter.name)
+            reason = check(parameter.value) if check else None
+            if reason:
+                return SetParametersResult(successful=False, reason=reason)
+        return SetParametersResult(successful=True)
+
+    return on_set
