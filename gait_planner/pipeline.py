@@ -18,7 +18,8 @@ import numpy as np
 
 from gait_planner.model.loader import SceneError, load_scene
 from gait_planner.ocp.request_ranges import RangeError, check_request
-from gait_planner.ocp.settings import SettingsError, settings_for
+from gait_planner.model.scene import Scene
+from gait_planner.ocp.settings import GaitSettings, SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.result import PlanResult
@@ -73,17 +74,8 @@ def output_stem(request: PlanRequest, scene_name: str) -> str:
     return f"{scene_name}_{time.strftime('%Y%m%d-%H%M%S')}"
 
 
-def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Path, *,
-                    rrd: bool = True, stage: Callable[[str], None] | None = None) -> Outcome:
-    """Plan `request`; on success write <output_dir>/<stem>.mcap (and .rrd).
-
-    stage: called with "recording" once the plan is found, before anything is written (an
-    exception it raises ends the request with nothing recorded)."""
-    for name in ("step_length", "friction_coefficient", "max_solve_time"):
-        _finite(name, getattr(request, name))
-    if not 1 <= request.steps <= MAX_STEPS:
-        raise RequestError(f"steps must be a whole number of half cycles from 1 to {MAX_STEPS}, "
-                           f"got {request.steps}")
+def request_settings(request: PlanRequest) -> tuple[Scene, GaitSettings]:
+    """The scene and settings of `request`; RequestError says what cannot be planned."""
     try:
         scene = load_scene(request.scene)
         check_request(scene, step_length=request.step_length,
@@ -99,6 +91,27 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
             **({"posture": request.posture} if request.posture else {}))
     except (SceneError, SettingsError, RangeError) as err:
         raise RequestError(str(err)) from None
+    return scene, settings
+
+
+def prepare(planner: Planner, request: PlanRequest) -> str:
+    """Build the problem of `request` in `planner` now (`Planner.prepare`), so that a
+    request like it pays no build; returns how its derivatives are evaluated."""
+    return planner.prepare(*request_settings(request))
+
+
+def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Path, *,
+                    rrd: bool = True, stage: Callable[[str], None] | None = None) -> Outcome:
+    """Plan `request`; on success write <output_dir>/<stem>.mcap (and .rrd).
+
+    stage: called with "recording" once the plan is found, before anything is written (an
+    exception it raises ends the request with nothing recorded)."""
+    for name in ("step_length", "friction_coefficient", "max_solve_time"):
+        _finite(name, getattr(request, name))
+    if not 1 <= request.steps <= MAX_STEPS:
+        raise RequestError(f"steps must be a whole number of half cycles from 1 to {MAX_STEPS}, "
+                           f"got {request.steps}")
+    scene, settings = request_settings(request)
     stem = output_stem(request, scene.name)
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)

@@ -113,6 +113,28 @@ def kinematic_guess(tr: Transcription, step: float) -> np.ndarray:
     return out
 
 
+def standing_guess(tr: Transcription, step: float) -> np.ndarray:
+    """Configurations (N+1, k): the scene pose at every node (a cold start that knows
+    nothing of walking; `step` unused)."""
+    return np.tile(configuration(tr.mb.scene), (tr.N + 1, 1))
+
+
+def perturbed_guess(tr: Transcription, step: float, amplitude: float = 0.3,
+                    seed: int = 0) -> np.ndarray:
+    """Configurations (N+1, k): the kinematic guess with every node turned by seeded random
+    rotation increments of up to `amplitude` rad in each rotational entry of u (the nodal
+    reparametrisation, so joints stay assembled): a deliberately poor guess."""
+    mb, rng = tr.mb, np.random.default_rng(seed)
+    out = kinematic_guess(tr, step)
+    for n in range(out.shape[0]):
+        u = rng.uniform(-amplitude, amplitude, mb.ndof) * mb.rotation_mask
+        out[n] = np.array(mb.reparametrise(u, out[n])).ravel()
+    return out
+
+
+GUESSES = {"kinematic": kinematic_guess, "standing": standing_guess, "poor": perturbed_guess}
+
+
 def _levenberg_marquardt(f: ca.Function, x: np.ndarray, t: np.ndarray,
                          iterations: int = 100) -> np.ndarray:
     """Minimise |r(x, t)|^2 from x; f returns (r, dr/dx). Damped, monotone steps."""

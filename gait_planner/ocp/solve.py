@@ -20,7 +20,7 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.compile import CompileError, compile_sources
 from gait_planner.ocp.derivatives import nlp_derivatives
-from gait_planner.ocp.guess import initial_multipliers, kinematic_guess
+from gait_planner.ocp.guess import GUESSES, initial_multipliers
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, build_result, failed_result
 from gait_planner.ocp.transcription import Transcription
@@ -138,9 +138,13 @@ class Planner:
 
     def prepare(self, scene: Scene, settings: GaitSettings) -> str:
         """Build the problem of (scene, settings) now, compiling its derivative elements if
-        the settings ask for it (cached on disk for later processes), so that a first plan
-        spends no time on it. Returns how the derivatives are evaluated, in words."""
-        return self._build(scene, settings).derivatives_used
+        the settings ask for it (cached on disk for later processes), and the IPOPT
+        instances of a cold start and of a warm re-plan (walker3d: 0.7 s each), so that
+        no plan spends time on them. Returns how the derivatives are evaluated, in words."""
+        built = self._build(scene, settings)
+        for variant, *_ in COLD_ATTEMPTS[0] + WARM_ATTEMPTS[0]:
+            self._solver(built, settings, variant)
+        return built.derivatives_used
 
     def _build(self, scene: Scene, s: GaitSettings) -> _Built:
         key = _key(scene, s)
@@ -214,14 +218,20 @@ class Planner:
             "ipopt.warm_start_init_point": "yes",
         }
 
-    def plan(self, scene: Scene, settings: GaitSettings, *, warm_start: bool = True) -> PlanResult:
+    def plan(self, scene: Scene, settings: GaitSettings, *, warm_start: bool = True,
+             guess: str = "kinematic") -> PlanResult:
         """Solve one half cycle; a numerical failure is a result with a reason.
+
+        A cold start begins at `guess`, a key of `ocp.guess.GUESSES`: the kinematic
+        stepping motion, or (for robustness tests) the standing pose or a perturbed guess.
 
         The time limit (settings.max_solve_time) covers the guess and the solve; building a
         problem the planner has not seen before comes on top (stats.build_time).
         """
         stopped = self.stop or (lambda: False)
         self.stage("building")
+        if guess not in GUESSES:
+            raise ValueError(f"unknown guess {guess!r}; known: {', '.join(GUESSES)}")
         try:
             built = self._build(scene, settings)
             warm_start = warm_start and bool(built.stored)
@@ -242,7 +252,7 @@ class Planner:
             origin = f"warm start from the plan for step length {step0:.4f} m, mu {mu0:.3g}"
         else:
             self.stage("initial guess")
-            qref = kinematic_guess(tr, step)[: tr.N - 1]
+            qref = GUESSES[guess](tr, step)[: tr.N - 1]
             x_start = np.concatenate([
                 np.zeros(tr.U.numel() + tr.T.numel()), initial_multipliers(tr),
                 np.full(nsig, settings.scaling_bounds[1])])
@@ -254,7 +264,7 @@ class Planner:
             # numpy's Haswell, Zen, SkylakeX, Prescott kernels (compiled) and CasADi
             # derivatives: J 20.7683, 20.7683, 20.7801, 20.7801, 20.7801 (0.06 % apart);
             # from sigma = 1: 20.7801, 20.7801, 20.8470, 20.8936, 20.7644 (0.6 %)
-            origin = "kinematic guess; sigma fixed at its upper bound and limits relaxed, then free"
+            origin = f"{guess} guess; sigma fixed at its upper bound and limits relaxed, then free"
         p = np.concatenate([qref.reshape(-1), [step, mu]])
         lbx, ubx, lbg, ubg = built.bounds
         built.callback.deadline = start + settings.max_solve_time

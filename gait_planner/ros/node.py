@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import os
 import sys
+import time
 
 import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
@@ -31,7 +32,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from gait_planner.io import messages
 from gait_planner.io.atomic import remove_stale_temporaries
 from gait_planner.ocp.solve import STOPPED, Planner
-from gait_planner.pipeline import PlanRequest, RequestError, plan_and_record
+from gait_planner.pipeline import PlanRequest, RequestError, plan_and_record, prepare
 from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
 from gait_planner.ros.worker import Closed, PlanWorker, Stopped
@@ -85,6 +86,8 @@ class GaitPlannerNode(Node):
             self.get_logger().info(f"removed the stale temporary file {path}")
         self._planner = planner or Planner(progress=self._progress, stage=self._worker.enter,
                                            stop=self._worker.stopped)
+        if self._param("prepare_on_start"):
+            self._prepare()
         group = ReentrantCallbackGroup()
         qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         self._pub_trajectory = self.create_publisher(JointTrajectory, TOPIC_TRAJECTORY, 10)
@@ -92,6 +95,20 @@ class GaitPlannerNode(Node):
         self._pub_forces = self.create_publisher(ContactForces, TOPIC_FORCES, qos)
         self.create_service(PlanGait, SERVICE, self._on_plan, callback_group=group)
         self._action = PlanGaitActionServer(self, self._worker, self._plan_into, group)
+
+    def _prepare(self) -> None:
+        """Build the default request's problem (parameter prepare_on_start); a failure
+        only costs the first request its build."""
+        start = time.perf_counter()
+        request = PlanRequest(scene=self._param("default_scene"),
+                              compiled=self._param("compile_derivatives"))
+        try:
+            how = prepare(self._planner, request)
+        except (RequestError, ValueError, RuntimeError) as err:
+            self.get_logger().warning(f"could not prepare {request.scene}: {err}")
+            return
+        self.get_logger().info(f"prepared {request.scene} in {time.perf_counter() - start:.1f} s"
+                               f" ({how})")
 
     def close(self) -> None:
         """Stop a running plan and release the callbacks waiting for it (shutdown)."""

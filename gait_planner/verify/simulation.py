@@ -20,10 +20,13 @@ reset=...)` is the API.
   q_{N-1+j} = mirror(q_j)), then projected on the held contacts. One-sided because the
   velocity jumps at an impact and the acceleration at a release; second order like the
   plan (two-point difference when the segment has a single interval).
-* reset="phase": every segment starts from the plan's state: the drift measures the local
-  consistency of the plan with the continuous dynamics, without the open-loop instability
-  of walking. reset="none": only the first; the half cycle open loop, the honest drift
-  (instability growth included).
+* reset="node": every interval starts from the plan's state at its first node: the drift
+  after one interval is the plan's local error against the continuous dynamics (O(h^3) for
+  a second-order plan where the motion is smooth), free of any growth.
+  reset="phase": every segment starts from the plan's state: the drift over a phase, growth
+  of errors within it included, but not the open-loop instability of the whole step.
+  reset="none": only the first; the half cycle open loop, the honest drift (instability
+  growth included).
 * Measured at the nodes (the state arriving at a node from the segment before it):
   joint angles (`gait_planner.model.angles`, both from director coordinates), contact
   points, the root's centre of mass, the ground force on each foot against the sum of the
@@ -62,7 +65,7 @@ from gait_planner.verify.continuous import effort_names, pin_configuration
 from gait_planner.verify.mechanics import Mechanics, parse_scene
 from gait_planner.verify.physical import near_switch, switch_nodes
 
-RESETS = ("phase", "none")
+RESETS = ("node", "phase", "none")
 SPEED_LIMIT = 1e3  # m/s or rad/s: any generalised velocity above it is a blow-up
 MAX_RHS = 200_000  # right-hand side evaluations per segment (~30 s)
 
@@ -207,8 +210,11 @@ class PlanSimulation:
         N = self.N
         out = _Run([None] * (N + 1), [None] * (N + 1), [None] * (N + 1), "", 0, 0.0)
         state = None
-        for s, e, held in self.segments:
-            if state is None or reset == "phase":
+        pieces = [(n, n + 1, held) if reset == "node" else (s, e, held)
+                  for s, e, held in self.segments
+                  for n in (range(s, e) if reset == "node" else [s])]
+        for s, e, held in pieces:
+            if state is None or reset != "none":
                 v = (start_velocities or {}).get(s)
                 state = (self.configs[s], self.plan_velocity(s) if v is None else v)
             if s == 0:
@@ -269,7 +275,7 @@ def physics_error(result: PlanResult, *, reset: str = "phase", rtol: float = 1e-
                   atol: float = 1e-10,
                   start_velocities: dict[int, np.ndarray] | None = None) -> PhysicsError:
     """Simulate `result` on the continuous dynamics and measure its drift (module
-    docstring). reset: "phase" or "none"; rtol, atol: DOP853's tolerances; start_velocities:
+    docstring). reset: "node", "phase" or "none"; rtol, atol: DOP853's tolerances; start_velocities:
     segment start node -> Pinocchio velocity (nv,) to start from instead of the
     differences of the plan's configurations (a motion whose velocities are known, e.g.
     one simulated here). Raises ValueError for an unknown reset or a plan whose scene has

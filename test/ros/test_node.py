@@ -117,7 +117,8 @@ def test_an_unexpected_error_is_answered_and_the_node_keeps_serving(
     server = GaitPlannerNode(context=ros_context, planner=_FailingOnce(), parameter_overrides=[
         Parameter("output_dir", value=str(tmp_path)),
         Parameter("allowed_output_dirs", value=[str(tmp_path)]),
-        Parameter("default_scene", value="compass")])
+        Parameter("default_scene", value="compass"),
+        Parameter("prepare_on_start", value=False)])
     client_node = make_node("fault_client")
     executor.add_node(server)
     executor.add_node(client_node)

@@ -67,7 +67,7 @@ def parameters_of_process(make_node, executor, spin_until):
 def test_parameters_are_declared_with_type_range_and_description(parameters):
     client, wait = parameters
     names = ["default_scene", "output_dir", "allowed_output_dirs", "max_solve_time",
-             "compile_derivatives", "feedback_every"]
+             "compile_derivatives", "feedback_every", "prepare_on_start"]
     described = {d.name: d for d in wait(client.describe_parameters(names)).descriptors}
     assert all(described[name].description for name in names)
     assert described["max_solve_time"].type == ParameterType.PARAMETER_DOUBLE
@@ -75,6 +75,14 @@ def test_parameters_are_declared_with_type_range_and_description(parameters):
     assert described["feedback_every"].integer_range[0].from_value == 1
     assert described["allowed_output_dirs"].read_only
     assert described["compile_derivatives"].type == ParameterType.PARAMETER_BOOL
+    assert described["prepare_on_start"].read_only
+
+
+def test_the_default_scene_is_built_at_start_when_asked(planner_node):
+    """prepare_on_start: the default request's problem exists before the first request."""
+    node = planner_node(default_scene="compass", prepare_on_start=True)
+    assert len(node._planner._built) == 1
+    assert not planner_node(default_scene="compass")._planner._built
 
 
 @pytest.mark.parametrize("name, value, words", [
