@@ -1,11 +1,14 @@
 # gait_planner: `make run` plans and records a gait, `make test` runs the tests.
-# Both set up .venv/ first (tools/setup.sh; quick when nothing changed).
+# `make fuzz` sends FUZZ_EXAMPLES (1000) hypothesis-drawn requests to a live node
+# (test/ros/test_fuzz.py; `make test` runs a seeded 40 of them).
+# All set up .venv/ first (tools/setup.sh; quick when nothing changed).
 
 VENV ?= .venv
 PYTHON := $(VENV)/bin/python
 PYTEST_ARGS ?=
+FUZZ_EXAMPLES ?= 1000
 
-.PHONY: setup test run clean distclean
+.PHONY: setup test fuzz run bench bench-quick clean distclean
 
 setup:
 	@tools/setup.sh $(VENV)
@@ -13,8 +16,20 @@ setup:
 test: setup
 	$(PYTHON) -m pytest test $(PYTEST_ARGS)
 
+fuzz: setup
+	GAIT_PLANNER_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PYTHON) -m pytest test/ros/test_fuzz.py -m fuzz -s $(PYTEST_ARGS)
+
 run: setup
 	$(VENV)/bin/gait-planner run --compile
+
+# Benchmarks (benchmarks/README.md): `bench` rewrites benchmarks/REPORT.md and
+# benchmarks/results/*.json (~30 min on 2 cores); `bench-quick` is a smoke run (~3 min)
+# writing to build/bench-quick/ instead.
+bench: setup
+	$(PYTHON) benchmarks/bench.py
+
+bench-quick: setup
+	$(PYTHON) benchmarks/bench.py --quick
 
 # Build outputs and caches; keeps .venv/ (and forgets its msg_defs build, so the next
 # `make setup` rebuilds and reinstalls gait_planner_msgs) and keeps runs/.

@@ -64,7 +64,7 @@ from gait_planner.verify.mechanics import parse_scene
 
 from free_motion import hanging
 from pinned_model import PinnedModel
-from results_io import write_results
+from results_io import figure_path, write_results
 
 PIN, SEED, DT = "foot_r_heel", 0, 1e-3
 SHORT, LONG = 1_000, 100_000  # steps of DT
@@ -325,8 +325,8 @@ def main() -> None:
               f"(E(0) = {check['energy_J']:.3f} J)")
     path = write_results("integrators", rows, {"start_check": checks, "pinned": PIN,
                                                "seed": SEED, "quick": args.quick})
-    plot(rows, Path(__file__).resolve().parent / "integrators.png")
-    print(f"wrote {path} and benchmarks/integrators.png")
+    plot(rows, figure_path("integrators.png"))
+    print(f"wrote {path} and {figure_path('integrators.png')}")
 
 
 if __name__ == "__main__":

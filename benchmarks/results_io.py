@@ -13,7 +13,16 @@ from pathlib import Path
 import casadi
 import numpy as np
 
-RESULTS = Path(__file__).resolve().parent / "results"
+HERE = Path(__file__).resolve().parent
+# $GAIT_PLANNER_BENCH_RESULTS: another folder for the JSON and the figures (bench-quick's
+# smoke runs), so that they never overwrite the report's results
+OTHER = os.environ.get("GAIT_PLANNER_BENCH_RESULTS")
+RESULTS = Path(OTHER) if OTHER else HERE / "results"
+
+
+def figure_path(name: str) -> Path:
+    """Where a figure goes: benchmarks/<name> next to REPORT.md, or the other folder."""
+    return RESULTS / name if OTHER else HERE / name
 
 
 def _cpu_model() -> str:
@@ -65,7 +74,7 @@ def _plain(value):
 
 def write_results(name: str, rows: list[dict], meta: dict | None = None) -> Path:
     """Write {"header": header() + meta, "rows": rows} to benchmarks/results/<name>.json."""
-    RESULTS.mkdir(exist_ok=True)
+    RESULTS.mkdir(parents=True, exist_ok=True)
     path = RESULTS / f"{name}.json"
     document = {"header": {**header(), **(meta or {})}, "rows": rows}
     path.write_text(json.dumps(document, indent=1, default=_plain) + "\n")

@@ -4,7 +4,7 @@ One BLAS thread for CasADi's bundled OpenBLAS (read when CasADi first loads its 
 plugin, so this has to run before the first solver is built): MUMPS then factorises the
 same way every time and IPOPT takes the same path on every run. With two threads walker3d's cold solve took 160 or 199 iterations
 depending on the run's threading, and spent a third of its time spinning in the kernel
-(benchmarks/REPORT.md).
+(benchmarks/HISTORY.md).
 
 numpy's OpenBLAS chooses its kernels by CPU (DYNAMIC_ARCH; CasADi's is built for one core
 type): the kinematic guess's Gauss-Newton solves then differ in the last bits from machine

@@ -16,7 +16,7 @@ from typing import Callable
 
 import numpy as np
 
-from gait_planner.model.loader import SceneError, load_scene
+from gait_planner.model.loader import SceneError, available_scenes, load_scene
 from gait_planner.ocp.request_ranges import RangeError, check_request
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings, SettingsError, settings_for
@@ -63,7 +63,8 @@ def _finite(name: str, value: float | None) -> None:
 
 def output_stem(request: PlanRequest, scene_name: str) -> str:
     """The file stem for a request: its output_name, checked to be a bare file name
-    (no folders: files stay in the output folder), or scene + step length + time."""
+    (no folders: files stay in the output folder), or scene + time (`plan_and_record`
+    adds _2, _3, ... if that name is taken: `unused_stem`)."""
     if request.output_name:
         name = request.output_name.removesuffix(".mcap")
         if not _OUTPUT_NAME.fullmatch(name) or ".." in name:
@@ -74,10 +75,24 @@ def output_stem(request: PlanRequest, scene_name: str) -> str:
     return f"{scene_name}_{time.strftime('%Y%m%d-%H%M%S')}"
 
 
+def unused_stem(folder: Path, stem: str) -> str:
+    """`stem`, or else `stem`_2, _3, ...: the first with no .mcap or .rrd in `folder` (two
+    automatic names made within the same second would otherwise be one file)."""
+    candidate, number = stem, 1
+    while any((folder / f"{candidate}{suffix}").exists() for suffix in (".mcap", ".rrd")):
+        number += 1
+        candidate = f"{stem}_{number}"
+    return candidate
+
+
 def request_settings(request: PlanRequest) -> tuple[Scene, GaitSettings]:
     """The scene and settings of `request`; RequestError says what cannot be planned."""
     try:
-        scene = load_scene(request.scene)
+        try:
+            scene = load_scene(request.scene)
+        except OSError as err:  # a name the file system refuses, e.g. one too long
+            raise SceneError(f"scene {request.scene!r} cannot be looked up ({err.strerror}); "
+                             f"available scenes: {', '.join(available_scenes())}") from None
         check_request(scene, step_length=request.step_length,
                       friction_coefficient=request.friction_coefficient,
                       intervals_per_phase=request.intervals_per_phase,
@@ -124,6 +139,8 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
     result.settings.update(certificate_metadata(continuous_certificate(result)))
     from gait_planner.io.mcap_writer import write_plan_mcap
 
+    if not request.output_name:  # an automatic name never replaces an earlier recording
+        stem = unused_stem(folder, stem)
     mcap = write_plan_mcap(result, folder / f"{stem}.mcap", allowed_dirs=[folder])
     rrd_path = None
     if rrd:

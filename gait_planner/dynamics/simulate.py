@@ -78,7 +78,7 @@ class Simulator:
         self._mass_max = float(np.abs(mb.mass_diagonal).max())
         # Numeric evaluation through CasADi's buffer interface: the arguments and results
         # are numpy arrays bound once, so a Newton iteration converts nothing (measured in
-        # benchmarks/REPORT.md). Not thread-safe: one Simulator per thread.
+        # benchmarks/HISTORY.md). Not thread-safe: one Simulator per thread.
         n = mb.ndof + nc
         self._in = {"x": np.zeros(n), "q": np.zeros(mb.k), "p": np.zeros(mb.k),
                     "h": np.zeros(1), "w": np.zeros(1), "tau": np.zeros(mb.nt)}
@@ -197,7 +197,7 @@ class Simulator:
         momentum exceeds that peak has no next configuration. The equations fold there
         (Newton stalls at a singular Jacobian; a homotopy from the previous increment turns
         back before reaching the step): the step is too large for the motion, and only a
-        smaller h helps (benchmarks/REPORT.md, "dt = 0.05").
+        smaller h helps (benchmarks/HISTORY.md, "dt = 0.05").
         """
         body, angle = self.largest_rotation(q_prev, q)
         text = f"; in the previous step {body} turned by {angle:.0f} deg"

@@ -35,7 +35,7 @@ STOPPED = "stopped on request"  # the message of a plan ended by `Planner.stop`
 # step is accepted when it has positive curvature, instead of regularising the Hessian
 # until MUMPS reports the right inertia. Far from the optimum walker3d's reduced Hessian is
 # strongly indefinite: with the inertia test it needed regularisations up to 1e6 and
-# 200-330 cold iterations, with this 70-105 (benchmarks/REPORT.md). walker2d cold solves
+# 200-330 cold iterations, with this 70-105 (benchmarks/HISTORY.md). walker2d cold solves
 # with it took from 31 to over 1000 iterations, hence the fallback below.
 INERTIA_FREE = {"ipopt.neg_curv_test_tol": 1e-12}
 # Iterations the inertia-free attempt of a cold plan gets (per stage) before the plan

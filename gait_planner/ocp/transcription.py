@@ -21,7 +21,7 @@ Unknowns (scaled to O(1)):
   (h_{n-1} tau_{n-1} + h_n tau_n)/2 into node n's equation: a sequence alternating in sign
   from interval to interval is invisible to the equations, and the optimum deconvolved
   rapidly varying node demands into such zigzags, measured up to 2.7 times a joint's peak
-  torque in its second difference; benchmarks/REPORT.md.)
+  torque in its second difference; benchmarks/HISTORY.md.)
 * lambda_n, contact multipliers of nodes 1..N-1 (in units of FORCE_SCALE): the paper
   removes them by projection (its Q matrices) and recovers them by eq. 10; keeping them as
   unknowns gives the same discrete trajectory and makes the friction cones and unilateral
@@ -56,7 +56,7 @@ FORCE_SCALE = 1000.0  # N
 # Bound (rad) on each rotational entry of u_n. The reparametrisation about qref_n is a chart
 # that is one-to-one for turns below half a revolution; a Newton step beyond it is a
 # divergence, not progress. With IPOPT's inertia-free curvature test (solve.py) walker2d
-# cold solves diverged without these bounds (benchmarks/REPORT.md); no plan measured had
+# cold solves diverged without these bounds (benchmarks/HISTORY.md); no plan measured had
 # one active.
 ROTATION_INCREMENT_MAX = np.pi
 
@@ -480,7 +480,7 @@ class Transcription:
         swing_clearance), joint speeds free. From a kinematic guess IPOPT finds the gait
         of the relaxed problem in about 100 iterations and the full one from there; with
         every limit from the start its inertia-free attempt stalled (walker3d: 851
-        iterations through the fallback; benchmarks/REPORT.md)."""
+        iterations through the fallback; benchmarks/HISTORY.md)."""
         out, offset = lbg.copy(), 0
         for name, size, _ in self.constraint_groups():
             if name == "ground_clearance":

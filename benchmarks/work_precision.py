@@ -1,0 +1,210 @@
+"""Speed against error: DMOCC (the product) and Hermite-Simpson direct collocation on
+minimal coordinates (`gait_planner.collocation`), the same gait problem at several grids,
+both solved cold from the same kinematic guess with the same IPOPT options, in one process.
+
+    .venv/bin/python benchmarks/work_precision.py            # walker2d + walker3d, 4..16
+    .venv/bin/python benchmarks/work_precision.py --quick    # walker2d at 4 and 8
+
+Grids: n intervals per phase with the base time step scaled by 8 / n, so that every grid can
+reach the same phase durations and only the discretisation changes. Errors, measured the
+same way for both methods:
+* against physics (`gait_planner.verify.simulation.physics_error`): the plan's torques and
+  contact schedule through the continuous dynamics (Pinocchio, DOP853, rtol 1e-10), from the
+  plan's state at every node ("node": the local error of one interval; RMS and max joint
+  angle drift) and at every phase start ("phase": drift over a phase, swing foot in mm);
+  and the continuous-dynamics certificate (inverse dynamics, % of peak torque);
+* against a fine reference: the same problem by DMOCC at `REFERENCE` intervals per phase;
+  joint angles compared at the same phase-relative times (each phase's nodes mapped to
+  [k, k + 1] for phase k, the reference interpolated linearly), and the cost difference.
+Rows go to benchmarks/results/work_precision.json; the plot to benchmarks/work_precision.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import logging
+import time
+
+import numpy as np
+
+from gait_planner.collocation import plan_collocation
+from gait_planner.model.loader import load_scene
+from gait_planner.ocp.settings import settings_for
+from gait_planner.ocp.solve import Planner
+from gait_planner.pipeline import continuous_certificate
+from gait_planner.verify.simulation import physics_error
+
+GRIDS = (4, 6, 8, 12, 16)
+REFERENCE = 24
+TIME_LIMIT = 300.0  # s per solve
+
+
+def settings_at(scene, n: int, time_limit: float):
+    s = settings_for(scene, intervals_per_phase=n, max_solve_time=time_limit, compiled=True)
+    return dataclasses.replace(s, base_time_step=scene.gait.base_time_step * 8 / n)
+
+
+def phase_clock(result) -> np.ndarray:
+    """(N+1,) phase-relative time of each node: phase k's nodes run over [k, k + 1]."""
+    names = [p.name for p in result.scene.gait.phases]
+    out = np.zeros(len(result.times))
+    for k, name in enumerate(names):
+        nodes = [i for i, ph in enumerate(result.phases) if ph == name]
+        if not nodes:
+            continue
+        first, last = nodes[0], min(nodes[-1] + 1, len(result.times) - 1)
+        span = result.times[last] - result.times[first]
+        for i in range(first, last + 1):
+            out[i] = k + (result.times[i] - result.times[first]) / span
+    return out
+
+
+def reference_error(result, reference) -> float:
+    """RMS joint angle difference (deg) to the reference over the half cycle."""
+    clock, ref_clock = phase_clock(result), phase_clock(reference)
+    inside = np.arange(len(result.times) - 1)  # nodes 0..N-1
+    ref = np.column_stack([np.interp(clock[inside], ref_clock[:-1], a[:-1])
+                           for a in np.unwrap(reference.joint_angles, axis=0).T])
+    mine = np.unwrap(result.joint_angles, axis=0)[inside]
+    return float(np.degrees(np.sqrt(np.mean((mine - ref) ** 2))))
+
+
+def solve(method: str, scene, n: int, time_limit: float):
+    s = settings_at(scene, n, time_limit)
+    start = time.perf_counter()
+    if method == "dmocc":
+        planner = Planner()
+        planner.prepare(scene, s)
+        build = time.perf_counter() - start
+        result = planner.plan(scene, s, warm_start=False)
+        size = {}
+    else:
+        result = plan_collocation(scene, s)
+        build = result.stats.build_time
+        size = {k: result.settings.get(k) for k in ("variables", "constraints",
+                                                      "jacobian_nonzeros", "hessian_nonzeros")}
+    return result, build, size
+
+
+def measure(method: str, scene_name: str, n: int, reference, time_limit: float) -> dict:
+    scene = load_scene(scene_name)
+    result, build, size = solve(method, scene, n, time_limit)
+    if method == "dmocc":
+        tr = Planner()._build(scene, settings_at(scene, n, time_limit)).tr
+        size = {"variables": int(tr.x.shape[0]), "constraints": int(tr.g.shape[0])}
+    row = {"method": method, "scene": scene_name, "intervals_per_phase": n,
+           **{k: (int(v) if v is not None else None) for k, v in size.items()},
+           "build_time_s": build, "solve_time_s": result.stats.solve_time,
+           "iterations": result.stats.iterations, "cost": result.cost_value,
+           "converged": bool(result.success), "message": result.message}
+    if not result.success:
+        return row
+    node, phase = (physics_error(result, reset=r) for r in ("node", "phase"))
+    cert = continuous_certificate(result)
+    row.update(
+        error_physics_rms_deg=node.angle_drift_rms_deg,
+        error_physics_max_deg=node.angle_drift_max_deg,
+        error_physics_phase_rms_deg=phase.angle_drift_rms_deg,
+        error_physics_phase_max_deg=phase.angle_drift_max_deg,
+        swing_drift_phase_mm=phase.swing_drift_max_mm,
+        physics_failure=node.failure or phase.failure,
+        certificate_torque_calm_pct=100 * cert.max_torque_calm,
+        certificate_torque_switch_pct=100 * cert.max_torque_switch,
+        error_reference_rms_deg=reference_error(result, reference) if reference else None,
+        cost_reference_relative=(result.cost_value / reference.cost_value - 1)
+        if reference else None)
+    return row
+
+
+def time_to_reach(rows: list[dict], level: float, key: str = "error_physics_rms_deg"):
+    """Solve time (s) at which a method's error first drops to `level`, interpolated in
+    log-log between the grids that bracket it (None: never reached)."""
+    pts = sorted((r["solve_time_s"], r[key]) for r in rows if r.get(key) is not None)
+    best = np.inf
+    for (t0, e0), (t1, e1) in zip(pts, pts[1:]):
+        best = min(best, e0)
+        if best > level >= e1:
+            w = np.log(level / best) / np.log(e1 / best)
+            return float(np.exp(np.log(t0) + w * np.log(t1 / t0)))
+    if pts and pts[0][1] <= level:
+        return pts[0][0]
+    return None
+
+
+def run(quick: bool = False, time_limit: float = TIME_LIMIT) -> list[dict]:
+    logging.getLogger("gait_planner").setLevel(logging.ERROR)
+    scenes = ("walker2d",) if quick else ("walker2d", "walker3d")
+    grids = (4, 8) if quick else GRIDS
+    rows = []
+    for scene_name in scenes:
+        scene = load_scene(scene_name)
+        reference = None
+        if not quick:
+            reference, _, _ = solve("dmocc", scene, REFERENCE, time_limit)
+            reference = reference if reference.success else None
+            print(f"{scene_name}: reference at {REFERENCE} per phase: "
+                  f"{'J = %.5f' % reference.cost_value if reference else 'did not converge'}",
+                  flush=True)
+        for n in grids:
+            for method in ("dmocc", "collocation"):
+                rows.append(measure(method, scene_name, n, reference, time_limit))
+                print_row(rows[-1])
+    return rows
+
+
+def print_row(r: dict) -> None:
+    def f(key, fmt):
+        v = r.get(key)
+        return "-" if v is None else format(v, fmt)
+    print(f"{r['scene']:9s} {r['method']:12s} n={r['intervals_per_phase']:3d} "
+          f"vars={f('variables', 'd'):>6} it={r['iterations']:5d} "
+          f"t={r['solve_time_s']:8.2f} s J={f('cost', '.5f'):>9} "
+          f"phys rms/max={f('error_physics_rms_deg', '.3g')}/{f('error_physics_max_deg', '.3g')} deg "
+          f"ref={f('error_reference_rms_deg', '.3g')} deg "
+          f"{'' if r['converged'] else 'FAILED: ' + r['message'][:60]}", flush=True)
+
+
+def plot(rows: list[dict], path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    keys = (("error_physics_rms_deg", "against physics: one-interval drift, RMS (deg)"),
+            ("error_reference_rms_deg", "against the fine reference: RMS (deg)"))
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for ax, (key, title) in zip(axes, keys):
+        for scene in sorted({r["scene"] for r in rows}):
+            for method, style in (("dmocc", "o-"), ("collocation", "s--")):
+                pts = sorted((r["solve_time_s"], r[key], r["intervals_per_phase"]) for r in rows
+                             if r["scene"] == scene and r["method"] == method
+                             and r.get(key) is not None)
+                if not pts:
+                    continue
+                t, e, n = zip(*pts)
+                ax.loglog(t, e, style, label=f"{method}, {scene}")
+                for ti, ei, ni in pts:
+                    ax.annotate(str(ni), (ti, ei), fontsize=7, xytext=(3, 3),
+                                textcoords="offset points")
+        ax.set_xlabel("solve time (s), cold, 2 cores")
+        ax.set_title(title, fontsize=10)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--time-limit", type=float, default=TIME_LIMIT)
+    args = parser.parse_args()
+    from results_io import figure_path, write_results
+    rows = run(args.quick, args.time_limit)
+    print(write_results("work_precision", rows, {"quick": args.quick, "reference": REFERENCE,
+                                                 "time_limit_s": args.time_limit}))
+    plot(rows, figure_path("work_precision.png"))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,14 @@
+"""Baseline for the speed-against-error comparison (issue #10): the same gait optimal
+control problem as `gait_planner.ocp`, transcribed by Hermite-Simpson direct collocation in
+minimal coordinates, the method of bioptim, OpenSim Moco or Drake users.
+
+`plan_collocation(scene, settings, intervals_per_phase=None, progress=None)` returns the
+product's `PlanResult`; `MinimalModel` is the minimal-coordinate model (q(theta), equations
+of motion, impact map, mirror), `CollocationTranscription` the NLP.
+"""
+
+from gait_planner.collocation.minimal import MinimalModel
+from gait_planner.collocation.solve import plan_collocation, problem_size
+from gait_planner.collocation.transcription import CollocationTranscription
+
+__all__ = ["MinimalModel", "CollocationTranscription", "plan_collocation", "problem_size"]

@@ -1,0 +1,110 @@
+"""Solving the collocation NLP with the product's IPOPT set-up.
+
+Same options as `gait_planner.ocp.solve.Planner` (MUMPS, tol and constr_viol_tol of the
+settings, adaptive mu, warm_start_init_point; `Planner._options`), the same solver variants
+and cold-start stages (`VARIANTS`, `COLD_ATTEMPTS`: sigma fixed at its upper bound with
+the swing clearance and joint speed limits relaxed, then everything free; the
+inertia-free curvature test first, IPOPT's inertia correction as the fallback), the same
+progress callback and time limit. Exact Hessian by CasADi's AD of the MX graph of
+per-point SX Functions (`MinimalModel`); nothing compiled (the product's default neither).
+The whole problem expanded to one SX graph, as the product does, built walker2d in 19 s
+instead of 2 s and walker3d's did not finish (over 6 GB) on this machine; per iteration the
+MX derivatives cost walker2d 0.10 s instead of 0.03 s.
+"""
+
+from __future__ import annotations
+
+import time
+from types import SimpleNamespace
+
+import casadi as ca
+import numpy as np
+
+from gait_planner.collocation.guess import initial_guess
+from gait_planner.collocation.mesh import mesh_of
+from gait_planner.collocation.minimal import MinimalModel
+from gait_planner.collocation.result import build_result
+from gait_planner.collocation.transcription import CollocationTranscription
+from gait_planner.model.multibody import Multibody
+from gait_planner.model.scene import Scene
+from gait_planner.ocp.settings import GaitSettings
+from gait_planner.ocp.solution import STATUS_WORDS, failed_result
+from gait_planner.ocp.solve import COLD_ATTEMPTS, VARIANTS, Planner, Progress, _IterationCallback
+from gait_planner.result import PlanResult
+
+
+def problem_size(solver: ca.Function, nx: int, ng: int) -> dict[str, int]:
+    """variables, constraints, nonzeros of the constraint Jacobian and of the Hessian of
+    the Lagrangian (lower triangle, what IPOPT stores) of an nlpsol instance."""
+    rows, cols = solver.get_function("nlp_hess_l").sparsity_out(0).get_triplet()  # triu
+    return {"variables": nx, "constraints": ng,
+            "jacobian_nonzeros": int(solver.get_function("nlp_jac_g").sparsity_out(1).nnz()),
+            "hessian_nonzeros": int(np.sum(np.array(rows) <= np.array(cols)))}
+
+
+def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phase: int | None = None,
+                     progress: Progress | None = None) -> PlanResult:
+    """Plan the half cycle of (scene, settings) by Hermite-Simpson collocation in minimal
+    coordinates (`gait_planner.collocation.transcription`); intervals_per_phase sets the
+    collocation mesh (None: the DMOCC nodes), the problem itself is that of `settings`
+    (`collocation.mesh`). Returns a `PlanResult` as the product's (`collocation.result`),
+    with the NLP's size in result.settings (variables, constraints, jacobian_nonzeros,
+    hessian_nonzeros)."""
+    start = time.perf_counter()
+    try:
+        model = MinimalModel(Multibody(scene))
+        tr = CollocationTranscription(model, settings, mesh_of(scene, settings,
+                                                               intervals_per_phase))
+    except (ValueError, RuntimeError) as err:
+        return failed_result(scene, settings, f"could not build the problem: {err}")
+    nlp = {"x": tr.x, "p": tr.p, "f": tr.cost, "g": tr.g}
+    lbx, ubx, lbg, ubg = tr.bounds()
+    nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
+    callback = _IterationCallback(nx, ng, lbg, ubg)
+    solvers: dict[str, ca.Function] = {}
+
+    def solver(variant: str) -> ca.Function:
+        if variant not in solvers:
+            opts = Planner._options(SimpleNamespace(callback=callback), settings)
+            opts.update(VARIANTS[variant])
+            opts["ipopt.max_iter"] = min(opts["ipopt.max_iter"], settings.max_iterations)
+            solvers[variant] = ca.nlpsol(f"collocation_{variant}", "ipopt", nlp, opts)
+        return solvers[variant]
+
+    size = problem_size(solver(COLD_ATTEMPTS[0][0][0]), nx, ng)
+    build_time = time.perf_counter() - start
+    start = time.perf_counter()
+    p = np.array([settings.step_length, settings.friction_coefficient])
+    x_start = initial_guess(tr, settings.step_length)
+    sig = tr.variables.index("sigma")
+    callback.deadline = start + settings.max_solve_time
+    callback.started, callback.iteration, callback.report = start, 0, progress
+    origin = ("kinematic guess (ocp.guess) in minimal coordinates; sigma fixed at its upper "
+              "bound and limits relaxed, then free")
+    iterations, status, evaluation, x, g = 0, "not started", 0.0, x_start, None
+    for number, attempt in enumerate(COLD_ATTEMPTS):
+        x, duals, success = x_start, {"lam_x0": np.zeros(nx), "lam_g0": np.zeros(ng)}, False
+        for variant, fix_sigma, relaxed in attempt:
+            lb, ub = lbx.copy(), ubx.copy()
+            if fix_sigma:
+                lb[sig] = ub[sig] = x[sig]
+            lower = tr.relaxed_lower_bounds(lbg) if relaxed else lbg
+            ipopt = solver(variant)
+            sol = ipopt(x0=x, p=p, lbx=lb, ubx=ub, lbg=lower, ubg=ubg, **duals)
+            stats = ipopt.stats()
+            iterations += int(stats.get("iter_count", 0))
+            evaluation += sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_"))
+            status = str(stats.get("return_status", "unknown"))
+            x, g = np.array(sol["x"]).ravel(), np.array(sol["g"]).ravel()
+            duals = {"lam_x0": np.array(sol["lam_x"]).ravel(),
+                     "lam_g0": np.array(sol["lam_g"]).ravel()}
+            success = bool(stats.get("success", False))
+            if not success:
+                break
+        if success or time.perf_counter() > callback.deadline or number + 1 == len(COLD_ATTEMPTS):
+            break
+        origin += (f"; the inertia-free attempt stopped ({STATUS_WORDS.get(status, status)})"
+                   f" after {iterations} iterations, restarted with IPOPT's inertia test")
+    return build_result(tr, x, p, g, status=status, iterations=iterations,
+                        solve_time=time.perf_counter() - start, build_time=build_time,
+                        evaluation_time=evaluation, origin=origin, sizes=size)

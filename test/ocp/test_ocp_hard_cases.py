@@ -1,0 +1,54 @@
+"""The fast rows of the hard-case benchmark (benchmarks/hard_cases.py) as tests: walker2d
+changed in one way converges to a plan that passes every check, or is refused with the
+right reason before planning."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from gait_planner.model.loader import load_scene
+from gait_planner.ocp.request_ranges import RangeError, check_request
+from gait_planner.ocp.settings import settings_for
+from gait_planner.ocp.solve import Planner
+from gait_planner.verify import verify_result
+
+
+@pytest.fixture(scope="module")
+def walker2d():
+    return load_scene("walker2d")
+
+
+@pytest.mark.parametrize("overrides, replace, guess", [
+    ({"step_length": 0.3}, {}, "kinematic"),
+    ({}, {"scaling_bounds": (0.9, 1.1)}, "kinematic"),
+    ({}, {}, "standing"),
+    ({}, {}, "poor"),
+], ids=["step 0.3 m", "narrow sigma", "cold start standing", "poor guess"])
+def test_a_hard_request_converges_to_a_plan_that_passes_every_check(walker2d, overrides,
+                                                                     replace, guess):
+    settings = dataclasses.replace(settings_for(walker2d, max_solve_time=120.0, **overrides),
+                                   **replace)
+    result = Planner().plan(walker2d, settings, warm_start=False, guess=guess)
+    assert result.success, result.message
+    lo, hi = settings.scaling_bounds
+    assert all(lo - 1e-6 <= s <= hi + 1e-6 for s in result.phase_scaling)
+    report = verify_result(result)
+    assert report.ok, report.failures
+
+
+@pytest.mark.parametrize("field, value", [("intervals_per_phase", 1),
+                                          ("intervals_per_phase", 100000),
+                                          ("step_length", 100.0),
+                                          ("friction_coefficient", 1e-6)])
+def test_an_impossible_request_is_refused_naming_the_field(walker2d, field, value):
+    given = {"step_length": None, "friction_coefficient": None, "intervals_per_phase": None,
+             "max_solve_time": None, field: value}
+    with pytest.raises(RangeError, match=field):
+        check_request(walker2d, **given)
+
+
+def test_an_unknown_guess_is_refused(walker2d):
+    with pytest.raises(ValueError, match="unknown guess 'bad'"):
+        Planner().plan(walker2d, settings_for(walker2d), guess="bad")
