@@ -28,7 +28,6 @@ import argparse
 import logging
 import time
 
-import numpy as np
 
 from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
@@ -37,17 +36,6 @@ from gait_planner.ocp.solve import Planner
 from results_io import write_results
 
 SCENES = ("compass", "walker2d", "walker3d")
-
-
-def _nonzeros(function, name_part: str, upper: bool = False) -> int:
-    """Nonzeros of the output of `function` whose name contains `name_part` (upper: of its
-    upper triangle only)."""
-    name = next(n for n in function.name_out() if name_part in n)
-    sparsity = function.sparsity_out(name)
-    if not upper:
-        return int(sparsity.nnz())
-    rows, cols = sparsity.get_triplet()
-    return int(np.sum(np.asarray(rows) <= np.asarray(cols)))
 
 
 def measure(name: str, compiled: bool = False) -> dict:
@@ -59,14 +47,11 @@ def measure(name: str, compiled: bool = False) -> dict:
     start = time.perf_counter()
     used = planner.prepare(scene, settings)
     build = time.perf_counter() - start
-    built = planner._build(scene, settings)  # the cached problem prepare() built
+    size = planner.problem_size(scene, settings)  # the problem prepare() built
     result = planner.plan(scene, settings, warm_start=False)
     return {
         "scene": name, "derivatives": used, "bodies": mb.nb, "k": mb.k, "dof": mb.ndof,
-        "torques": mb.nt, "intervals": int(built.tr.N),
-        "variables": int(built.nlp["x"].numel()), "constraints": int(built.nlp["g"].numel()),
-        "jacobian_nonzeros": _nonzeros(built.derivatives["jac_g"], "jac_g_x"),
-        "hessian_nonzeros_upper": _nonzeros(built.derivatives["hess_lag"], "hess", upper=True),
+        "torques": mb.nt, **size,
         "build_s": build, "solve_s": result.stats.solve_time,
         "iterations": result.stats.iterations,
         "per_iteration_ms": 1e3 * result.stats.solve_time / max(1, result.stats.iterations),
@@ -87,7 +72,7 @@ def print_table(rows: list[dict]) -> None:
     for r in rows:
         print(f"{r['scene']:>9} {r['dof']:>4} {r['intervals']:>3} {r['variables']:>6} "
               f"{r['constraints']:>6} {r['jacobian_nonzeros']:>8} "
-              f"{r['hessian_nonzeros_upper']:>9} {r['build_s']:>8.2f} {r['solve_s']:>8.2f} "
+              f"{r['hessian_nonzeros']:>9} {r['build_s']:>8.2f} {r['solve_s']:>8.2f} "
               f"{r['iterations']:>5} {r['per_iteration_ms']:>6.1f} "
               f"{'y' if r['success'] else 'n':>3} {r['cost']:>9.4f}")
     print(f"(derivatives: {rows[0]['derivatives']}; hess nnz: upper triangle of the Hessian "

@@ -183,7 +183,7 @@ def model_size(doc) -> list[str]:
     out += table(rows, [
         ("scene", "scene", ""), ("dof", "dof", "d"), ("N", "intervals", "d"),
         ("variables", "variables", "d"), ("constraints", "constraints", "d"),
-        ("Jacobian nnz", "jacobian_nonzeros", "d"), ("Hessian nnz (upper)", "hessian_nonzeros_upper", "d"),
+        ("Jacobian nnz", "jacobian_nonzeros", "d"), ("Hessian nnz (upper)", "hessian_nonzeros", "d"),
         ("build s", "build_s", ".2f"), ("solve s", "solve_s", ".2f"),
         ("iterations", "iterations", "d"), ("ms/iteration", "per_iteration_ms", ".1f"),
         ("J", "cost", ".4f")])

@@ -78,7 +78,7 @@ def solve(method: str, scene, n: int, time_limit: float):
         planner.prepare(scene, s)
         build = time.perf_counter() - start
         result = planner.plan(scene, s, warm_start=False)
-        size = {}
+        size = planner.problem_size(scene, s)
     else:
         result = plan_collocation(scene, s)
         build = result.stats.build_time
@@ -90,11 +90,9 @@ def solve(method: str, scene, n: int, time_limit: float):
 def measure(method: str, scene_name: str, n: int, reference, time_limit: float) -> dict:
     scene = load_scene(scene_name)
     result, build, size = solve(method, scene, n, time_limit)
-    if method == "dmocc":
-        tr = Planner()._build(scene, settings_at(scene, n, time_limit)).tr
-        size = {"variables": int(tr.x.shape[0]), "constraints": int(tr.g.shape[0])}
     row = {"method": method, "scene": scene_name, "intervals_per_phase": n,
-           **{k: (int(v) if v is not None else None) for k, v in size.items()},
+           **{k: (int(v) if v is not None else None) for k, v in size.items()
+              if k != "intervals"},
            "build_time_s": build, "solve_time_s": result.stats.solve_time,
            "iterations": result.stats.iterations, "cost": result.cost_value,
            "converged": bool(result.success), "message": result.message}

@@ -146,6 +146,17 @@ class Planner:
             self._solver(built, settings, variant)
         return built.derivatives_used
 
+    def problem_size(self, scene: Scene, settings: GaitSettings) -> dict[str, int]:
+        """Size of the NLP of (scene, settings), built if needed: intervals, variables,
+        constraints, nonzeros of the constraint Jacobian and of the upper triangle of the
+        Lagrangian's Hessian (the patterns IPOPT is given)."""
+        built = self._build(scene, settings)
+        rows, cols = built.derivatives["hess_lag"].sparsity_out(0).get_triplet()
+        return {"intervals": int(built.tr.N), "variables": int(built.nlp["x"].numel()),
+                "constraints": int(built.nlp["g"].numel()),
+                "jacobian_nonzeros": int(built.derivatives["jac_g"].sparsity_out(1).nnz()),
+                "hessian_nonzeros": int(np.sum(np.asarray(rows) <= np.asarray(cols)))}
+
     def _build(self, scene: Scene, s: GaitSettings) -> _Built:
         key = _key(scene, s)
         if key not in self._built:
