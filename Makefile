@@ -17,7 +17,7 @@ test: setup
 	$(PYTHON) -m pytest test $(PYTEST_ARGS)
 
 fuzz: setup
-	GAIT_PLANNER_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PYTHON) -m pytest test/ros/test_fuzz.py -m fuzz -s $(PYTEST_ARGS)
+	GAIT_PLANNER_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PYTHON) -m pytest test/ros/test_fuzz.py -m fuzz -s --hypothesis-show-statistics $(PYTEST_ARGS)
 
 run: setup
 	$(VENV)/bin/gait-planner run --compile

@@ -28,6 +28,7 @@ from gait_planner.ros.worker import Closed, PlanWorker
 from gait_planner_msgs.action import PlanGait as PlanGaitAction
 
 ACTION = "/gait_planner/plan_gait"
+CANCEL_MARK_WAIT = 0.5  # s, the longest a stopped goal waits for rclpy's "canceling" mark
 
 # plan(request, answer): plans a request and fills the answer (Response or Result fields)
 Plan = Callable[[object, object], None]
@@ -61,6 +62,17 @@ class PlanGaitActionServer:
         self._node.get_logger().info("cancel refused: the plan is being recorded")
         return CancelResponse.REJECT
 
+    def _await_cancel_mark(self, goal_handle: ServerGoalHandle) -> None:
+        """Wait (up to `CANCEL_MARK_WAIT` s; not at shutdown) until rclpy has marked the goal
+        canceling. rclpy marks it after `_on_cancel` returns, and `_on_cancel` has already
+        stopped the plan: a plan that stops at once could end before the mark, and the goal
+        was then aborted (message "stopped on request") instead of canceled, and the cancel
+        answered as refused (seen in test/ros/test_fuzz.py)."""
+        deadline = time.monotonic() + CANCEL_MARK_WAIT
+        while (not goal_handle.is_cancel_requested and not self._worker.closing()
+               and time.monotonic() < deadline):
+            time.sleep(0.002)
+
     def _execute(self, goal_handle: ServerGoalHandle) -> PlanGaitAction.Result:
         started = time.monotonic()
         every = max(1, int(self._node.get_parameter("feedback_every").value))
@@ -80,6 +92,8 @@ class PlanGaitActionServer:
             self._worker.run(lambda: self._plan(goal_handle.request, result), feedback)
         except Closed as err:
             result.success, result.message = False, str(err)
+        if result.message == STOPPED:
+            self._await_cancel_mark(goal_handle)
         try:
             if goal_handle.is_cancel_requested and result.message == STOPPED:
                 goal_handle.canceled()

@@ -105,6 +105,10 @@ class PlanWorker:
             raise outcome["error"]
         return outcome["value"]
 
+    def closing(self) -> bool:
+        """True once `close` was called (the node is shutting down)."""
+        return self._closed.is_set()
+
     def close(self) -> None:
         """Stop the running plan, silence its listener (the node is going away) and release
         every caller waiting in `run`."""

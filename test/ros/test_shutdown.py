@@ -33,7 +33,8 @@ def test_a_signal_ends_the_node_within_2_s_and_nothing_is_recorded(
     process = node_process("--ros-args", "-p", f"output_dir:={out}",
                            "-p", f"allowed_output_dirs:=['{tmp_path}']",
                            "-p", f"default_scene:={scene}",
-                           "-p", f"compile_derivatives:={compiled}")
+                           "-p", f"compile_derivatives:={compiled}",
+                           "-p", "prepare_on_start:=false")  # the request builds: "building"
     client_node = make_node("shutdown_test_client")
     executor.add_node(client_node)
     action = ActionClient(client_node, PlanGaitAction, ACTION)
