@@ -19,7 +19,8 @@ reset=...)` is the API.
   t_s of the quadratic through 0, xi_1, xi_2; nodes past N from the periodic continuation
   q_{N-1+j} = mirror(q_j)), then projected on the held contacts. One-sided because the
   velocity jumps at an impact and the acceleration at a release; second order like the
-  plan (two-point difference when the segment has a single interval).
+  plan (a segment of a single interval takes node s - 1 instead when interval s - 1 holds
+  the same contacts, else the two-point difference).
 * reset="node": every interval starts from the plan's state at its first node: the drift
   after one interval is the plan's local error against the continuous dynamics (O(h^3) for
   a second-order plan where the motion is smooth), free of any growth.
@@ -197,9 +198,13 @@ class PlanSimulation:
         t0, q0, held = self._extended(s)
         t1, q1, held1 = self._extended(s + 1)
         xi1, tau1 = pin.difference(self.cm.model, q0, q1), t1 - t0
-        if held1 != held:  # the segment has a single interval
-            return xi1 / tau1
-        t2, q2, _ = self._extended(s + 2)
+        if held1 != held:  # the segment has a single interval: take node s - 1 instead of
+            # s + 2 if interval s - 1 holds the same contacts (no impact at s)
+            if s == 0 or self.active[s - 1] != held:
+                return xi1 / tau1
+            t2, q2 = self.times[s - 1], self.configs[s - 1]
+        else:
+            t2, q2, _ = self._extended(s + 2)
         xi2, tau2 = pin.difference(self.cm.model, q0, q2), t2 - t0
         return -tau2 / (tau1 * (tau1 - tau2)) * xi1 - tau1 / (tau2 * (tau2 - tau1)) * xi2
 
