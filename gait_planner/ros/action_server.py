@@ -39,6 +39,7 @@ class PlanGaitActionServer:
 
     def __init__(self, node: Node, worker: PlanWorker, plan: Plan, callback_group):
         self._node, self._worker, self._plan = node, worker, plan
+        self._tickets: dict[int, int] = {}  # id of an accepted goal -> its reservation
         self._server = ActionServer(
             node, PlanGaitAction, ACTION, execute_callback=self._execute,
             goal_callback=self._on_goal, cancel_callback=self._on_cancel,
@@ -50,16 +51,17 @@ class PlanGaitActionServer:
 
     def _on_goal(self, goal: PlanGaitAction.Goal) -> GoalResponse:
         if self._worker.try_reserve():
+            self._tickets[id(goal)] = self._worker.ticket  # goal_handle.request is `goal`
             return GoalResponse.ACCEPT
         self._node.get_logger().warning(
             "plan goal rejected: busy (one plan at a time; the running plan goes on)")
         return GoalResponse.REJECT
 
     def _on_cancel(self, goal_handle: ServerGoalHandle) -> CancelResponse:
-        if self._worker.request_stop():
+        if self._worker.request_stop(self._tickets.get(id(goal_handle.request), -1)):
             self._node.get_logger().info("plan goal canceled: stopping the solver")
             return CancelResponse.ACCEPT
-        self._node.get_logger().info("cancel refused: the plan is being recorded")
+        self._node.get_logger().info("cancel refused: the plan is being recorded or is over")
         return CancelResponse.REJECT
 
     def _await_cancel_mark(self, goal_handle: ServerGoalHandle) -> None:
@@ -92,6 +94,7 @@ class PlanGaitActionServer:
             self._worker.run(lambda: self._plan(goal_handle.request, result), feedback)
         except Closed as err:
             result.success, result.message = False, str(err)
+        self._tickets.pop(id(goal_handle.request), None)
         if result.message == STOPPED:
             self._await_cancel_mark(goal_handle)
         try:

@@ -40,23 +40,29 @@ class PlanWorker:
         self._closed = threading.Event()
         self._listener: Listener | None = None
         self.phase, self.iterations = "", 0
+        self.ticket = 0  # numbers the reservations: a stop names the plan it is meant for
 
     def try_reserve(self) -> bool:
-        """Reserve the worker for one plan; False if a plan runs (or the node is closing)."""
+        """Reserve the worker for one plan (`ticket` then numbers it); False if a plan runs
+        (or the node is closing)."""
         if self._closed.is_set() or not self._busy.acquire(blocking=False):
             return False
-        self._stop.clear()
-        self.phase, self.iterations = "", 0
+        with self._guard:
+            self._stop.clear()
+            self.phase, self.iterations = "", 0
+            self.ticket += 1
         return True
 
     def stopped(self) -> bool:
         """The planner's stop callback: True once a stop was requested."""
         return self._stop.is_set()
 
-    def request_stop(self) -> bool:
-        """Stop the running plan; refused (False) once it is recording its result."""
+    def request_stop(self, ticket: int | None = None) -> bool:
+        """Stop the running plan (with `ticket`: only the plan of that reservation, so that a
+        late cancel never stops the next request); refused (False) once it is recording its
+        result or when that plan is over."""
         with self._guard:
-            if self.phase == "recording":
+            if self.phase == "recording" or ticket not in (None, self.ticket):
                 return False
             self._stop.set()
             return True
