@@ -24,7 +24,7 @@ FULL = [
     ["cold_solve.py"],
     ["node_latency.py"],
     ["work_precision.py"],
-    ["hard_cases.py", "--time-limit", "60"],
+    ["hard_cases.py", "--time-limit", "45"],
     ["integrators.py", "--long-steps", "30000"],
 ]
 QUICK = [

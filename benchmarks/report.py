@@ -75,7 +75,10 @@ def work_precision(doc) -> list[str]:
             "*reference*: DMOCC at "
             f"{doc['header'].get('reference', '?')} intervals per phase, joint angles at equal "
             "phase-relative times; *certificate*: inverse dynamics, largest torque error in % "
-            "of the peak torque away from contact switches.", "",
+            "of the peak torque away from contact switches. The collocation is its fast form "
+            "(recursive Newton–Euler dynamics, the NLP expanded to one SX graph) with a time "
+            f"limit of {doc['header'].get('collocation_time_limit_s', '?')} s per solve; "
+            "DMOCC uses its compiled derivative elements.", "",
             "![work-precision](work_precision.png)", ""]
     out += table(rows, [
         ("scene", "scene", ""), ("method", "method", ""), ("n", "intervals_per_phase", "d"),

@@ -8,7 +8,9 @@ of motion, impact map, mirror), `CollocationTranscription` the NLP.
 """
 
 from gait_planner.collocation.minimal import MinimalModel
+from gait_planner.collocation.rnea import SpatialModel
 from gait_planner.collocation.solve import plan_collocation, problem_size
 from gait_planner.collocation.transcription import CollocationTranscription
 
-__all__ = ["MinimalModel", "CollocationTranscription", "plan_collocation", "problem_size"]
+__all__ = ["MinimalModel", "SpatialModel", "CollocationTranscription", "plan_collocation",
+           "problem_size"]

@@ -10,6 +10,15 @@ per-point SX Functions (`MinimalModel`); nothing compiled (the product's default
 The whole problem expanded to one SX graph, as the product does, built walker2d in 19 s
 instead of 2 s and walker3d's did not finish (over 6 GB) on this machine; per iteration the
 MX derivatives cost walker2d 0.10 s instead of 0.03 s.
+
+With dynamics="rnea" (`collocation.rnea.SpatialModel`: recursive Newton-Euler, the same
+values to round-off) and expand=True the whole NLP is one SX graph (measured on a loaded
+2-core machine, walker2d on the DMOCC nodes: build 7 s, 13.6 ms of derivative evaluation
+per iteration against 200 ms for minimal + MX; walker3d at 4 intervals per phase: build
+41 s, 2.4 GB). The default stays dynamics="minimal", expand=False: on walker2d the expanded
+RNEA problem converges (128 iterations) to another local optimum (cost 22.84 against
+22.76) whose knot velocity of ankle_r (846 deg/s) fails the verifier's joint-speed check
+(test_collocation_plans.test_recording_checks); the NLP bounds only the secant speeds.
 """
 
 from __future__ import annotations
@@ -24,6 +33,7 @@ from gait_planner.collocation.guess import initial_guess
 from gait_planner.collocation.mesh import mesh_of
 from gait_planner.collocation.minimal import MinimalModel
 from gait_planner.collocation.result import build_result
+from gait_planner.collocation.rnea import SpatialModel
 from gait_planner.collocation.transcription import CollocationTranscription
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
@@ -43,23 +53,39 @@ def problem_size(solver: ca.Function, nx: int, ng: int) -> dict[str, int]:
 
 
 def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phase: int | None = None,
-                     progress: Progress | None = None) -> PlanResult:
+                     progress: Progress | None = None, dynamics: str = "minimal",
+                     expand: bool = False) -> PlanResult:
     """Plan the half cycle of (scene, settings) by Hermite-Simpson collocation in minimal
     coordinates (`gait_planner.collocation.transcription`); intervals_per_phase sets the
     collocation mesh (None: the DMOCC nodes), the problem itself is that of `settings`
     (`collocation.mesh`). Returns a `PlanResult` as the product's (`collocation.result`),
     with the NLP's size in result.settings (variables, constraints, jacobian_nonzeros,
-    hessian_nonzeros)."""
+    hessian_nonzeros).
+
+    dynamics "rnea": equations of motion, impacts and contact kinematics by recursive
+    Newton-Euler (`collocation.rnea.SpatialModel`); "minimal": derivatives of q(theta)
+    composed with the director mass matrix (`MinimalModel`). expand: the NLP expanded to
+    one SX graph before IPOPT (Hessian and Jacobian by SX AD), else MX calls of per-point
+    SX Functions."""
     start = time.perf_counter()
+    if dynamics not in ("rnea", "minimal"):
+        raise ValueError(f"dynamics must be 'rnea' or 'minimal', got {dynamics!r}")
     try:
-        model = MinimalModel(Multibody(scene))
+        mb = Multibody(scene)
+        model = SpatialModel(mb) if dynamics == "rnea" else MinimalModel(mb)
         tr = CollocationTranscription(model, settings, mesh_of(scene, settings,
                                                                intervals_per_phase))
     except (ValueError, RuntimeError) as err:
         return failed_result(scene, settings, f"could not build the problem: {err}")
-    nlp = {"x": tr.x, "p": tr.p, "f": tr.cost, "g": tr.g}
-    lbx, ubx, lbg, ubg = tr.bounds()
     nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
+    if expand:
+        graph = ca.Function("collocation_nlp", [tr.x, tr.p], [tr.cost, tr.g]).expand()
+        xs, ps = ca.SX.sym("x", nx), ca.SX.sym("p", int(tr.p.shape[0]))
+        f, g_expr = graph(xs, ps)
+        nlp = {"x": xs, "p": ps, "f": f, "g": g_expr}
+    else:
+        nlp = {"x": tr.x, "p": tr.p, "f": tr.cost, "g": tr.g}
+    lbx, ubx, lbg, ubg = tr.bounds()
     callback = _IterationCallback(nx, ng, lbg, ubg)
     solvers: dict[str, ca.Function] = {}
 
