@@ -53,7 +53,8 @@ from gait_planner.ocp.mirror import torque_mirror
 from gait_planner.ocp.posture import (joint_limit_constants, joint_limit_margins,
                                       joint_speed_margins, twist_squares)
 from gait_planner.ocp.settings import GaitSettings
-from gait_planner.ocp.transcription import FORCE_SCALE, TORQUE_SCALE, Transcription
+from gait_planner.ocp.transcription import (FORCE_SCALE, TORQUE_SCALE, Transcription,
+                                           relaxed_lower_bounds)
 
 ACCELERATION_SCALE = 10.0  # rad/s^2
 
@@ -350,11 +351,4 @@ class CollocationTranscription:
     def relaxed_lower_bounds(self, lbg: np.ndarray) -> np.ndarray:
         """lbg of the first stage, as the product's (`Transcription.relaxed_lower_bounds`):
         swing points only above the ground, joint speeds free."""
-        out, offset = lbg.copy(), 0
-        for name, size, _ in self.constraint_groups():
-            if name == "ground_clearance":
-                out[offset : offset + size] = -self.settings.swing_clearance
-            elif name == "joint_speed":
-                out[offset : offset + size] = -np.inf
-            offset += size
-        return out
+        return relaxed_lower_bounds(self.constraint_groups(), lbg, self.settings.swing_clearance)

@@ -481,11 +481,17 @@ class Transcription:
         of the relaxed problem in about 100 iterations and the full one from there; with
         every limit from the start its inertia-free attempt stalled (walker3d: 851
         iterations through the fallback; benchmarks/HISTORY.md)."""
-        out, offset = lbg.copy(), 0
-        for name, size, _ in self.constraint_groups():
-            if name == "ground_clearance":
-                out[offset : offset + size] = -self.settings.swing_clearance
-            elif name == "joint_speed":
-                out[offset : offset + size] = -np.inf
-            offset += size
-        return out
+        return relaxed_lower_bounds(self.constraint_groups(), lbg, self.settings.swing_clearance)
+
+
+def relaxed_lower_bounds(groups, lbg: np.ndarray, swing_clearance: float) -> np.ndarray:
+    """lbg with the groups [(name, size, is_equality)] "ground_clearance" lowered by
+    swing_clearance (points only above the ground) and "joint_speed" free."""
+    out, offset = lbg.copy(), 0
+    for name, size, _ in groups:
+        if name == "ground_clearance":
+            out[offset : offset + size] = -swing_clearance
+        elif name == "joint_speed":
+            out[offset : offset + size] = -np.inf
+        offset += size
+    return out
