@@ -39,7 +39,8 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
-from gait_planner.ocp.solve import COLD_ATTEMPTS, VARIANTS, Planner, Progress, _IterationCallback
+from gait_planner.ocp.solve import (COLD_ATTEMPTS, VARIANTS, Planner, Progress, _IterationCallback,
+                                     solve_stage)
 from gait_planner.result import PlanResult
 
 
@@ -115,16 +116,10 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
             if fix_sigma:
                 lb[sig] = ub[sig] = x[sig]
             lower = tr.relaxed_lower_bounds(lbg) if relaxed else lbg
-            ipopt = solver(variant)
-            sol = ipopt(x0=x, p=p, lbx=lb, ubx=ub, lbg=lower, ubg=ubg, **duals)
-            stats = ipopt.stats()
-            iterations += int(stats.get("iter_count", 0))
-            evaluation += sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_"))
-            status = str(stats.get("return_status", "unknown"))
-            x, g = np.array(sol["x"]).ravel(), np.array(sol["g"]).ravel()
-            duals = {"lam_x0": np.array(sol["lam_x"]).ravel(),
-                     "lam_g0": np.array(sol["lam_g"]).ravel()}
-            success = bool(stats.get("success", False))
+            x, g, duals, stage = solve_stage(solver(variant), x, duals, p, lb, ub, lower, ubg)
+            iterations += stage.iterations
+            evaluation += stage.evaluation_time
+            status, success = stage.status, stage.success
             if not success:
                 break
         if success or time.perf_counter() > callback.deadline or number + 1 == len(COLD_ATTEMPTS):

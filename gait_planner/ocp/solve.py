@@ -123,6 +123,31 @@ def _key(scene: Scene, s: GaitSettings):
     return scene.name, scene.source, fixed
 
 
+@dataclasses.dataclass(frozen=True)
+class StageStats:
+    """What one IPOPT call reports: iterations, seconds spent evaluating functions and
+    derivatives, return status, success."""
+
+    iterations: int
+    evaluation_time: float
+    status: str
+    success: bool
+
+
+def solve_stage(solver: ca.Function, x0: np.ndarray, duals: dict, p: np.ndarray,
+                lbx: np.ndarray, ubx: np.ndarray, lbg: np.ndarray, ubg: np.ndarray):
+    """One IPOPT call from (x0, duals {"lam_x0", "lam_g0"}): (x, g, duals to continue
+    from, StageStats)."""
+    sol = solver(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, **duals)
+    stats = solver.stats()
+    return (np.array(sol["x"]).ravel(), np.array(sol["g"]).ravel(),
+            {"lam_x0": np.array(sol["lam_x"]).ravel(), "lam_g0": np.array(sol["lam_g"]).ravel()},
+            StageStats(int(stats.get("iter_count", 0)),
+                       sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_")),
+                       str(stats.get("return_status", "unknown")),
+                       bool(stats.get("success", False))))
+
+
 class Planner:
     """Plans gaits; keeps built problems and previous plans for warm starts.
 
@@ -292,15 +317,10 @@ class Planner:
                 if fix_sigma:
                     lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
                 lower = tr.relaxed_lower_bounds(lbg) if relaxed else lbg
-                sol = solver(x0=x0, p=p, lbx=lb, ubx=ub, lbg=lower, ubg=ubg, **duals)
-                stats = solver.stats()
-                iterations += int(stats.get("iter_count", 0))
-                evaluation += sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_"))
-                status = str(stats.get("return_status", "unknown"))
-                x0, g = np.array(sol["x"]).ravel(), np.array(sol["g"]).ravel()
-                duals = {"lam_x0": np.array(sol["lam_x"]).ravel(),
-                         "lam_g0": np.array(sol["lam_g"]).ravel()}
-                success = bool(stats.get("success", False))
+                x0, g, duals, stage = solve_stage(solver, x0, duals, p, lb, ub, lower, ubg)
+                iterations += stage.iterations
+                evaluation += stage.evaluation_time
+                status, success = stage.status, stage.success
                 if not success:
                     break
             if success or stopped() or time.perf_counter() > built.callback.deadline \
