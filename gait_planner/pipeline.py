@@ -87,6 +87,11 @@ def unused_stem(folder: Path, stem: str) -> str:
 
 def request_settings(request: PlanRequest) -> tuple[Scene, GaitSettings]:
     """The scene and settings of `request`; RequestError says what cannot be planned."""
+    for name in ("step_length", "friction_coefficient", "max_solve_time"):
+        _finite(name, getattr(request, name))
+    if not 1 <= request.steps <= MAX_STEPS:
+        raise RequestError(f"steps must be a whole number of half cycles from 1 to {MAX_STEPS}, "
+                           f"got {request.steps}")
     try:
         try:
             scene = load_scene(request.scene)
@@ -121,11 +126,6 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
 
     stage: called with "recording" once the plan is found, before anything is written (an
     exception it raises ends the request with nothing recorded)."""
-    for name in ("step_length", "friction_coefficient", "max_solve_time"):
-        _finite(name, getattr(request, name))
-    if not 1 <= request.steps <= MAX_STEPS:
-        raise RequestError(f"steps must be a whole number of half cycles from 1 to {MAX_STEPS}, "
-                           f"got {request.steps}")
     scene, settings = request_settings(request)
     stem = output_stem(request, scene.name)
     folder = Path(output_dir)

@@ -36,19 +36,9 @@ import numpy as np
 
 from gait_planner.collocation.transcription import CollocationTranscription
 from gait_planner.model.angles import angle_names
-from gait_planner.ocp.solution import CONSTRAINT_LIMIT, SOLVED, STATUS_WORDS, _mirror_forces
+from gait_planner.ocp.solution import (CONSTRAINT_LIMIT, SOLVED, STATUS_WORDS, _mirror_forces,
+                                       violations)
 from gait_planner.result import PlanResult, SolverStats
-
-
-def violations(tr: CollocationTranscription, g: np.ndarray) -> dict[str, float]:
-    """Largest violation of each constraint group (equalities |g|, inequalities max(0, -g))."""
-    out, offset = {}, 0
-    for name, size, equality in tr.constraint_groups():
-        part = g[offset : offset + size]
-        offset += size
-        v = np.abs(part) if equality else np.maximum(0.0, -part)
-        out[name] = float(v.max()) if size else 0.0
-    return out
 
 
 def _extractor(tr: CollocationTranscription) -> ca.Function:

@@ -34,7 +34,8 @@ SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
 def violations(tr: Transcription, g: np.ndarray) -> dict[str, float]:
-    """Largest violation of each constraint group (equalities |g|, inequalities max(0, -g))."""
+    """Largest violation of each constraint group (equalities |g|, inequalities max(0, -g));
+    tr: a transcription's constraint_groups() (also the collocation baseline's)."""
     out, offset = {}, 0
     for name, size, equality in tr.constraint_groups():
         part = g[offset : offset + size]

@@ -80,8 +80,7 @@ from rclpy.signals import SignalHandlerOptions
 
 from gait_planner.io.mcap_reader import read_plan_mcap
 from gait_planner.ocp.solve import STOPPED, _key
-from gait_planner.pipeline import (MAX_STEPS, RequestError, _finite, output_stem,
-                                   request_settings)
+from gait_planner.pipeline import MAX_STEPS, RequestError, output_stem, request_settings
 from gait_planner.ros.action_server import ACTION
 from gait_planner.ros.node import BUSY, SERVICE, request_from_msg
 from gait_planner_msgs.action import PlanGait as PlanGaitAction
@@ -143,11 +142,6 @@ def predicted_refusal(request) -> str | None:
     order `plan_and_record` makes them), or None if the node will plan it."""
     plan = request_from_msg(as_received(request), DEFAULT_SCENE, NODE_MAX_SOLVE_TIME, True)
     try:
-        for name in ("step_length", "friction_coefficient", "max_solve_time"):
-            _finite(name, getattr(plan, name))
-        if not 1 <= plan.steps <= MAX_STEPS:
-            raise RequestError(f"steps must be a whole number of half cycles from 1 to "
-                               f"{MAX_STEPS}, got {plan.steps}")
         scene, _ = request_settings(plan)
         output_stem(plan, scene.name)
     except RequestError as err:
