@@ -47,6 +47,7 @@ TOPIC_FORCES = "/gait_planner/contact_forces"
 BUSY = "busy: another plan is running (the node plans one request at a time); try again later"
 EXECUTOR_THREADS = 4  # a waiting plan request holds one; busy answers and cancels need others
 EXIT_GRACE = 0.5  # s a stopped plan gets to end at shutdown before the process leaves anyway
+SHUTDOWN_POLL = 0.1  # s between checks that the context is still up (see main)
 
 
 def _given(value: float) -> float | None:
@@ -196,8 +197,8 @@ class GaitPlannerNode(Node):
 
 def main(args=None) -> int:
     """Run the node until SIGINT or SIGTERM (``gait-planner node``). rclpy's signal
-    handlers shut the context down, which ends the spin; a running solve is then stopped
-    within one iteration. A problem being built cannot be interrupted, and CasADi aborts
+    handlers shut the context down, which ends the spin (within `SHUTDOWN_POLL` s); a
+    running solve is then stopped within one iteration. A problem being built cannot be interrupted, and CasADi aborts
     the process if the interpreter is finalised under it: if the plan thread has not ended
     `EXIT_GRACE` s after the ROS shutdown, the process ends at once (`os._exit`; nothing is
     being written then, or only a temporary file, which the next start removes)."""
@@ -211,7 +212,10 @@ def main(args=None) -> int:
     executor.add_node(node)
     node.get_logger().info(f"serving the service and the action {SERVICE}")
     try:
-        executor.spin()
+        # not `executor.spin()`: its wait has no timeout, and a signal arriving while the
+        # executor builds its wait set was seen lost (the wait never woke; 1 in ~25 runs)
+        while node.context.ok():
+            executor.spin_once(timeout_sec=SHUTDOWN_POLL)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
