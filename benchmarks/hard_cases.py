@@ -75,7 +75,7 @@ def methods() -> dict[str, Callable]:
     def collocation(scene, settings, guess):
         if guess != "kinematic":  # the baseline starts from the kinematic guess only
             return None
-        return plan_collocation(scene, settings, dynamics="rnea", expand=True)
+        return plan_collocation(scene, settings)
 
     out["collocation"] = collocation
     return out

@@ -84,9 +84,8 @@ def solve(method: str, scene, n: int, time_limit: float):
         result = planner.plan(scene, s, warm_start=False)
         size = planner.problem_size(scene, s)
     else:
-        # the fast form of the baseline: recursive Newton-Euler, one expanded SX graph
         s = dataclasses.replace(s, max_solve_time=min(time_limit, COLLOCATION_TIME_LIMIT))
-        result = plan_collocation(scene, s, dynamics="rnea", expand=True)
+        result = plan_collocation(scene, s)  # recursive Newton-Euler, one expanded SX graph
         build = result.stats.build_time
         size = {k: result.settings.get(k) for k in ("variables", "constraints",
                                                       "jacobian_nonzeros", "hessian_nonzeros")}

@@ -12,13 +12,13 @@ instead of 2 s and walker3d's did not finish (over 6 GB) on this machine; per it
 MX derivatives cost walker2d 0.10 s instead of 0.03 s.
 
 With dynamics="rnea" (`collocation.rnea.SpatialModel`: recursive Newton-Euler, the same
-values to round-off) and expand=True the whole NLP is one SX graph (measured on a loaded
-2-core machine, walker2d on the DMOCC nodes: build 7 s, 13.6 ms of derivative evaluation
-per iteration against 200 ms for minimal + MX; walker3d at 4 intervals per phase: build
-41 s, 2.4 GB). The default stays dynamics="minimal", expand=False: on walker2d the expanded
-RNEA problem converges (128 iterations) to another local optimum (cost 22.84 against
-22.76) whose knot velocity of ankle_r (846 deg/s) fails the verifier's joint-speed check
-(test_collocation_plans.test_recording_checks); the NLP bounds only the secant speeds.
+values to round-off) and expand=True (the default) the whole NLP is one SX graph (measured
+on a loaded 2-core machine, walker2d on the DMOCC nodes: build 7 s, 13.6 ms of derivative
+evaluation per iteration against 200 ms for minimal + MX; walker3d at 4 intervals per
+phase: build 41 s, 2.4 GB). dynamics="minimal", expand=False remains for the model tests;
+with the swing clearance ramp (`ocp.clearance`) it did not converge on walker2d within
+600 s (414 iterations at 1.45 s each) where the default converges in 231 iterations,
+6.5 s (2026-11-23).
 """
 
 from __future__ import annotations
@@ -54,8 +54,8 @@ def problem_size(solver: ca.Function, nx: int, ng: int) -> dict[str, int]:
 
 
 def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phase: int | None = None,
-                     progress: Progress | None = None, dynamics: str = "minimal",
-                     expand: bool = False) -> PlanResult:
+                     progress: Progress | None = None, dynamics: str = "rnea",
+                     expand: bool = True) -> PlanResult:
     """Plan the half cycle of (scene, settings) by Hermite-Simpson collocation in minimal
     coordinates (`gait_planner.collocation.transcription`); intervals_per_phase sets the
     collocation mesh (None: the DMOCC nodes), the problem itself is that of `settings`

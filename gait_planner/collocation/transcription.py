@@ -29,6 +29,12 @@ and regularisers), transcribed the way bioptim, OpenSim Moco or Drake users woul
   (`MinimalModel.impact`, every contact of the new phase takes an impulse Lambda, in its
   friction cone, and has zero velocity after it); elsewhere w is continuous. The
   touching-down points sit on the ground (`establishing_rows`).
+* Path constraints: the product's at the knots 1..K (swing clearance by
+  `ocp.clearance`, torso, joint ranges, joint speeds over the intervals: mean speeds, so
+  the collocation's own knot velocities may exceed them; walker2d's ankle turned at
+  625 deg/s just after its heel strike). Box bounds on the joint rates made it fragile:
+  on every knot and midpoint walker2d did not converge (212 iterations in 120 s), on the
+  impact knots alone it converged or not depending on the swing clearance ramp.
 * Periodicity: theta_K, w_K (after the impact, if any, at the end) and tau_K are the
   mirror images of theta_0, w_0, tau_0 (expressions, not unknowns: no redundant rows).
 
@@ -48,6 +54,7 @@ import numpy as np
 
 from gait_planner.collocation.mesh import Mesh
 from gait_planner.collocation.minimal import MinimalModel
+from gait_planner.ocp.clearance import clearance_rows
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import torque_mirror
 from gait_planner.ocp.posture import (joint_limit_constants, joint_limit_margins,
@@ -279,14 +286,9 @@ class CollocationTranscription:
         phase_names = [scene.gait.phases[self.mesh.phases[c]].name
                        for c in self.mesh.phase_of_interval] + [scene.gait.phases[-1].name]
         held = [{p for bc in self.contacts[c] for p in bc.points}
-                for c in self.mesh.phase_of_interval]
-        held.append({p for bc in self.contacts_after_end for p in bc.points})
-        ground = []
-        for j in range(1, K + 1 if s.ground_clearance else 1):
-            for contact in scene.contacts:
-                if contact.name not in held[j - 1] | held[j]:
-                    ground.append(ca.mtimes(ca.DM(mb.contact_rows(contact.name)[-1:]), self.q[j])
-                                  - s.swing_clearance)
+                for c in self.mesh.phase_of_interval]  # interval K: the image of 0
+        spacing = s.base_time_step * sum(self.mesh.base_steps) / K  # s at sigma = 1
+        ground, self.clearances = clearance_rows(mb, lambda j: self.q[j], held, s, spacing)
         if ground:
             self._ineq.append(("ground_clearance", ca.vertcat(*ground)))
         root = mb.block(scene.root.body).start
@@ -351,4 +353,4 @@ class CollocationTranscription:
     def relaxed_lower_bounds(self, lbg: np.ndarray) -> np.ndarray:
         """lbg of the first stage, as the product's (`Transcription.relaxed_lower_bounds`):
         swing points only above the ground, joint speeds free."""
-        return relaxed_lower_bounds(self.constraint_groups(), lbg, self.settings.swing_clearance)
+        return relaxed_lower_bounds(self.constraint_groups(), lbg, self.clearances)

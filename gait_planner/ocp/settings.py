@@ -38,7 +38,10 @@ class GaitSettings:
     the rigid-legged compass, which must scuff at mid-stance);
     swing_clearance m: with ground_clearance, a contact point that is neither held nor
     striking at a node (nor released there) stays at least this high, so no swing point
-    slides along the ground at zero force; joint_speed_max deg/s (0 = off): every joint's
+    slides along the ground at zero force; swing_clearance_ramp s: that height is required
+    in full only this long after the point's release and before its strike, and grows
+    linearly over it (`gait_planner.ocp.clearance`; 0 = in full from the first swing node);
+    joint_speed_max deg/s (0 = off): every joint's
     relative rotation over an interval stays below joint_speed_max * h_n;
     phase_joint_limits: ((phase, ((angle, lo rad, hi rad), ...)), ...) from the option
     ``phase_joint_limits: {phase: {angle: [lo, hi]}}`` in degrees, ranges at the nodes that
@@ -65,6 +68,7 @@ class GaitSettings:
     foot_half_width: float = 0.04575
     ground_clearance: bool = True
     swing_clearance: float = 0.0
+    swing_clearance_ramp: float = 0.0
     joint_speed_max: float = 0.0
     twist_regularisation: float = 0.0
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
@@ -104,8 +108,8 @@ class GaitSettings:
             object.__setattr__(self, "torso_lean_max", check_torso_lean_max(self.torso_lean_max))
         except PostureError as err:
             raise SettingsError(str(err)) from None
-        for name in ("torque_regularisation", "friction_smoothing",
-                     "torso_height_min", "foot_half_width", "swing_clearance",
+        for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
+                     "foot_half_width", "swing_clearance", "swing_clearance_ramp",
                      "joint_speed_max", "twist_regularisation"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")

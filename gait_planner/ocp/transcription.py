@@ -45,6 +45,7 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
+from gait_planner.ocp.clearance import clearance_rows
 from gait_planner.ocp.contacts import BodyContact, body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import configuration_mirror, torque_mirror
 from gait_planner.ocp.posture import (joint_limit_constants, joint_limit_margins,
@@ -284,14 +285,10 @@ class Transcription:
 
     def _path(self):
         mb, N, s = self.mb, self.N, self.settings
-        ground = []
-        for n in range(1, N if s.ground_clearance else 1):
-            held = {p for bc in self.contacts[self.phase_of_interval[n - 1]] for p in bc.points}
-            held |= {p for bc in self.contacts[self.phase_of_interval[n]] for p in bc.points}
-            for c in mb.scene.contacts:
-                if c.name not in held:
-                    ground.append(ca.mtimes(ca.DM(mb.contact_rows(c.name)[-1:]), self.Q[:, n])
-                                  - s.swing_clearance)
+        held = [{p for bc in self.contacts[k] for p in bc.points}
+                for k in self.phase_of_interval[: N - 1]]  # interval N-1: the image of 0
+        ground, self.clearances = clearance_rows(mb, lambda n: self.Q[:, n], held, s,
+                                                 s.base_time_step)
         if ground:
             self._ineq.append(("ground_clearance", ca.vertcat(*ground)))
         root = mb.block(mb.scene.root.body).start
@@ -481,16 +478,17 @@ class Transcription:
         of the relaxed problem in about 100 iterations and the full one from there; with
         every limit from the start its inertia-free attempt stalled (walker3d: 851
         iterations through the fallback; benchmarks/HISTORY.md)."""
-        return relaxed_lower_bounds(self.constraint_groups(), lbg, self.settings.swing_clearance)
+        return relaxed_lower_bounds(self.constraint_groups(), lbg, self.clearances)
 
 
-def relaxed_lower_bounds(groups, lbg: np.ndarray, swing_clearance: float) -> np.ndarray:
-    """lbg with the groups [(name, size, is_equality)] "ground_clearance" lowered by
-    swing_clearance (points only above the ground) and "joint_speed" free."""
+def relaxed_lower_bounds(groups, lbg: np.ndarray, clearances: list[float]) -> np.ndarray:
+    """lbg with the group [(name, size, is_equality)] "ground_clearance" (rows z - height)
+    lowered by each row's required height `clearances` (points only above the ground) and
+    "joint_speed" free."""
     out, offset = lbg.copy(), 0
     for name, size, _ in groups:
         if name == "ground_clearance":
-            out[offset : offset + size] = -swing_clearance
+            out[offset : offset + size] = -np.asarray(clearances)
         elif name == "joint_speed":
             out[offset : offset + size] = -np.inf
         offset += size

@@ -33,7 +33,11 @@ def test_default_plans_are_physical(solved, name):
     assert not physical.zigzags
     if name != "compass":  # the rigid-legged compass must scuff at mid-stance
         assert not physical.scuffs
-        assert physical.min_swing_height >= 0.01 - 1e-9  # the scenes' swing_clearance
+        # the scenes' swing_clearance (1 cm), ramped over 0.03 s = 3 base steps after a
+        # release and before a strike (`ocp.clearance`): 1 cm x sin(pi / 6) one node away
+        options = solved(name).scene.gait.options
+        assert (options["swing_clearance"], options["swing_clearance_ramp"]) == (0.01, 0.03)
+        assert physical.min_swing_height >= 0.005 - 1e-9
 
 
 def test_the_default_plan_passes(walker2d):

@@ -1,0 +1,98 @@
+"""The swing-clearance schedule (`gait_planner.ocp.clearance`) against walker3d's schedule
+counted by hand, and the properties any ramp keeps.
+
+walker3d, 8 intervals per phase (39 in the half cycle; interval 39 is the image of 0):
+right_full 0-7, right_forefoot 8-15, double_heel 16-23, double_full 24-31, left_full 32-38.
+By the mirror, the left points were last held in the previous half cycle: foot_l_heel
+released at node 8 - 39 = -31 and struck at 16, foot_l_forefoot released at 32 - 39 = -7
+and struck at 24; foot_r_heel is released at 8 and struck at 16 + 39 = 55, foot_r_forefoot
+released at 32 and struck at 24 + 39 = 63.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from gait_planner.model.loader import load_scene
+from gait_planner.model.multibody import Multibody
+from gait_planner.ocp.clearance import required_clearances
+from gait_planner.ocp.contacts import body_contacts
+from gait_planner.verify.physical import GROUND_BAND
+
+MARGIN = 0.01
+# point -> (release node, strike node) around the half cycle, counted by hand (docstring)
+EVENTS = {"foot_l_heel": (-31, 16), "foot_l_forefoot": (-7, 24),
+          "foot_r_heel": (8, 55), "foot_r_forefoot": (32, 63)}
+
+
+@pytest.fixture(scope="module")
+def walker3d_held():
+    scene = load_scene("walker3d")
+    mb = Multibody(scene)
+    phases = [{p for bc in body_contacts(mb, ph.contacts) for p in bc.points}
+              for ph in scene.gait.phases]
+    return scene, [phases[k] for k in np.repeat(np.arange(len(phases)), 8)][:39]
+
+
+def expected(ramp_nodes: float, margin: float) -> dict[int, dict[str, float]]:
+    out: dict[int, dict[str, float]] = {n: {} for n in range(1, 40)}
+    for point, (release, strike) in EVENTS.items():
+        for n in range(1, 40):
+            if release < n < strike:
+                k = min(n - release, strike - n)
+                out[n][point] = margin * math.sin(0.5 * math.pi * min(1.0, k / max(ramp_nodes, 1)))
+    return out
+
+
+def test_swing_points_and_heights_match_the_schedule_counted_by_hand(walker3d_held):
+    scene, held = walker3d_held
+    for ramp in (0.0, 1.0, 4.0, 10.0):
+        out = required_clearances(scene, held, MARGIN, ramp)
+        want = expected(ramp, MARGIN)
+        assert {n: set(p) for n, p in out.items()} == {n: set(p) for n, p in want.items()}
+        for n in out:
+            for point, height in out[n].items():
+                assert height == pytest.approx(want[n][point], rel=1e-12), (ramp, n, point)
+
+
+def test_without_a_ramp_every_swing_point_needs_the_full_margin(walker3d_held):
+    scene, held = walker3d_held
+    heights = {h for p in required_clearances(scene, held, MARGIN, 0.0).values()
+               for h in p.values()}
+    assert heights == {MARGIN}
+
+
+def test_a_released_point_rises_and_a_striking_point_lowers(walker3d_held):
+    scene, held = walker3d_held
+    out = required_clearances(scene, held, MARGIN, 4.0)
+    after_toe_off = [out[n]["foot_r_forefoot"] for n in range(33, 40)]
+    before_heel_strike = [out[n]["foot_l_heel"] for n in range(10, 16)]
+    assert np.all(np.diff(after_toe_off[:4]) > 0) and after_toe_off[3:] == [MARGIN] * 4
+    assert np.all(np.diff(before_heel_strike[-4:]) < 0)
+    assert "foot_r_heel" not in out[8] and "foot_l_heel" not in out[16]
+
+
+@settings(max_examples=40, deadline=None)
+@given(ramp=st.floats(0.0, 40.0), margin=st.floats(1e-3, 0.05))
+def test_any_ramp_keeps_the_swing_points_and_bounds_the_heights(walker3d_held, ramp, margin):
+    scene, held = walker3d_held
+    out = required_clearances(scene, held, margin, ramp)
+    flat = required_clearances(scene, held, margin, 0.0)
+    assert {n: set(p) for n, p in out.items()} == {n: set(p) for n, p in flat.items()}
+    lowest = margin * math.sin(math.pi / (2 * max(ramp, 1.0)))
+    for points in out.values():
+        for height in points.values():
+            assert lowest * (1 - 1e-12) <= height <= margin
+
+
+def test_the_declared_ramps_keep_swing_points_above_the_verifier_ground_band():
+    for name in ("walker2d", "walker3d"):
+        gait = load_scene(name).gait
+        ramp_nodes = gait.options["swing_clearance_ramp"] / gait.base_time_step
+        lowest = gait.options["swing_clearance"] * math.sin(math.pi / (2 * ramp_nodes))
+        assert lowest > GROUND_BAND, (name, lowest)
