@@ -5,20 +5,20 @@ settings, adaptive mu, warm_start_init_point; `Planner._options`), the same solv
 and cold-start stages (`VARIANTS`, `COLD_ATTEMPTS`: sigma fixed at its upper bound with
 the swing clearance and joint speed limits relaxed, then everything free; the
 inertia-free curvature test first, IPOPT's inertia correction as the fallback), the same
-progress callback and time limit. Exact Hessian by CasADi's AD of the MX graph of
-per-point SX Functions (`MinimalModel`); nothing compiled (the product's default neither).
-The whole problem expanded to one SX graph, as the product does, built walker2d in 19 s
-instead of 2 s and walker3d's did not finish (over 6 GB) on this machine; per iteration the
-MX derivatives cost walker2d 0.10 s instead of 0.03 s.
+progress callback and time limit.
 
-With dynamics="rnea" (`collocation.rnea.SpatialModel`: recursive Newton-Euler, the same
-values to round-off) and expand=True (the default) the whole NLP is one SX graph (measured
-on a loaded 2-core machine, walker2d on the DMOCC nodes: build 7 s, 13.6 ms of derivative
-evaluation per iteration against 200 ms for minimal + MX; walker3d at 4 intervals per
-phase: build 41 s, 2.4 GB). dynamics="minimal", expand=False remains for the model tests;
-with the swing clearance ramp (`ocp.clearance`) it did not converge on walker2d within
-600 s (414 iterations at 1.45 s each) where the default converges in 231 iterations,
-6.5 s (2026-11-23).
+The NLP is built with recursive Newton-Euler dynamics (`collocation.rnea.SpatialModel`, the
+same values as `MinimalModel` to round-off) and expanded to one SX graph before IPOPT
+(Hessian and Jacobian by SX AD; nothing compiled). Measured alternatives (2-core machine,
+walker2d on the DMOCC nodes): `MinimalModel` (derivatives of q(theta) composed with the
+director mass matrix) as MX calls of per-point SX Functions cost 200 ms of derivative
+evaluation per iteration against 13.6 ms (build 2 s against 7 s) and, with a 0.04 s swing
+clearance ramp (`ocp.clearance`) and joint-rate bounds at the impacts (a variant not kept),
+did not converge within 600 s (414 iterations) where this form converged in 231
+iterations, 6.5 s (2026-11-23; today's problem: 70 iterations, 1.9 s in
+benchmarks/REPORT.md); `MinimalModel` expanded built
+walker2d in 19 s and did not finish walker3d (over 6 GB). walker3d at 4 intervals per phase
+builds in 41 s (2.4 GB).
 """
 
 from __future__ import annotations
@@ -31,7 +31,6 @@ import numpy as np
 
 from gait_planner.collocation.guess import initial_guess
 from gait_planner.collocation.mesh import mesh_of
-from gait_planner.collocation.minimal import MinimalModel
 from gait_planner.collocation.result import build_result
 from gait_planner.collocation.rnea import SpatialModel
 from gait_planner.collocation.transcription import CollocationTranscription
@@ -54,38 +53,24 @@ def problem_size(solver: ca.Function, nx: int, ng: int) -> dict[str, int]:
 
 
 def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phase: int | None = None,
-                     progress: Progress | None = None, dynamics: str = "rnea",
-                     expand: bool = True) -> PlanResult:
+                     progress: Progress | None = None) -> PlanResult:
     """Plan the half cycle of (scene, settings) by Hermite-Simpson collocation in minimal
     coordinates (`gait_planner.collocation.transcription`); intervals_per_phase sets the
     collocation mesh (None: the DMOCC nodes), the problem itself is that of `settings`
     (`collocation.mesh`). Returns a `PlanResult` as the product's (`collocation.result`),
     with the NLP's size in result.settings (variables, constraints, jacobian_nonzeros,
-    hessian_nonzeros).
-
-    dynamics "rnea": equations of motion, impacts and contact kinematics by recursive
-    Newton-Euler (`collocation.rnea.SpatialModel`); "minimal": derivatives of q(theta)
-    composed with the director mass matrix (`MinimalModel`). expand: the NLP expanded to
-    one SX graph before IPOPT (Hessian and Jacobian by SX AD), else MX calls of per-point
-    SX Functions."""
+    hessian_nonzeros)."""
     start = time.perf_counter()
-    if dynamics not in ("rnea", "minimal"):
-        raise ValueError(f"dynamics must be 'rnea' or 'minimal', got {dynamics!r}")
     try:
-        mb = Multibody(scene)
-        model = SpatialModel(mb) if dynamics == "rnea" else MinimalModel(mb)
-        tr = CollocationTranscription(model, settings, mesh_of(scene, settings,
-                                                               intervals_per_phase))
+        tr = CollocationTranscription(SpatialModel(Multibody(scene)), settings,
+                                      mesh_of(scene, settings, intervals_per_phase))
     except (ValueError, RuntimeError) as err:
         return failed_result(scene, settings, f"could not build the problem: {err}")
     nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
-    if expand:
-        graph = ca.Function("collocation_nlp", [tr.x, tr.p], [tr.cost, tr.g]).expand()
-        xs, ps = ca.SX.sym("x", nx), ca.SX.sym("p", int(tr.p.shape[0]))
-        f, g_expr = graph(xs, ps)
-        nlp = {"x": xs, "p": ps, "f": f, "g": g_expr}
-    else:
-        nlp = {"x": tr.x, "p": tr.p, "f": tr.cost, "g": tr.g}
+    graph = ca.Function("collocation_nlp", [tr.x, tr.p], [tr.cost, tr.g]).expand()
+    xs, ps = ca.SX.sym("x", nx), ca.SX.sym("p", int(tr.p.shape[0]))
+    f, g_expr = graph(xs, ps)
+    nlp = {"x": xs, "p": ps, "f": f, "g": g_expr}
     lbx, ubx, lbg, ubg = tr.bounds()
     callback = _IterationCallback(nx, ng, lbg, ubg)
     solvers: dict[str, ca.Function] = {}

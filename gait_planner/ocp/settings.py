@@ -39,10 +39,10 @@ class GaitSettings:
     swing_clearance m: with ground_clearance, a contact point that is neither held nor
     striking at a node (nor released there) stays at least this high, so no swing point
     slides along the ground at zero force; swing_clearance_ramp s: that height is required
-    in full only this long after the point's release and before its strike, and grows
-    linearly over it (`gait_planner.ocp.clearance`; 0 = in full from the first swing node);
-    joint_speed_max deg/s (0 = off): every joint's
-    relative rotation over an interval stays below joint_speed_max * h_n;
+    in full only this long (at sigma = 1) after the point's release and before its strike,
+    and grows along a quarter sine over it (`gait_planner.ocp.clearance`; 0 = in full from
+    the first swing node); joint_speed_max deg/s (0 = off): every joint's relative rotation
+    over an interval stays below joint_speed_max * h_n;
     phase_joint_limits: ((phase, ((angle, lo rad, hi rad), ...)), ...) from the option
     ``phase_joint_limits: {phase: {angle: [lo, hi]}}`` in degrees, ranges at the nodes that
     start an interval of that phase only; posture "paper" (the scene's declared ranges) or

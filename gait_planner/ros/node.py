@@ -199,10 +199,11 @@ class GaitPlannerNode(Node):
 def main(args=None) -> int:
     """Run the node until SIGINT or SIGTERM (``gait-planner node``). rclpy's signal
     handlers shut the context down, which ends the spin (within `SHUTDOWN_POLL` s); a
-    running solve is then stopped within one iteration. A problem being built cannot be interrupted, and CasADi aborts
-    the process if the interpreter is finalised under it: if the plan thread has not ended
-    `EXIT_GRACE` s after the ROS shutdown, the process ends at once (`os._exit`; nothing is
-    being written then, or only a temporary file, which the next start removes)."""
+    running solve is then stopped within one iteration. A problem being built cannot be
+    interrupted, and CasADi aborts the process if the interpreter is finalised under it:
+    if the plan thread has not ended `EXIT_GRACE` s after the ROS shutdown, the process
+    ends at once (`os._exit`; nothing is being written then, or only a temporary file,
+    which the next start removes)."""
     rclpy.init(args=args)
     try:
         node = GaitPlannerNode()

@@ -32,18 +32,6 @@ ANY = st.floats(-3.1, 3.1)
 MIDDLE = st.floats(-np.radians(80), np.radians(80))
 
 
-@pytest.fixture(scope="module")
-def minimal(model):
-    cache = {}
-
-    def get(name):
-        if name not in cache:
-            cache[name] = MinimalModel(model(name).mb)
-        return cache[name]
-
-    return get
-
-
 @st.composite
 def thetas(draw, mm: MinimalModel):
     """Random theta with |middle Cardan angle| < 80 deg, and its InitialPose."""

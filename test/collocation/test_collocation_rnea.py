@@ -27,18 +27,6 @@ SCENES = ("compass", "walker2d", "walker3d")
 NAMES = ("dynamics", "impact", "project", "velocity", "acceleration", "kinetic_energy")
 
 
-@pytest.fixture(scope="module")
-def spatial(model):
-    cache = {}
-
-    def get(name):
-        if name not in cache:
-            cache[name] = SpatialModel(model(name).mb)
-        return cache[name]
-
-    return get
-
-
 @pytest.mark.parametrize("name", SCENES)
 def test_agrees_with_minimal_model(spatial, name):
     sm = spatial(name)
