@@ -45,8 +45,7 @@ COLLOCATION_TIME_LIMIT = 60.0
 
 
 def settings_at(scene, n: int, time_limit: float):
-    s = settings_for(scene, intervals_per_phase=n, max_solve_time=time_limit, compiled=True)
-    return dataclasses.replace(s, base_time_step=scene.gait.base_time_step * 8 / n)
+    return settings_for(scene, intervals_per_phase=n, max_solve_time=time_limit, compiled=True)
 
 
 def phase_clock(result) -> np.ndarray:

@@ -125,7 +125,14 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
                  friction_coefficient: float | None = None,
                  intervals_per_phase: int | None = None,
                  max_solve_time: float | None = None, **overrides) -> GaitSettings:
-    """The scene's gait settings with the given overrides (None = the scene's value)."""
+    """The scene's gait settings with the given overrides (None = the scene's value).
+
+    intervals_per_phase refines or coarsens the grid of the same problem: the base time
+    step scales so that the half cycle's nominal length (the sum over the phases of
+    intervals * base_time_step, at sigma = 1) stays the scene's (walker2d/3d: 8 intervals
+    per phase of 10 ms; 16 per phase: 5 ms). A fixed base step would instead ask for
+    another gait (24 per phase: a half cycle three times as long, J 6.99 against 20.76 on
+    walker3d)."""
     gait = scene.gait
     if gait is None:
         raise SettingsError(f"scene {scene.name!r} declares no gait: nothing to plan")
@@ -154,11 +161,13 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
     if max_solve_time is not None:
         options["max_solve_time"] = max_solve_time
     intervals = tuple(p.intervals for p in gait.phases)
-    if intervals_per_phase is not None:
+    base_time_step = gait.base_time_step
+    if intervals_per_phase is not None:  # another grid on the same half cycle
+        base_time_step *= sum(intervals) / (int(intervals_per_phase) * len(intervals))
         intervals = (int(intervals_per_phase),) * len(gait.phases)
     return GaitSettings(
         step_length=gait.step_length if step_length is None else float(step_length),
-        base_time_step=gait.base_time_step,
+        base_time_step=base_time_step,
         scaling_bounds=tuple(gait.scaling_bounds),
         friction_coefficient=(gait.friction_coefficient if friction_coefficient is None
                               else float(friction_coefficient)),

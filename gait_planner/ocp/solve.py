@@ -254,6 +254,52 @@ class Planner:
             "ipopt.warm_start_init_point": "yes",
         }
 
+    def _attempt(self, built: _Built, s: GaitSettings, attempt, number: int,
+                 x0: np.ndarray, duals: dict, p: np.ndarray, totals: list):
+        """The stages of one attempt (a list of (variant, sigma fixed, limits relaxed)) from
+        (x0, duals) with parameters p; adds iterations and evaluation seconds to totals.
+        Returns (x, g, duals, status, success) of its last stage."""
+        lbx, ubx, lbg, ubg = built.bounds
+        nsig = int(built.tr.S.shape[0])
+        g, status, success = None, "not started", False
+        for k, (variant, fix_sigma, relaxed) in enumerate(attempt):
+            self.stage("warm" if variant == "warm" else
+                       f"cold stage {k + 1}" + (" (inertia test)" if number else ""))
+            lb, ub = lbx.copy(), ubx.copy()
+            if fix_sigma:
+                lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
+            lower = built.tr.relaxed_lower_bounds(lbg) if relaxed else lbg
+            x0, g, duals, stage = solve_stage(self._solver(built, s, variant), x0, duals, p,
+                                              lb, ub, lower, ubg)
+            totals[0] += stage.iterations
+            totals[1] += stage.evaluation_time
+            status, success = stage.status, stage.success
+            if not success:
+                break
+        return x0, g, duals, status, success
+
+    def _continuation(self, built: _Built, s: GaitSettings, x_start: np.ndarray,
+                      duals_start: dict, qref: np.ndarray, step0: float, step: float,
+                      totals: list):
+        """A cold plan of a step length other than the scene's that failed from its own
+        guess: plan the scene's step length `step0` cold from its guess (qref), then
+        re-plan `step` warm from that optimum (the continuation is one jump). walker3d
+        at 0.9 m (scene: 0.6338 m): from its own kinematic guess no convergence within
+        120 s (336 iterations), this way 64 + 146 iterations, 9.5 s; in five steps of
+        0.05 m 64 + 127 (2026-11-23). Returns (x, g, duals, status, success, p) of the
+        warm stage, or None if a stage failed. The scene's plan is kept for warm starts."""
+        mu = s.friction_coefficient
+        p0 = np.concatenate([qref.reshape(-1), [step0, mu]])
+        x0, _, duals, _, success = self._attempt(built, s, COLD_ATTEMPTS[0], 0, x_start,
+                                                 duals_start, p0, totals)
+        if not success or time.perf_counter() > built.callback.deadline:
+            return None
+        built.stored.append((step0, mu, x0, duals["lam_x0"], duals["lam_g0"], qref))
+        p = np.concatenate([qref.reshape(-1), [step, mu]])
+        x, g, duals, status, success = self._attempt(built, s, WARM_ATTEMPTS[0], 0, x0, duals,
+                                                     p, totals)
+        return (x, g, duals, status, success, p) if success else None
+
     def plan(self, scene: Scene, settings: GaitSettings, *, warm_start: bool = True,
              guess: str = "kinematic") -> PlanResult:
         """Solve one half cycle; a numerical failure is a result with a reason.
@@ -302,32 +348,33 @@ class Planner:
             # from sigma = 1: 20.7801, 20.7801, 20.8470, 20.8936, 20.7644 (0.6 %)
             origin = f"{guess} guess; sigma fixed at its upper bound and limits relaxed, then free"
         p = np.concatenate([qref.reshape(-1), [step, mu]])
-        lbx, ubx, lbg, ubg = built.bounds
         built.callback.deadline = start + settings.max_solve_time
         built.callback.started, built.callback.iteration = start, 0
         built.callback.report, built.callback.stop = self.progress, stopped
-        iterations, status, g, evaluation = 0, "not started", None, 0.0
+        totals = [0, 0.0]  # iterations, evaluation s
         for number, attempt in enumerate(attempts):
-            x0, duals, success = x_start, duals_start, False
-            for k, (variant, fix_sigma, relaxed) in enumerate(attempt):
-                self.stage("warm" if variant == "warm" else
-                           f"cold stage {k + 1}" + (" (inertia test)" if number else ""))
-                solver = self._solver(built, settings, variant)
-                lb, ub = lbx.copy(), ubx.copy()
-                if fix_sigma:
-                    lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
-                lower = tr.relaxed_lower_bounds(lbg) if relaxed else lbg
-                x0, g, duals, stage = solve_stage(solver, x0, duals, p, lb, ub, lower, ubg)
-                iterations += stage.iterations
-                evaluation += stage.evaluation_time
-                status, success = stage.status, stage.success
-                if not success:
-                    break
+            x0, g, duals, status, success = self._attempt(
+                built, settings, attempt, number, x_start, duals_start, p, totals)
             if success or stopped() or time.perf_counter() > built.callback.deadline \
                     or number + 1 == len(attempts):
                 break
             origin += (f"; the inertia-free attempt stopped ({STATUS_WORDS.get(status, status)})"
-                       f" after {iterations} iterations, restarted with IPOPT's inertia test")
+                       f" after {totals[0]} iterations")
+            if number == 0 and step != scene.gait.step_length:
+                qref_c = GUESSES[guess](tr, scene.gait.step_length)[: tr.N - 1]
+                found = self._continuation(built, settings, x_start, duals_start, qref_c,
+                                           scene.gait.step_length, step, totals)
+                if found is not None:
+                    x0, g, duals, status, success, p = found
+                    qref = qref_c
+                    origin += (f"; continued from the scene's step length "
+                               f"{scene.gait.step_length:.4f} m (cold) to {step:.4f} m (warm)")
+                    break
+                if stopped() or time.perf_counter() > built.callback.deadline:
+                    break
+                origin += "; the continuation from the scene's step length failed"
+            origin += ", restarted with IPOPT's inertia test"
+        iterations, evaluation = totals
         if stopped():
             return failed_result(scene, settings, STOPPED)
         result = build_result(tr, x0, p, g, status=status, iterations=iterations,

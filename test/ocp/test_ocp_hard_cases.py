@@ -38,6 +38,33 @@ def test_a_hard_request_converges_to_a_plan_that_passes_every_check(walker2d, ov
     assert report.ok, report.failures
 
 
+def test_a_long_step_the_guess_cannot_reach_is_planned_by_continuation():
+    """walker3d at 0.9 m (scene: 0.6338 m) does not converge from its own kinematic guess
+    (120 s, 336 iterations, before the continuation); from the scene's plan it does."""
+    walker3d = load_scene("walker3d")
+    settings = settings_for(walker3d, step_length=0.9, max_solve_time=120.0, compiled=True)
+    result = Planner().plan(walker3d, settings, warm_start=False)
+    assert result.success, result.message
+    assert "continued from the scene's step length 0.6338 m" in result.settings["initial_guess"]
+    report = verify_result(result)
+    assert report.ok, report.failures
+
+
+def test_intervals_per_phase_refines_the_grid_of_the_same_half_cycle(walker2d):
+    """Another number of intervals keeps the half cycle's nominal length (the base time step
+    scales), so the planned gait stays the same motion: J 21.153 at 6 and 20.770 at 12 per
+    phase (1.8 %, the grid's error; with the base step fixed, 12 per phase would ask for a
+    half cycle 1.5 times as long)."""
+    costs = {}
+    for n in (6, 12):
+        settings = settings_for(walker2d, intervals_per_phase=n)
+        assert settings.base_time_step * n == pytest.approx(walker2d.gait.base_time_step * 8)
+        result = Planner().plan(walker2d, settings, warm_start=False)
+        assert result.success, result.message
+        costs[n] = result.cost_value
+    assert costs[6] == pytest.approx(costs[12], rel=0.03)
+
+
 @pytest.mark.parametrize("field, value", [("intervals_per_phase", 1),
                                           ("intervals_per_phase", 100000),
                                           ("step_length", 100.0),
