@@ -55,7 +55,7 @@ def _add_plan_options(parser: argparse.ArgumentParser, scene_default: str | None
                         help="scene name (config/scenes/NAME.yaml or GAIT_PLANNER_SCENE_PATH)")
     parser.add_argument("--step-length", type=float, help="m (default: the scene's)")
     parser.add_argument("--cost", help="kinetic_energy | torque_squared (default: the scene's)")
-    parser.add_argument("--intervals", type=int, help="intervals per phase (default: the scene's)")
+    parser.add_argument("--intervals", type=int, help="intervals per phase (default: the scene's); the half cycle keeps its length")
     parser.add_argument("--mu", type=float, help="friction coefficient (default: the scene's)")
     parser.add_argument("--steps", type=int, default=1,
                         help="half cycles to record, joined by the mirror (default 1)")
