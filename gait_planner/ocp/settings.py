@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from gait_planner.model.scene import Scene
@@ -47,8 +48,11 @@ class GaitSettings:
     ``phase_joint_limits: {phase: {angle: [lo, hi]}}`` in degrees, ranges at the nodes that
     start an interval of that phase only; posture "paper" (the scene's declared ranges) or
     "human" (adds normative stance-knee ranges in single support,
-    `gait_planner.model.posture.human_phase_limits`); twist_regularisation J: weight w of w sum_n h_n sum_joints (1 - (d2_parent . d2_child)^2)
-    added to the cost (sin^2 of a joint's roll or yaw; the J reported excludes it);
+    `gait_planner.model.posture.human_phase_limits`); twist_regularisation (units of the
+    cost, per s): weight w of w sum_n h_n sum_joints (1 - (d2_parent . d2_child)^2) added to
+    the cost (sin^2 of a joint's roll or yaw; the J reported excludes it); the option may
+    be a number or a weight per cost, ``{kinetic_energy: 1, torque_squared: 50}`` (the
+    costs differ in size by ~60 on walker3d; a cost it does not name gets 0);
     max_iterations, max_solve_time s (IPOPT); tolerance (IPOPT tol);
     constraint_tolerance (IPOPT constr_viol_tol); compiled: build the per-node derivative
     elements as C (`gait_planner.ocp.compile`; a one-time cost per machine, cached).
@@ -160,6 +164,14 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
             if (kept := tuple(l for l in limits if (phase, l[0]) not in taken)))
     if max_solve_time is not None:
         options["max_solve_time"] = max_solve_time
+    chosen = gait.cost if cost is None else cost
+    twist = options.get("twist_regularisation")
+    if isinstance(twist, Mapping):  # a weight per cost, in that cost's units
+        unknown = set(twist) - set(COSTS)
+        if unknown:
+            raise SettingsError(f"twist_regularisation: unknown cost(s) {sorted(unknown)}; "
+                                f"known: {', '.join(COSTS)}")
+        options["twist_regularisation"] = twist.get(chosen, 0.0)
     intervals = tuple(p.intervals for p in gait.phases)
     base_time_step = gait.base_time_step
     if intervals_per_phase is not None:  # another grid on the same half cycle
@@ -171,7 +183,7 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
         scaling_bounds=tuple(gait.scaling_bounds),
         friction_coefficient=(gait.friction_coefficient if friction_coefficient is None
                               else float(friction_coefficient)),
-        cost=gait.cost if cost is None else cost,
+        cost=chosen,
         intervals=intervals,
         **options,
     )

@@ -123,6 +123,16 @@ def test_settings_carry_the_ranges_in_radians():
     assert s.joint_limits == (("knee_r", 0.0, pytest.approx(math.radians(70))),)
 
 
+def test_a_twist_weight_per_cost_is_chosen_by_the_cost():
+    walker3d = load_scene("walker3d")
+    assert settings_for(walker3d).twist_regularisation == 1.0
+    assert settings_for(walker3d, cost="torque_squared").twist_regularisation == 50.0
+    assert settings_for(walker3d, twist_regularisation={"torque_squared": 3.0}
+                        ).twist_regularisation == 0.0
+    with pytest.raises(SettingsError, match=r"twist_regularisation: unknown cost\(s\) \['effort'\]"):
+        settings_for(walker3d, twist_regularisation={"effort": 1.0})
+
+
 @pytest.mark.parametrize("value, words", [
     (90, "torso_lean_max: must be in [0, 90) degrees, got 90.0"),
     (-1, "torso_lean_max: must be in [0, 90) degrees, got -1.0"),
