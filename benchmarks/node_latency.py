@@ -1,13 +1,18 @@
 """The node as a user meets it: fresh `gait-planner node` processes, each asked for the
 paper's walker3d gait (the default request) as soon as its service is offered.
 
-    .venv/bin/python benchmarks/node_latency.py              # 5 fresh processes
+    .venv/bin/python benchmarks/node_latency.py              # 5 fresh processes of each kind
     .venv/bin/python benchmarks/node_latency.py --runs 3 --scene walker2d
 
-Per process: seconds from the start of the process until the service is offered (Python,
-rclpy, the problem built by prepare_on_start), the first request's wall time (request sent
-to answer received: guess, cold solve, verification certificate, MCAP and .rrd written,
-topics published) and a second, warm request (step length +2 %). Median over the runs.
+Two kinds of process: without the plan library (`-p plan_library:=false`: the first request
+is a cold solve from the kinematic guess) and with it as `make setup` leaves it (the
+scene's default plan only: every such run gets a cache folder of its own whose compiled
+libraries are links to the real cache's and whose plans/ holds what `gait-planner prepare`
+wrote into an empty one, so no run re-plans from an earlier run's plans). Per process:
+seconds from the start of the process until the service is offered (Python, rclpy, the
+problem built by prepare_on_start), the first request's wall time (request sent to answer
+received: guess, solve, verification certificate, MCAP and .rrd written, topics published)
+and a second, warm request (step length +2 %). Median over the runs of each kind.
 Needs the compiled derivatives of the scene in the cache (`make setup` compiles them).
 """
 
@@ -15,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -31,13 +37,42 @@ REPO = Path(__file__).resolve().parent.parent
 GAIT_PLANNER = Path(sys.executable).parent / "gait-planner"
 
 
-def one_run(scene: str, node, step_factor: float = 1.02) -> dict:
+def cache_with_plans(folder: Path, plans: Path | None) -> Path:
+    """A cache folder under `folder` whose entries link to the real cache's
+    (`gait_planner.ocp.compile.cache_folder`), except plans/, a copy of `plans` (or empty)."""
+    from gait_planner.ocp.compile import cache_folder
+
+    cache = folder / "cache"
+    cache.mkdir()
+    for entry in cache_folder().iterdir():
+        if entry.name != "plans":
+            (cache / entry.name).symlink_to(entry)
+    if plans is not None:
+        shutil.copytree(plans, cache / "plans")
+    return cache
+
+
+def seeded_plans(scene: str, folder: Path) -> Path:
+    """plans/ as `gait-planner prepare` (make setup) writes it into an empty library."""
+    cache = cache_with_plans(folder, None)
+    subprocess.run([str(GAIT_PLANNER), "prepare", scene], cwd=REPO, check=True,
+                   env={**os.environ, "GAIT_PLANNER_CACHE": str(cache)},
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return cache / "plans"
+
+
+def one_run(scene: str, node, plans: Path | None, step_factor: float = 1.02) -> dict:
+    """One fresh node; plans None: without the plan library, else with a copy of it."""
     with tempfile.TemporaryDirectory(prefix="node_latency_") as folder:
+        env = dict(os.environ)
+        if plans is not None:
+            env["GAIT_PLANNER_CACHE"] = str(cache_with_plans(Path(folder), plans))
         start = time.perf_counter()
         process = subprocess.Popen(
             [str(GAIT_PLANNER), "node", "--ros-args", "-p", f"default_scene:={scene}",
-             "-p", f"output_dir:={folder}", "-p", f"allowed_output_dirs:=['{folder}']"],
-            cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+             "-p", f"output_dir:={folder}", "-p", f"allowed_output_dirs:=['{folder}']",
+             "-p", f"plan_library:={'true' if plans is not None else 'false'}"],
+            cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         try:
             client = node.create_client(PlanGait, SERVICE)
             while not client.wait_for_service(timeout_sec=0.01):
@@ -71,13 +106,17 @@ def run(runs: int = 5, scene: str = "walker3d") -> list[dict]:
     node = rclpy.create_node("node_latency_client")
     try:
         rows = []
-        for i in range(runs):
-            rows.append({"scene": scene, "run": i, **one_run(scene, node)})
-            r = rows[-1]
-            print(f"run {i}: service offered after {r['service_ready_s']:.2f} s, first answer "
-                  f"{r['first_answer_s']:.2f} s ({r['first_iterations']} it, solve "
-                  f"{r['first_solve_time_s']:.2f} s), warm answer {r['warm_answer_s']:.2f} s "
-                  f"({r['warm_iterations']} it)", flush=True)
+        with tempfile.TemporaryDirectory(prefix="node_latency_seed_") as seed:
+            plans = seeded_plans(scene, Path(seed))
+            for i, library in [(i, library) for library in (False, True) for i in range(runs)]:
+                rows.append({"scene": scene, "run": i, "library": library,
+                             **one_run(scene, node, plans if library else None)})
+                r = rows[-1]
+                print(f"run {i}{' (plan library)' if library else ''}: service offered after "
+                      f"{r['service_ready_s']:.2f} s, first answer "
+                      f"{r['first_answer_s']:.2f} s ({r['first_iterations']} it, solve "
+                      f"{r['first_solve_time_s']:.2f} s), warm answer {r['warm_answer_s']:.2f} s "
+                      f"({r['warm_iterations']} it)", flush=True)
         return rows
     finally:
         node.destroy_node()
@@ -91,8 +130,10 @@ def main() -> None:
     args = parser.parse_args()
     from results_io import write_results
     rows = run(args.runs, args.scene)
-    for key in ("service_ready_s", "first_answer_s", "warm_answer_s"):
-        print(f"median {key}: {np.median([r[key] for r in rows]):.2f}")
+    for library in (False, True):
+        for key in ("service_ready_s", "first_answer_s", "warm_answer_s"):
+            values = [r[key] for r in rows if r["library"] == library]
+            print(f"median {key}{' (plan library)' if library else ''}: {np.median(values):.2f}")
     print(write_results(f"node_latency_{args.scene}", rows))
 
 

@@ -227,14 +227,22 @@ def speed(cold, node) -> list[str]:
             ("warm iterations", "warm_iterations", ".0f")]) + [""]
     if node is not None:
         rows = node["rows"]
-        med = {k: float(np.median([r[k] for r in rows]))
-               for k in ("service_ready_s", "first_answer_s", "warm_answer_s")}
+        med = {(library, k): float(np.median([r[k] for r in rows
+                                               if r.get("library", False) == library]))
+               for library in (False, True) if any(r.get("library", False) == library for r in rows)
+               for k in ("service_ready_s", "first_answer_s", "warm_answer_s",
+                         "first_iterations", "warm_iterations")}
         out += [provenance(node), "", f"`node_latency.py`: {len(rows)} fresh `gait-planner node` "
-                f"processes (walker3d, the default request): the service is offered "
-                f"{med['service_ready_s']:.2f} s after the start (median; the problem is built "
-                f"before, prepare_on_start), the first request is answered in "
-                f"{med['first_answer_s']:.2f} s (plan, certificate, MCAP, .rrd, topics) and a "
-                f"warm one in {med['warm_answer_s']:.2f} s.", ""]
+                f"processes (walker3d, the default request), without and with the plan library "
+                f"as `make setup` leaves it (the default plan only). Medians:", ""]
+        out += table([{"kind": "with the plan library" if library else "without (cold)",
+                       **{k: v for (lib, k), v in med.items() if lib == library}}
+                      for library in (False, True) if (library, "first_answer_s") in med], [
+            ("node", "kind", ""), ("service offered s", "service_ready_s", ".2f"),
+            ("first answer s", "first_answer_s", ".2f"),
+            ("first iterations", "first_iterations", ".0f"),
+            ("warm answer (+2 %) s", "warm_answer_s", ".2f"),
+            ("warm iterations", "warm_iterations", ".0f")]) + [""]
     return out
 
 

@@ -139,10 +139,12 @@ if ! is_current gait_planner "$pkg_hash" || [[ ! -x "$venv/bin/gait-planner" ]];
   mark gait_planner "$pkg_hash"
 fi
 
-# --- 7. compiled derivatives of the shipped scenes ------------------------------------------
+# --- 7. compiled derivatives and default plans of the shipped scenes -----------------------
 # The planner compiles each scene's per-node derivative elements to C the first time they
 # are needed (about a minute for walker3d) and caches them by source hash; doing it here
-# keeps it off the first request (`gait-planner prepare`). A failure only costs speed later.
+# keeps it off the first request (`gait-planner prepare`), which also plans each scene's
+# default request into the plan library (gait_planner/ocp/library.py) that the node
+# re-plans from. A failure only costs speed later.
 prep_hash="$( { printf '%s\n' "$venv" "${GAIT_PLANNER_CACHE:-$HOME/.cache/gait_planner}";
   cat gait_planner/model/*.py gait_planner/dynamics/*.py gait_planner/ocp/*.py \
       config/scenes/*.yaml; } | sha256sum | cut -d' ' -f1)"

@@ -317,17 +317,20 @@ def _urdf(args: argparse.Namespace) -> int:
 
 def _add_prepare(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
-        "prepare", help="compile the scenes' derivatives now (make setup runs it)",
+        "prepare", help="compile the scenes' derivatives and plan their defaults now "
+        "(make setup runs it)",
         description="Build each SCENE's default problem with compiled derivatives, so that "
         "the C libraries are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) and "
-        "no first request compiles. Takes about a minute for walker3d the first time, a few "
-        "seconds when cached.")
+        "no first request compiles, and plan its default request into the plan library "
+        "(gait_planner/ocp/library.py), from which the node's first request re-plans warm. "
+        "Takes about a minute for walker3d the first time, a few seconds when cached.")
     parser.add_argument("scenes", nargs="+", help="scene names")
     parser.set_defaults(handler=_prepare)
 
 
 def _prepare(args: argparse.Namespace) -> int:
     from gait_planner.model.loader import SceneError, load_scene
+    from gait_planner.ocp.library import PlanLibrary
     from gait_planner.ocp.settings import SettingsError, settings_for
     from gait_planner.ocp.solve import Planner
 
@@ -335,10 +338,15 @@ def _prepare(args: argparse.Namespace) -> int:
         start = time.perf_counter()
         try:
             scene = load_scene(name)
-            used = Planner().prepare(scene, settings_for(scene, compiled=True))
+            settings = settings_for(scene, compiled=True)
+            planner = Planner(library=PlanLibrary())
+            used = planner.prepare(scene, settings)
+            result = planner.plan(scene, settings, warm_start=False)
         except (SceneError, SettingsError) as error:
             raise CliError(str(error)) from None
-        print(f"{name}: {used} ({time.perf_counter() - start:.1f} s)", flush=True)
+        kept = ("its default plan kept in the plan library" if result.success
+                else f"its default plan failed: {result.message}")
+        print(f"{name}: {used}; {kept} ({time.perf_counter() - start:.1f} s)", flush=True)
     return 0
 
 

@@ -3,7 +3,9 @@
 `Planner` caches one built transcription + solvers per (scene, settings other than step
 length, friction coefficient and time limit) and the plans it found, so a changed step
 length or friction coefficient re-plans from the nearest stored plan (primal and dual warm
-start) without rebuilding anything.
+start) without rebuilding anything; with a `PlanLibrary` it also starts from, and adds to,
+the plans of earlier processes (`ocp.library`). A cold plan that fails from its guess at a
+step length other than the scene's is continued from the scene's (`Planner._continuation`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from gait_planner.model.scene import Scene
 from gait_planner.ocp.compile import CompileError, compile_sources
 from gait_planner.ocp.derivatives import nlp_derivatives
 from gait_planner.ocp.guess import GUESSES, initial_multipliers
+from gait_planner.ocp.library import PlanLibrary, StoredPlan
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, build_result, failed_result
 from gait_planner.ocp.transcription import Transcription
@@ -115,7 +118,8 @@ class _Built:
     derivatives_used: str  # how, in words (result.settings["derivatives"])
     build_time: float
     solvers: dict = dataclasses.field(default_factory=dict)  # variant -> IPOPT instance
-    stored: list = dataclasses.field(default_factory=list)  # (step, mu, x, lam_x, lam_g, qref)
+    stored: list[StoredPlan] = dataclasses.field(default_factory=list)
+    library_key: str | None = None  # its file in the plan library, if the planner has one
 
 
 def _key(scene: Scene, s: GaitSettings):
@@ -154,11 +158,14 @@ class Planner:
     progress: called every IPOPT iteration; stage: called when a plan enters a phase;
     stop: polled every iteration and between phases: once it returns True the plan ends
     within one iteration as a failed result with the message `STOPPED` (a problem being
-    built is finished first and kept for later plans)."""
+    built is finished first and kept for later plans); library: the plans of earlier
+    processes (`ocp.library`), read when a problem is built and written after every
+    successful plan (None: this process's plans only)."""
 
     def __init__(self, *, progress: Progress | None = None, stage: Stage | None = None,
-                 stop: Stop | None = None):
+                 stop: Stop | None = None, library: PlanLibrary | None = None):
         self.progress, self.stage, self.stop = progress, stage or (lambda name: None), stop
+        self.library = library
         self._built: dict = {}
 
     def prepare(self, scene: Scene, settings: GaitSettings) -> str:
@@ -209,10 +216,20 @@ class Planner:
                 derivatives = {name: reference.get_function(f"nlp_{name}")
                                for name in ("grad_f", "jac_g")}
                 derivatives["hess_lag"] = reference.get_function("nlp_hess_l")
-            cb = _IterationCallback(int(tr.x.shape[0]), int(tr.g.shape[0]), bounds[2], bounds[3])
-            self._built[key] = _Built(tr, nlp, bounds, cb, derivatives, used,
-                                      time.perf_counter() - start)
+            nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
+            cb = _IterationCallback(nx, ng, bounds[2], bounds[3])
+            built = _Built(tr, nlp, bounds, cb, derivatives, used, time.perf_counter() - start)
+            if self.library is not None:
+                built.library_key = self.library.key(scene.source, key[2], nx, ng)
+                built.stored = self.library.load(built.library_key, nx, ng)
+            self._built[key] = built
         return self._built[key]
+
+    def _store(self, built: _Built, plan: StoredPlan) -> None:
+        """Keep an optimum for warm starts, in the library too if the planner has one."""
+        built.stored.append(plan)
+        if self.library is not None and built.library_key is not None:
+            self.library.save(built.library_key, built.stored)
 
     def _solver(self, built: _Built, s: GaitSettings, variant: str = "cold") -> ca.Function:
         """The IPOPT instance `variant` of a problem, built on first use (under a second:
@@ -294,7 +311,7 @@ class Planner:
                                                  duals_start, p0, totals)
         if not success or time.perf_counter() > built.callback.deadline:
             return None
-        built.stored.append((step0, mu, x0, duals["lam_x0"], duals["lam_g0"], qref))
+        self._store(built, StoredPlan(step0, mu, x0, duals["lam_x0"], duals["lam_g0"], qref))
         p = np.concatenate([qref.reshape(-1), [step, mu]])
         x, g, duals, status, success = self._attempt(built, s, WARM_ATTEMPTS[0], 0, x0, duals,
                                                      p, totals)
@@ -328,10 +345,11 @@ class Planner:
         tr, step, mu = built.tr, settings.step_length, settings.friction_coefficient
         nsig = int(tr.S.shape[0])
         if warm_start:
-            step0, mu0, x_start, lam_x, lam_g, qref = min(
-                built.stored, key=lambda r: abs(r[0] - step) + abs(r[1] - mu))
-            duals_start = {"lam_x0": lam_x, "lam_g0": lam_g}
-            origin = f"warm start from the plan for step length {step0:.4f} m, mu {mu0:.3g}"
+            nearest = min(built.stored, key=lambda r: abs(r.step - step) + abs(r.mu - mu))
+            x_start, qref = nearest.x, nearest.qref
+            duals_start = {"lam_x0": nearest.lam_x, "lam_g0": nearest.lam_g}
+            origin = (f"warm start from the plan for step length {nearest.step:.4f} m, "
+                      f"mu {nearest.mu:.3g} ({nearest.source})")
         else:
             self.stage("initial guess")
             qref = GUESSES[guess](tr, step)[: tr.N - 1]
@@ -383,5 +401,5 @@ class Planner:
                               origin=origin)
         result.settings["derivatives"] = built.derivatives_used
         if result.success:
-            built.stored.append((step, mu, x0, duals["lam_x0"], duals["lam_g0"], qref))
+            self._store(built, StoredPlan(step, mu, x0, duals["lam_x0"], duals["lam_g0"], qref))
         return result

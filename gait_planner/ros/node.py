@@ -32,6 +32,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from gait_planner.io import messages
 from gait_planner.io.atomic import remove_stale_temporaries
+from gait_planner.ocp.library import PlanLibrary
 from gait_planner.ocp.solve import STOPPED, Planner
 from gait_planner.pipeline import PlanRequest, RequestError, plan_and_record, prepare
 from gait_planner.ros import parameters
@@ -86,8 +87,9 @@ class GaitPlannerNode(Node):
         parameters.declare(self)
         for path in remove_stale_temporaries(self._param("output_dir")):
             self.get_logger().info(f"removed the stale temporary file {path}")
+        library = PlanLibrary() if self._param("plan_library") else None
         self._planner = planner or Planner(progress=self._progress, stage=self._worker.enter,
-                                           stop=self._worker.stopped)
+                                           stop=self._worker.stopped, library=library)
         if self._param("prepare_on_start"):
             self._prepare()
         group = ReentrantCallbackGroup()

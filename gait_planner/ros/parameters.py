@@ -53,6 +53,12 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         "Build the default scene's problem at start, before the service and the action are "
         "offered, so that the first request pays no build (walker3d: about 2 s from the "
         "compiled cache)", read_only=True)),
+    "plan_library": (True, _descriptor(
+        ParameterType.PARAMETER_BOOL,
+        "Warm-start from the plans of earlier processes (the plan library in the cache "
+        "folder, gait_planner/ocp/library.py; `make setup` plans the shipped scenes' default "
+        "requests into it) and add this node's plans to it; a request with cold_start "
+        "ignores it", read_only=True)),
     "feedback_every": (1, _descriptor(
         ParameterType.PARAMETER_INTEGER,
         "Action feedback every this many IPOPT iterations (and at every phase change)",

@@ -140,7 +140,9 @@ def spin_until(executor: SingleThreadedExecutor) -> Callable[..., bool]:
 @pytest.fixture
 def planner_node(ros_context: Context, tmp_path: Path) -> Iterator[Callable[..., Node]]:
     """``planner_node(**parameters)``: a `GaitPlannerNode` writing to `tmp_path` (its only
-    allowed output folder; prepare_on_start false unless given), served by its own multi-threaded executor on a background thread
+    allowed output folder; prepare_on_start and plan_library false unless given, so a test's
+    first plan is cold whatever earlier processes planned), served by its own multi-threaded
+    executor on a background thread
     as `gait-planner node` serves it, so a test's client spins apart from it. Closed, shut
     down and destroyed after the test."""
     from rclpy.executors import MultiThreadedExecutor
@@ -152,7 +154,7 @@ def planner_node(ros_context: Context, tmp_path: Path) -> Iterator[Callable[...,
 
     def start(**parameters) -> Node:
         values = {"output_dir": str(tmp_path), "allowed_output_dirs": [str(tmp_path)],
-                  "prepare_on_start": False, **parameters}
+                  "prepare_on_start": False, "plan_library": False, **parameters}
         node = GaitPlannerNode(context=ros_context, parameter_overrides=[
             Parameter(name, value=value) for name, value in values.items()])
         serving = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS, context=ros_context)

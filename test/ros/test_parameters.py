@@ -67,7 +67,7 @@ def parameters_of_process(make_node, executor, spin_until):
 def test_parameters_are_declared_with_type_range_and_description(parameters):
     client, wait = parameters
     names = ["default_scene", "output_dir", "allowed_output_dirs", "max_solve_time",
-             "compile_derivatives", "feedback_every", "prepare_on_start"]
+             "compile_derivatives", "feedback_every", "prepare_on_start", "plan_library"]
     described = {d.name: d for d in wait(client.describe_parameters(names)).descriptors}
     assert all(described[name].description for name in names)
     assert described["max_solve_time"].type == ParameterType.PARAMETER_DOUBLE
@@ -76,6 +76,7 @@ def test_parameters_are_declared_with_type_range_and_description(parameters):
     assert described["allowed_output_dirs"].read_only
     assert described["compile_derivatives"].type == ParameterType.PARAMETER_BOOL
     assert described["prepare_on_start"].read_only
+    assert described["plan_library"].read_only
 
 
 def test_the_default_scene_is_built_at_start_when_asked(planner_node):

@@ -1,0 +1,68 @@
+"""The plan library (`gait_planner.ocp.library`): a fresh planner re-plans warm from the plans
+an earlier one kept on disk, to the same optimum; a damaged or foreign file is ignored."""
+
+from __future__ import annotations
+
+import pytest
+
+from gait_planner.model.loader import load_scene
+from gait_planner.ocp.library import PlanLibrary, StoredPlan
+from gait_planner.ocp.settings import settings_for
+from gait_planner.ocp.solve import Planner
+
+
+@pytest.fixture(scope="module")
+def walker2d():
+    return load_scene("walker2d")
+
+
+def test_a_fresh_planner_replans_warm_from_the_library_to_the_same_optimum(walker2d, tmp_path):
+    settings = settings_for(walker2d)
+    cold = Planner(library=PlanLibrary(tmp_path)).plan(walker2d, settings, warm_start=False)
+    assert cold.success, cold.message
+    files = list((tmp_path / "plans").glob("*.npz"))
+    assert len(files) == 1
+
+    fresh = Planner(library=PlanLibrary(tmp_path))
+    warm = fresh.plan(walker2d, settings)
+    assert warm.success, warm.message
+    assert "(the plan library" in warm.settings["initial_guess"]
+    assert warm.stats.iterations < cold.stats.iterations / 4
+    assert warm.cost_value == pytest.approx(cold.cost_value, rel=1e-8)
+
+    again = fresh.plan(walker2d, settings, warm_start=False)  # cold_start ignores it
+    assert again.settings["initial_guess"].startswith("kinematic guess")
+
+
+def test_a_request_with_other_settings_does_not_read_the_file(walker2d, tmp_path):
+    Planner(library=PlanLibrary(tmp_path)).plan(walker2d, settings_for(walker2d), warm_start=False)
+    other = Planner(library=PlanLibrary(tmp_path)).plan(
+        walker2d, settings_for(walker2d, friction_coefficient=0.6, intervals_per_phase=6))
+    assert other.settings["initial_guess"].startswith("kinematic guess")
+    assert len(list((tmp_path / "plans").glob("*.npz"))) == 2
+
+
+def test_a_damaged_file_is_ignored(walker2d, tmp_path):
+    library = PlanLibrary(tmp_path)
+    Planner(library=library).plan(walker2d, settings_for(walker2d), warm_start=False)
+    (path,) = (tmp_path / "plans").glob("*.npz")
+    path.write_bytes(path.read_bytes()[:200])
+    result = Planner(library=library).plan(walker2d, settings_for(walker2d))
+    assert result.success, result.message
+    assert result.settings["initial_guess"].startswith("kinematic guess")
+
+
+def test_the_newest_plan_of_a_request_replaces_the_older_and_at_most_max_plans_are_kept(tmp_path):
+    import numpy as np
+
+    from gait_planner.ocp.library import MAX_PLANS
+
+    library = PlanLibrary(tmp_path)
+    plans = [StoredPlan(0.1 * (i % (MAX_PLANS + 4)), 0.8, np.full(3, float(i)), np.zeros(3),
+                        np.zeros(2), np.zeros((2, 4))) for i in range(MAX_PLANS + 8)]
+    library.save("k", plans)
+    loaded = library.load("k", 3, 2)
+    assert len(loaded) == MAX_PLANS
+    assert len({p.step for p in loaded}) == MAX_PLANS
+    assert max(p.x[0] for p in loaded) == MAX_PLANS + 7
+    assert library.load("k", 4, 2) == []
