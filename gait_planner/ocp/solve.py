@@ -42,8 +42,11 @@ STOPPED = "stopped on request"  # the message of a plan ended by `Planner.stop`
 # with it took from 31 to over 1000 iterations, hence the fallback below.
 INERTIA_FREE = {"ipopt.neg_curv_test_tol": 1e-12}
 # Iterations the inertia-free attempt of a cold plan gets (per stage) before the plan
-# restarts from the guess with IPOPT's inertia correction (walker3d: 57-87 in stage 1).
-FIRST_ATTEMPT_ITERATIONS = 150
+# restarts from the guess with IPOPT's inertia correction (walker3d's default: 57-87 in
+# stage 1). With 150 the torque-squared cost (126 + 224 needed) and the 0.9 m step (302) fell
+# back and took 942 iterations, 90 s (J 1106.6 instead of 1021.3), or did not converge in
+# 120 s; with 400 they converge in 13 s each (2026-11-23).
+FIRST_ATTEMPT_ITERATIONS = 400
 
 # IPOPT options of the solver variants beyond the common ones (`Planner._options`)
 VARIANTS = {
@@ -301,10 +304,12 @@ class Planner:
         """A cold plan of a step length other than the scene's that failed from its own
         guess: plan the scene's step length `step0` cold from its guess (qref), then
         re-plan `step` warm from that optimum (the continuation is one jump). walker3d
-        at 0.9 m (scene: 0.6338 m): from its own kinematic guess no convergence within
-        120 s (336 iterations), this way 64 + 146 iterations, 9.5 s; in five steps of
-        0.05 m 64 + 127 (2026-11-23). Returns (x, g, duals, status, success, p) of the
-        warm stage, or None if a stage failed. The scene's plan is kept for warm starts."""
+        at 1.0 m (scene: 0.6338 m): its inertia-free attempt stops at the iteration cap
+        (516 iterations), the continuation then converges (851 in all, 31 s; 2026-11-23).
+        At 0.9 m, before the cap was raised to 400: from its own guess no convergence
+        within 120 s, this way 64 + 146 iterations (in five steps of 0.05 m 64 + 127).
+        Returns (x, g, duals, status, success, p) of the warm stage, or None if a stage
+        failed. The scene's plan is kept for warm starts."""
         mu = s.friction_coefficient
         p0 = np.concatenate([qref.reshape(-1), [step0, mu]])
         x0, _, duals, _, success = self._attempt(built, s, COLD_ATTEMPTS[0], 0, x_start,
