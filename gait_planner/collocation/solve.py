@@ -23,16 +23,19 @@ builds in 41 s (2.4 GB).
 Cold attempts (`ATTEMPTS`): the product's inertia-free attempt from the "linear" guess
 (`collocation.guess`), then an inertia-free attempt from the "spline" guess with the whole
 iteration budget, then the product's inertia-correction attempt from the "linear" guess.
-Measured 2026-11-23 with benchmarks/work_precision.py's settings: walker2d at 8 intervals
-per phase converges in the first (94 iterations), at 12 and 16 (formerly rescued by the
-inertia attempt, 167 iterations each) now in the second (691 and 279 iterations, 32 s and
-22 s). walker3d converged in none of the product's: from "linear" the relaxed stage had not
-converged after 1000 iterations; with the inertia correction (from "spline" with
-inverse-dynamics torques, a variant not kept) the regularisation rose to 1e5 and the
-infeasibility stayed at 990 N for 100 iterations. From "spline" the relaxed stage and the
-free one take 245 + 114 iterations at 4 intervals per phase and 338 + 27 at 8, more than
-the 150 per stage of the product's first attempt (`FIRST_ATTEMPT_ITERATIONS`, set from
-DMOCC's 57-87), hence the whole budget.
+Measured 2026-11-23 with benchmarks/work_precision.py's settings (60 s for walker2d):
+walker2d at 8 intervals per phase converges in the first (94 iterations, 2.8 s), at 12 and
+16 now in the second (691 and 279 iterations, 32 s and 22 s); before, the inertia attempt
+took them over (benchmarks/results: converged, 167 iterations each; re-run on the loaded
+machine: time limit after 171 and 169 iterations). walker3d at 4, 6 and 8 intervals per
+phase converges in the second (509, 1101, 515 iterations; 68, 195, 134 s) and converged in
+none of the product's: from "linear" the relaxed stage had not converged after 1000
+iterations; with the inertia correction (from "spline" with inverse-dynamics torques, a
+variant not kept) the regularisation rose to 1e5 and the infeasibility stayed at 990 N for
+100 iterations. From "spline" the relaxed stage and the free one take 245 + 114 iterations
+at 4 intervals per phase and 338 + 27 at 8, more than the 150 per stage of the product's
+first attempt (`FIRST_ATTEMPT_ITERATIONS`, set from DMOCC's 57-87), hence the whole
+budget.
 
 Why walker3d needs that many: its optimum is stiff and nearly singular where a foot stands
 on one point (right_forefoot, double_heel). The foot's roll about that point (inertia
