@@ -27,15 +27,15 @@ Measured 2026-11-23 with benchmarks/work_precision.py's settings (60 s for walke
 walker2d at 8 intervals per phase converges in the first (94 iterations, 2.8 s), at 12 and
 16 now in the second (691 and 279 iterations, 32 s and 22 s); before, the inertia attempt
 took them over (benchmarks/results: converged, 167 iterations each; re-run on the loaded
-machine: time limit after 171 and 169 iterations). walker3d at 4, 6 and 8 intervals per
-phase converges in the second (509, 1101, 515 iterations; 68, 195, 134 s) and converged in
-none of the product's: from "linear" the relaxed stage had not converged after 1000
-iterations; with the inertia correction (from "spline" with inverse-dynamics torques, a
-variant not kept) the regularisation rose to 1e5 and the infeasibility stayed at 990 N for
-100 iterations. From "spline" the relaxed stage and the free one take 245 + 114 iterations
-at 4 intervals per phase and 338 + 27 at 8, more than the 150 per stage of the product's
-first attempt (`FIRST_ATTEMPT_ITERATIONS`, set from DMOCC's 57-87), hence the whole
-budget.
+machine: time limit after 171 and 169 iterations). walker3d at 4, 6, 8 and 12 intervals
+per phase converges in the second (509, 1101, 515, 793 iterations; 68, 195, 134, 291 s)
+and converged in none of the product's: from "linear" the relaxed stage had not converged
+after 1000 iterations; with the inertia correction (from "spline" with inverse-dynamics
+torques, a variant not kept) the regularisation rose to 1e5 and the infeasibility stayed
+at 990 N for 100 iterations. From "spline" the relaxed stage and the free one take 245 +
+114 iterations at 4 intervals per phase and 338 + 27 at 8, more than the 150 per stage of
+the product's first attempt (`FIRST_ATTEMPT_ITERATIONS`, set from DMOCC's 57-87), hence
+the whole budget.
 
 Why walker3d needs that many: its optimum is stiff and nearly singular where a foot stands
 on one point (right_forefoot, double_heel). The foot's roll about that point (inertia
