@@ -19,6 +19,32 @@ iterations, 6.5 s (2026-11-23; today's problem: 70 iterations, 1.9 s in
 benchmarks/REPORT.md); `MinimalModel` expanded built
 walker2d in 19 s and did not finish walker3d (over 6 GB). walker3d at 4 intervals per phase
 builds in 41 s (2.4 GB).
+
+Cold attempts (`ATTEMPTS`): the product's inertia-free attempt from the "linear" guess
+(`collocation.guess`), then an inertia-free attempt from the "spline" guess with the whole
+iteration budget, then the product's inertia-correction attempt from the "linear" guess.
+Measured 2026-11-23 with benchmarks/work_precision.py's settings (60 s for walker2d):
+walker2d at 8 intervals per phase converges in the first (94 iterations, 2.8 s), at 12 and
+16 now in the second (691 and 279 iterations, 32 s and 22 s); before, the inertia attempt
+took them over (benchmarks/results: converged, 167 iterations each; re-run on the loaded
+machine: time limit after 171 and 169 iterations). walker3d at 4, 6, 8 and 12 intervals
+per phase converges in the second (509, 1101, 515, 793 iterations; 68, 195, 134, 291 s)
+and converged in none of the product's: from "linear" the relaxed stage had not converged
+after 1000 iterations; with the inertia correction (from "spline" with inverse-dynamics
+torques, a variant not kept) the regularisation rose to 1e5 and the infeasibility stayed
+at 990 N for 100 iterations. From "spline" the relaxed stage and the free one take 245 +
+114 iterations at 4 intervals per phase and 338 + 27 at 8, more than the 150 per stage of
+the product's first attempt (`FIRST_ATTEMPT_ITERATIONS`, set from DMOCC's 57-87), hence
+the whole budget.
+
+Why walker3d needs that many: its optimum is stiff and nearly singular where a foot stands
+on one point (right_forefoot, double_heel). The foot's roll about that point (inertia
+0.0035 kg m^2; walker2d's foot has only its pitch, 0.0196 kg m^2 about the forefoot)
+reaches 2500-5000 rad/s^2 in the converged plan, the vertical forces alternate from knot
+to knot (32-823 N), and the reduced Hessian there has eigenvalues from -3.6e-5 to 1.7e-7
+along the ankle accelerations of these phases; IPOPT's full steps of 20-50 (scaled) in
+these directions raise the infeasibility to 100-200 N and back. Started from the DMOCC
+plan mapped to the collocation (4 per phase) it still needed 163 + 178 iterations.
 """
 
 from __future__ import annotations
@@ -38,9 +64,17 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
-from gait_planner.ocp.solve import (COLD_ATTEMPTS, VARIANTS, Planner, Progress, _IterationCallback,
-                                     solve_stage)
+from gait_planner.ocp.solve import (COLD_ATTEMPTS, INERTIA_FREE, VARIANTS, Planner, Progress,
+                                     _IterationCallback, solve_stage)
 from gait_planner.result import PlanResult
+
+# Solver variants: the product's, and the inertia-free test with the settings' whole
+# iteration budget (module docstring)
+COLLOCATION_VARIANTS = {**VARIANTS, "cold_full": INERTIA_FREE}
+# Cold attempts (guess mapping, stages as `COLD_ATTEMPTS`), in order (module docstring)
+ATTEMPTS = (("linear", COLD_ATTEMPTS[0]),
+            ("spline", [("cold_full", True, True), ("cold_full", False, False)]),
+            ("linear", COLD_ATTEMPTS[1]))
 
 
 def problem_size(solver: ca.Function, nx: int, ng: int) -> dict[str, int]:
@@ -78,24 +112,27 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
     def solver(variant: str) -> ca.Function:
         if variant not in solvers:
             opts = Planner._options(SimpleNamespace(callback=callback), settings)
-            opts.update(VARIANTS[variant])
+            opts.update(COLLOCATION_VARIANTS[variant])
             opts["ipopt.max_iter"] = min(opts["ipopt.max_iter"], settings.max_iterations)
             solvers[variant] = ca.nlpsol(f"collocation_{variant}", "ipopt", nlp, opts)
         return solvers[variant]
 
-    size = problem_size(solver(COLD_ATTEMPTS[0][0][0]), nx, ng)
+    size = problem_size(solver(ATTEMPTS[0][1][0][0]), nx, ng)
     build_time = time.perf_counter() - start
     start = time.perf_counter()
     p = np.array([settings.step_length, settings.friction_coefficient])
-    x_start = initial_guess(tr, settings.step_length)
     sig = tr.variables.index("sigma")
     callback.deadline = start + settings.max_solve_time
     callback.started, callback.iteration, callback.report = start, 0, progress
-    origin = ("kinematic guess (ocp.guess) in minimal coordinates; sigma fixed at its upper "
-              "bound and limits relaxed, then free")
-    iterations, status, evaluation, x, g = 0, "not started", 0.0, x_start, None
-    for number, attempt in enumerate(COLD_ATTEMPTS):
-        x, duals, success = x_start, {"lam_x0": np.zeros(nx), "lam_g0": np.zeros(ng)}, False
+    origin = ("kinematic guess (ocp.guess) in minimal coordinates, linear; sigma fixed at its "
+              "upper bound and limits relaxed, then free")
+    iterations, status, evaluation, g = 0, "not started", 0.0, None
+    x_starts: dict[str, np.ndarray] = {}
+    for number, (kinematics, attempt) in enumerate(ATTEMPTS):
+        if kinematics not in x_starts:
+            x_starts[kinematics] = initial_guess(tr, settings.step_length, kinematics)
+        x, duals, success = x_starts[kinematics], {"lam_x0": np.zeros(nx),
+                                                   "lam_g0": np.zeros(ng)}, False
         for variant, fix_sigma, relaxed in attempt:
             lb, ub = lbx.copy(), ubx.copy()
             if fix_sigma:
@@ -107,10 +144,13 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
             status, success = stage.status, stage.success
             if not success:
                 break
-        if success or time.perf_counter() > callback.deadline or number + 1 == len(COLD_ATTEMPTS):
+        if success or time.perf_counter() > callback.deadline or number + 1 == len(ATTEMPTS):
             break
-        origin += (f"; the inertia-free attempt stopped ({STATUS_WORDS.get(status, status)})"
-                   f" after {iterations} iterations, restarted with IPOPT's inertia test")
+        following = ATTEMPTS[number + 1]
+        test = "IPOPT's inertia test" if following[1][0][0] == "cold_inertia" \
+            else "the inertia-free test and no iteration cap"
+        origin += (f"; attempt {number + 1} stopped ({STATUS_WORDS.get(status, status)}) after "
+                   f"{iterations} iterations, restarted from the {following[0]} guess with {test}")
     return build_result(tr, x, p, g, status=status, iterations=iterations,
                         solve_time=time.perf_counter() - start, build_time=build_time,
                         evaluation_time=evaluation, origin=origin, sizes=size)
