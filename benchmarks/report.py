@@ -36,6 +36,13 @@ def table(rows: list[dict], columns: list[tuple[str, str, str]]) -> list[str]:
     return out
 
 
+def _limits(value) -> str:
+    """A time limit (s) or one per scene, in words."""
+    if isinstance(value, dict):
+        return ", ".join(f"{v:g} s ({k})" for k, v in value.items())
+    return f"{value} s"
+
+
 def provenance(doc: dict) -> str:
     h = doc["header"]
     return (f"*Measured {h['date_utc']} on {h['cpu']} ({h['cores']} cores, load "
@@ -77,7 +84,7 @@ def work_precision(doc) -> list[str]:
             "phase-relative times; *certificate*: inverse dynamics, largest torque error in % "
             "of the peak torque away from contact switches. The collocation is its fast form "
             "(recursive Newton–Euler dynamics, the NLP expanded to one SX graph) with a time "
-            f"limit of {doc['header'].get('collocation_time_limit_s', '?')} s per solve; "
+            f"limit per solve of {_limits(doc['header'].get('collocation_time_limit_s', '?'))}; "
             "DMOCC uses its compiled derivative elements.", "",
             "![work-precision](work_precision.png)", ""]
     out += table(rows, [
