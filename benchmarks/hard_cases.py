@@ -2,7 +2,7 @@
 clear reason; iterations, time, largest violations. DMOCC on walker3d, and DMOCC and the
 direct collocation baseline (`gait_planner.collocation`) on walker2d.
 
-    .venv/bin/python benchmarks/hard_cases.py            # walker3d, walker2d (~12 min on 2 cores)
+    .venv/bin/python benchmarks/hard_cases.py            # walker3d, walker2d (~4 min on 2 cores)
     .venv/bin/python benchmarks/hard_cases.py --quick    # four walker2d DMOCC rows (~20 s)
 
 Rows (the scene's default request changed in one way): step length 0.3 m and 0.9 m,
