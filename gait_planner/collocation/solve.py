@@ -1,7 +1,7 @@
 """Solving the collocation NLP with the product's IPOPT set-up.
 
-Same options as `gait_planner.ocp.solve.Planner` (MUMPS, tol and constr_viol_tol of the
-settings, adaptive mu, warm_start_init_point; `Planner._options`), the same solver variants
+Same options as `gait_planner.ocp.solve.Planner` (`ipopt_options`: MUMPS, tol and
+constr_viol_tol of the settings, adaptive mu, warm_start_init_point), the same solver variants
 and cold-start stages (`VARIANTS`, `COLD_ATTEMPTS`: sigma fixed at its upper bound with
 the swing clearance and joint speed limits relaxed, then everything free; the
 inertia-free curvature test first, IPOPT's inertia correction as the fallback), the same
@@ -49,7 +49,6 @@ plan mapped to the collocation (4 per phase) it still needed 163 + 178 iteration
 from __future__ import annotations
 
 import time
-from types import SimpleNamespace
 
 import casadi as ca
 import numpy as np
@@ -63,8 +62,8 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
-from gait_planner.ocp.solve import (COLD_ATTEMPTS, INERTIA_FREE, VARIANTS, Planner, Progress,
-                                     _IterationCallback, solve_stage)
+from gait_planner.ocp.solve import (COLD_ATTEMPTS, INERTIA_FREE, VARIANTS, Progress,
+                                     IterationCallback, ipopt_options, solve_stage)
 from gait_planner.result import PlanResult
 
 # Solver variants: the product's, except that the first attempt keeps 150 iterations per
@@ -109,12 +108,12 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
     f, g_expr = graph(xs, ps)
     nlp = {"x": xs, "p": ps, "f": f, "g": g_expr}
     lbx, ubx, lbg, ubg = tr.bounds()
-    callback = _IterationCallback(nx, ng, lbg, ubg)
+    callback = IterationCallback(nx, ng, lbg, ubg)
     solvers: dict[str, ca.Function] = {}
 
     def solver(variant: str) -> ca.Function:
         if variant not in solvers:
-            opts = Planner._options(SimpleNamespace(callback=callback), settings)
+            opts = ipopt_options(callback, settings)
             opts.update(COLLOCATION_VARIANTS[variant])
             opts["ipopt.max_iter"] = min(opts["ipopt.max_iter"], settings.max_iterations)
             solvers[variant] = ca.nlpsol(f"collocation_{variant}", "ipopt", nlp, opts)

@@ -64,7 +64,7 @@ COLD_ATTEMPTS = ([("cold", True, True), ("cold", False, False)],
 WARM_ATTEMPTS = ([("warm", False, False)],)
 
 
-class _IterationCallback(ca.Callback):
+class IterationCallback(ca.Callback):
     """Called by IPOPT every iteration: reports progress, stops at the deadline or when
     `stop` says so (IPOPT then ends with User_Requested_Stop after this iteration)."""
 
@@ -111,12 +111,33 @@ class _IterationCallback(ca.Callback):
         return [1 if stopped or time.perf_counter() > self.deadline else 0]
 
 
+def ipopt_options(callback: IterationCallback, s: GaitSettings) -> dict:
+    """The IPOPT options every solver variant shares (the planner's and the collocation
+    baseline's): MUMPS, the settings' tolerances and iteration limit, adaptive mu,
+    warm_start_init_point, progress and stopping through `callback`."""
+    return {
+        "print_time": False,
+        "iteration_callback": callback,
+        "ipopt.print_level": 0,
+        "ipopt.sb": "yes",
+        "ipopt.linear_solver": "mumps",
+        "ipopt.tol": s.tolerance,
+        "ipopt.constr_viol_tol": s.constraint_tolerance,
+        # IPOPT's "acceptable" stop keeps the tight constraint tolerance: only the
+        # optimality error is relaxed (to 1e-6, IPOPT's default acceptable_tol)
+        "ipopt.acceptable_constr_viol_tol": s.constraint_tolerance,
+        "ipopt.max_iter": s.max_iterations,
+        "ipopt.mu_strategy": "adaptive",
+        "ipopt.warm_start_init_point": "yes",
+    }
+
+
 @dataclasses.dataclass
 class _Built:
     tr: Transcription
     nlp: dict
     bounds: tuple
-    callback: _IterationCallback
+    callback: IterationCallback
     derivatives: dict  # nlpsol options grad_f, jac_g, hess_lag (ocp.derivatives)
     derivatives_used: str  # how, in words (result.settings["derivatives"])
     build_time: float
@@ -220,7 +241,7 @@ class Planner:
                                for name in ("grad_f", "jac_g")}
                 derivatives["hess_lag"] = reference.get_function("nlp_hess_l")
             nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
-            cb = _IterationCallback(nx, ng, bounds[2], bounds[3])
+            cb = IterationCallback(nx, ng, bounds[2], bounds[3])
             built = _Built(tr, nlp, bounds, cb, derivatives, used, time.perf_counter() - start)
             if self.library is not None:
                 built.library_key = self.library.key(scene.source, key[2], nx, ng)
@@ -248,31 +269,13 @@ class Planner:
         """
         if variant not in built.solvers:
             start = time.perf_counter()
-            opts = self._options(built, s)
+            opts = ipopt_options(built.callback, s)
             opts.update(VARIANTS[variant])
             opts["ipopt.max_iter"] = min(opts["ipopt.max_iter"], s.max_iterations)
             opts.update(built.derivatives)
             built.solvers[variant] = ca.nlpsol(f"gait_{variant}", "ipopt", built.nlp, opts)
             built.build_time += time.perf_counter() - start
         return built.solvers[variant]
-
-    @staticmethod
-    def _options(built: _Built, s: GaitSettings) -> dict:
-        return {
-            "print_time": False,
-            "iteration_callback": built.callback,
-            "ipopt.print_level": 0,
-            "ipopt.sb": "yes",
-            "ipopt.linear_solver": "mumps",
-            "ipopt.tol": s.tolerance,
-            "ipopt.constr_viol_tol": s.constraint_tolerance,
-            # IPOPT's "acceptable" stop keeps the tight constraint tolerance: only the
-            # optimality error is relaxed (to 1e-6, IPOPT's default acceptable_tol)
-            "ipopt.acceptable_constr_viol_tol": s.constraint_tolerance,
-            "ipopt.max_iter": s.max_iterations,
-            "ipopt.mu_strategy": "adaptive",
-            "ipopt.warm_start_init_point": "yes",
-        }
 
     def _attempt(self, built: _Built, s: GaitSettings, attempt, number: int,
                  x0: np.ndarray, duals: dict, p: np.ndarray, totals: list):
