@@ -63,7 +63,7 @@ from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
 from gait_planner.ocp.solve import (COLD_ATTEMPTS, INERTIA_FREE, VARIANTS, Progress,
-                                     IterationCallback, ipopt_options, solve_stage)
+                                     IterationCallback, ipopt_options, run_attempt)
 from gait_planner.result import PlanResult
 
 # Solver variants: the product's, except that the first attempt keeps 150 iterations per
@@ -128,31 +128,23 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
     callback.started, callback.iteration, callback.report = start, 0, progress
     origin = ("kinematic guess (ocp.guess) in minimal coordinates, linear; sigma fixed at its "
               "upper bound and limits relaxed, then free")
-    iterations, status, evaluation, g = 0, "not started", 0.0, None
+    totals = [0, 0.0]  # iterations, evaluation s
     x_starts: dict[str, np.ndarray] = {}
     for number, (kinematics, attempt) in enumerate(ATTEMPTS):
         if kinematics not in x_starts:
             x_starts[kinematics] = initial_guess(tr, settings.step_length, kinematics)
-        x, duals, success = x_starts[kinematics], {"lam_x0": np.zeros(nx),
-                                                   "lam_g0": np.zeros(ng)}, False
-        for variant, fix_sigma, relaxed in attempt:
-            lb, ub = lbx.copy(), ubx.copy()
-            if fix_sigma:
-                lb[sig] = ub[sig] = x[sig]
-            lower = tr.relaxed_lower_bounds(lbg) if relaxed else lbg
-            x, g, duals, stage = solve_stage(solver(variant), x, duals, p, lb, ub, lower, ubg)
-            iterations += stage.iterations
-            evaluation += stage.evaluation_time
-            status, success = stage.status, stage.success
-            if not success:
-                break
+        zero_duals = {"lam_x0": np.zeros(nx), "lam_g0": np.zeros(ng)}
+        x, g, _, status, success = run_attempt(solver, attempt, x_starts[kinematics], zero_duals,
+                                               p, (lbx, ubx, lbg, ubg), sig,
+                                               tr.relaxed_lower_bounds, totals)
         if success or time.perf_counter() > callback.deadline or number + 1 == len(ATTEMPTS):
             break
         following = ATTEMPTS[number + 1]
         test = "IPOPT's inertia test" if following[1][0][0] == "cold_inertia" \
             else "the inertia-free test and no iteration cap"
         origin += (f"; attempt {number + 1} stopped ({STATUS_WORDS.get(status, status)}) after "
-                   f"{iterations} iterations, restarted from the {following[0]} guess with {test}")
+                   f"{totals[0]} iterations, restarted from the {following[0]} guess with {test}")
+    iterations, evaluation = totals
     return build_result(tr, x, p, g, status=status, iterations=iterations,
                         solve_time=time.perf_counter() - start, build_time=build_time,
                         evaluation_time=evaluation, origin=origin, sizes=size)

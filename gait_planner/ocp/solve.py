@@ -48,7 +48,7 @@ INERTIA_FREE = {"ipopt.neg_curv_test_tol": 1e-12}
 # 120 s; with 400 they converge in 13 s each (2026-11-23).
 FIRST_ATTEMPT_ITERATIONS = 400
 
-# IPOPT options of the solver variants beyond the common ones (`Planner._options`)
+# IPOPT options of the solver variants beyond the common ones (`ipopt_options`)
 VARIANTS = {
     "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
     "cold_inertia": {},
@@ -176,6 +176,34 @@ def solve_stage(solver: ca.Function, x0: np.ndarray, duals: dict, p: np.ndarray,
                        bool(stats.get("success", False))))
 
 
+def run_attempt(solver_of: Callable[[str], ca.Function], attempt, x0: np.ndarray,
+                duals: dict, p: np.ndarray, bounds: tuple, sigma, relaxed_lower_bounds,
+                totals: list, enter: Callable[[int, str], None] = lambda k, variant: None):
+    """The stages of one attempt, a list of (variant, sigma fixed, limits relaxed), from
+    (x0, duals {"lam_x0", "lam_g0"}) with parameters p: each stage is one IPOPT call of
+    `solver_of(variant)` within bounds (lbx, ubx, lbg, ubg), with x[sigma] fixed at its
+    current value if asked and lbg replaced by `relaxed_lower_bounds(lbg)` if relaxed;
+    `enter(k, variant)` is called before stage k. Adds iterations and evaluation seconds to
+    totals [iterations, seconds] and stops at the first stage that fails. Returns (x, g,
+    duals, status, success) of the last stage run (the DMOCC planner's and the collocation
+    baseline's attempts alike)."""
+    lbx, ubx, lbg, ubg = bounds
+    g, status, success = None, "not started", False
+    for k, (variant, fix_sigma, relaxed) in enumerate(attempt):
+        enter(k, variant)
+        lb, ub = lbx.copy(), ubx.copy()
+        if fix_sigma:
+            lb[sigma] = ub[sigma] = x0[sigma]
+        lower = relaxed_lower_bounds(lbg) if relaxed else lbg
+        x0, g, duals, stage = solve_stage(solver_of(variant), x0, duals, p, lb, ub, lower, ubg)
+        totals[0] += stage.iterations
+        totals[1] += stage.evaluation_time
+        status, success = stage.status, stage.success
+        if not success:
+            break
+    return x0, g, duals, status, success
+
+
 class Planner:
     """Plans gaits; keeps built problems and previous plans for warm starts.
 
@@ -279,27 +307,14 @@ class Planner:
 
     def _attempt(self, built: _Built, s: GaitSettings, attempt, number: int,
                  x0: np.ndarray, duals: dict, p: np.ndarray, totals: list):
-        """The stages of one attempt (a list of (variant, sigma fixed, limits relaxed)) from
-        (x0, duals) with parameters p; adds iterations and evaluation seconds to totals.
-        Returns (x, g, duals, status, success) of its last stage."""
-        lbx, ubx, lbg, ubg = built.bounds
-        nsig = int(built.tr.S.shape[0])
-        g, status, success = None, "not started", False
-        for k, (variant, fix_sigma, relaxed) in enumerate(attempt):
+        """`run_attempt` on a built problem, reporting each stage (`Planner.stage`)."""
+        def enter(k: int, variant: str) -> None:
             self.stage("warm" if variant == "warm" else
                        f"cold stage {k + 1}" + (" (inertia test)" if number else ""))
-            lb, ub = lbx.copy(), ubx.copy()
-            if fix_sigma:
-                lb[-nsig:] = ub[-nsig:] = x0[-nsig:]
-            lower = built.tr.relaxed_lower_bounds(lbg) if relaxed else lbg
-            x0, g, duals, stage = solve_stage(self._solver(built, s, variant), x0, duals, p,
-                                              lb, ub, lower, ubg)
-            totals[0] += stage.iterations
-            totals[1] += stage.evaluation_time
-            status, success = stage.status, stage.success
-            if not success:
-                break
-        return x0, g, duals, status, success
+
+        return run_attempt(lambda variant: self._solver(built, s, variant), attempt, x0, duals,
+                           p, built.bounds, slice(-int(built.tr.S.shape[0]), None),
+                           built.tr.relaxed_lower_bounds, totals, enter)
 
     def _continuation(self, built: _Built, s: GaitSettings, x_start: np.ndarray,
                       duals_start: dict, qref: np.ndarray, step0: float, step: float,
