@@ -213,8 +213,8 @@ def hard_cases(doc) -> list[str]:
             "equations).", ""]
     out += table(rows, [
         ("case", "case", ""), ("scene", "scene", ""), ("method", "method", ""),
-        ("outcome", "outcome", ""), ("iterations", "iterations", "d"),
-        ("wall s", "wall_s", ".1f"), ("J", "cost", ".4f"),
+        ("outcome", "outcome", ""), ("intervals", "intervals", ""),
+        ("iterations", "iterations", "d"), ("wall s", "wall_s", ".1f"), ("J", "cost", ".4f"),
         ("constraint violation", "max_constraint_violation", ".1e"),
         ("reason", "reason", "")])
     return out + [""]

@@ -7,6 +7,7 @@ converge is a `PlanResult` with success False (nothing is recorded for it).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import time
@@ -17,6 +18,7 @@ from typing import Callable
 import numpy as np
 
 from gait_planner.model.loader import SceneError, available_scenes, load_scene
+from gait_planner.ocp.refine import refined_settings
 from gait_planner.ocp.request_ranges import RangeError, check_request
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings, SettingsError, settings_for
@@ -130,7 +132,7 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
     stem = output_stem(request, scene.name)
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    result = planner.plan(scene, settings, warm_start=not request.cold_start)
+    result, _ = plan_certified(planner, scene, settings, warm_start=not request.cold_start)
     if not result.success:
         return Outcome(result, None, None)
     if stage is not None:
@@ -148,6 +150,49 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
 
         rrd_path = save_rrd(result, folder / f"{stem}.rrd")
     return Outcome(result, mcap, rrd_path)
+
+
+def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
+                   warm_start: bool = True, guess: str = "kinematic"):
+    """`Planner.plan`, then, while the converged plan misses the continuous-dynamics
+    certificate and `settings.refinements` allow, the same request on a grid twice as fine
+    from that plan (`ocp.refine`); the finer plan is kept if it converges with a smaller
+    torque error. All plans share settings.max_solve_time. Returns (result, certificate;
+    None if the plan failed); a refined result's stats count every plan's iterations and
+    time, and its settings["refinement"] says what was refined and why."""
+    start = time.perf_counter()
+    result = planner.plan(scene, settings, warm_start=warm_start, guess=guess)
+    cert = continuous_certificate(result) if result.success else None
+    coarse, notes = settings, []
+    for _ in range(settings.refinements):
+        if cert is None or cert.ok:
+            break
+        left = settings.max_solve_time - (time.perf_counter() - start)
+        fine = dataclasses.replace(refined_settings(coarse), max_solve_time=max(left, 1e-3))
+        why = (f"the plan on {sum(coarse.intervals)} intervals missed the continuous-dynamics "
+               f"certificate ({'; '.join(cert.failures)})")
+        if left <= 0:
+            notes.append(f"{why}; no time left to refine")
+            break
+        planner.stage(f"refining the grid to {sum(fine.intervals)} intervals")
+        refined = planner.plan(scene, fine, warm_start=warm_start, refine_from=coarse)
+        if not refined.success:
+            notes.append(f"{why}; refined to {sum(fine.intervals)}: {refined.message}")
+            break
+        refined_cert = continuous_certificate(refined)
+        notes.append(f"{why}; refined to {sum(fine.intervals)}: {refined_cert.summary()}")
+        if refined_cert.max_torque_calm >= cert.max_torque_calm:
+            break
+        stats = dataclasses.replace(
+            refined.stats, iterations=result.stats.iterations + refined.stats.iterations,
+            solve_time=result.stats.solve_time + refined.stats.solve_time,
+            evaluation_time=result.stats.evaluation_time + refined.stats.evaluation_time)
+        message = f"{refined.message} on the refined grid ({stats.iterations} in all)"
+        result, cert, coarse = (dataclasses.replace(refined, stats=stats, message=message),
+                                refined_cert, fine)
+    if notes:
+        result.settings["refinement"] = " | ".join(notes)
+    return result, cert
 
 
 def continuous_certificate(result: PlanResult):

@@ -53,7 +53,10 @@ class GaitSettings:
     the cost (sin^2 of a joint's roll or yaw; the J reported excludes it); the option may
     be a number or a weight per cost, ``{kinetic_energy: 1, torque_squared: 50}`` (the
     costs differ in size by ~60 on walker3d; a cost it does not name gets 0);
-    max_iterations, max_solve_time s (IPOPT); tolerance (IPOPT tol);
+    refinements: how many times a converged plan that misses the continuous-dynamics
+    certificate is planned again on a grid twice as fine, from itself
+    (`gait_planner.pipeline.plan_certified`, `gait_planner.ocp.refine`; 0 = never);
+    max_iterations, max_solve_time s (IPOPT; with refinements, the time of all plans); tolerance (IPOPT tol);
     constraint_tolerance (IPOPT constr_viol_tol); compiled: build the per-node derivative
     elements as C (`gait_planner.ocp.compile`; a one-time cost per machine, cached).
     """
@@ -77,6 +80,7 @@ class GaitSettings:
     twist_regularisation: float = 0.0
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
+    refinements: int = 1
     max_iterations: int = 3000
     max_solve_time: float = 600.0
     tolerance: float = 1e-8
@@ -106,6 +110,9 @@ class GaitSettings:
             bad("cost", f"unknown cost {self.cost!r}; known: {', '.join(COSTS)}")
         if any(i < 1 for i in self.intervals):
             bad("intervals", f"every phase needs at least 1 interval, got {self.intervals}")
+        if isinstance(self.refinements, bool) or not isinstance(self.refinements, int) \
+                or not 0 <= self.refinements <= 3:
+            bad("refinements", f"must be a whole number from 0 to 3, got {self.refinements!r}")
         if self.max_solve_time <= 0:
             bad("max_solve_time", f"must be positive (s), got {self.max_solve_time}")
         try:  # degrees, validated and made a float

@@ -24,6 +24,7 @@ from gait_planner.ocp.compile import CompileError, compile_sources
 from gait_planner.ocp.derivatives import nlp_derivatives
 from gait_planner.ocp.guess import GUESSES, initial_multipliers
 from gait_planner.ocp.library import PlanLibrary, StoredPlan
+from gait_planner.ocp.refine import refined_start
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, build_result, failed_result
 from gait_planner.ocp.transcription import Transcription
@@ -316,6 +317,19 @@ class Planner:
                            p, built.bounds, slice(-int(built.tr.S.shape[0]), None),
                            built.tr.relaxed_lower_bounds, totals, enter)
 
+    def _refined_start(self, scene: Scene, coarse_settings: GaitSettings, built: _Built,
+                       step: float, mu: float):
+        """(x, qref, origin in words) refined (`ocp.refine.refined_start`) from the stored
+        plan of (step, mu) on the coarse grid of `coarse_settings`."""
+        coarse = self._built.get(_key(scene, coarse_settings))
+        plans = [r for r in (coarse.stored if coarse else []) if (r.step, r.mu) == (step, mu)]
+        if not plans:
+            raise ValueError(f"no plan of step length {step} m, mu {mu} on the coarse grid "
+                             "to refine")
+        x, qref = refined_start(coarse.tr, plans[-1], built.tr)
+        return x, qref, (f"refined from the plan on {coarse.tr.N} intervals to {built.tr.N}; "
+                         "sigma fixed and limits relaxed, then free")
+
     def _continuation(self, built: _Built, s: GaitSettings, x_start: np.ndarray,
                       duals_start: dict, qref: np.ndarray, step0: float, step: float,
                       totals: list):
@@ -341,11 +355,14 @@ class Planner:
         return (x, g, duals, status, success, p) if success else None
 
     def plan(self, scene: Scene, settings: GaitSettings, *, warm_start: bool = True,
-             guess: str = "kinematic") -> PlanResult:
+             guess: str = "kinematic", refine_from: GaitSettings | None = None) -> PlanResult:
         """Solve one half cycle; a numerical failure is a result with a reason.
 
         A cold start begins at `guess`, a key of `ocp.guess.GUESSES`: the kinematic
         stepping motion, or (for robustness tests) the standing pose or a perturbed guess.
+        refine_from: settings whose grid `settings` refines (`ocp.refine`); without a
+        stored plan of its own to warm-start from, the plan then starts from this planner's
+        plan of the same request on that coarser grid (ValueError if there is none).
 
         The time limit (settings.max_solve_time) covers the guess and the solve; building a
         problem the planner has not seen before comes on top (stats.build_time).
@@ -367,7 +384,11 @@ class Planner:
         start = time.perf_counter()
         tr, step, mu = built.tr, settings.step_length, settings.friction_coefficient
         nsig = int(tr.S.shape[0])
-        if warm_start:
+        if not warm_start and refine_from is not None:
+            x_start, qref, origin = self._refined_start(scene, refine_from, built, step, mu)
+            duals_start = {"lam_x0": np.zeros(x_start.size),
+                           "lam_g0": np.zeros(int(tr.g.shape[0]))}
+        elif warm_start:
             nearest = min(built.stored, key=lambda r: abs(r.step - step) + abs(r.mu - mu))
             x_start, qref = nearest.x, nearest.qref
             duals_start = {"lam_x0": nearest.lam_x, "lam_g0": nearest.lam_g}
@@ -401,7 +422,7 @@ class Planner:
                 break
             origin += (f"; the inertia-free attempt stopped ({STATUS_WORDS.get(status, status)})"
                        f" after {totals[0]} iterations")
-            if number == 0 and step != scene.gait.step_length:
+            if number == 0 and step != scene.gait.step_length and refine_from is None:
                 qref_c = GUESSES[guess](tr, scene.gait.step_length)[: tr.N - 1]
                 found = self._continuation(built, settings, x_start, duals_start, qref_c,
                                            scene.gait.step_length, step, totals)

@@ -1,0 +1,95 @@
+"""Grid refinement (`gait_planner.ocp.refine`, `gait_planner.pipeline.plan_certified`): a plan
+that misses the continuous-dynamics certificate is planned again on a grid twice as fine,
+from itself, and the refined plan passes."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gait_planner.model.loader import load_scene
+from gait_planner.ocp.refine import refined_settings, refined_start
+from gait_planner.ocp.settings import SettingsError, settings_for
+from gait_planner.ocp.solve import Planner
+from gait_planner.ocp.transcription import Transcription
+from gait_planner.pipeline import continuous_certificate, plan_certified
+from gait_planner.verify import verify_result
+
+
+@pytest.fixture(scope="module")
+def coarse_walker2d():
+    """walker2d on 3 intervals per phase (the hard case "coarse grid"), planned cold with
+    no refinement: it converges and misses the certificate (0.27 % of the peak torque
+    away from switches, 2026-11-23)."""
+    scene = load_scene("walker2d")
+    settings = settings_for(scene, intervals_per_phase=3, refinements=0)
+    planner = Planner()
+    result = planner.plan(scene, settings, warm_start=False)
+    assert result.success, result.message
+    return scene, settings, planner, result
+
+
+def test_refined_settings_keep_the_half_cycle():
+    s = settings_for(load_scene("walker3d"))
+    fine = refined_settings(s)
+    assert fine.intervals == tuple(2 * i for i in s.intervals)
+    assert sum(fine.intervals) * fine.base_time_step == pytest.approx(
+        sum(s.intervals) * s.base_time_step, rel=1e-15)
+
+
+def test_refined_start_keeps_the_coarse_plan_at_shared_nodes(coarse_walker2d):
+    scene, settings, planner, result = coarse_walker2d
+    built = planner._built[next(iter(planner._built))]
+    coarse, plan = built.tr, built.stored[-1]
+    fine = Transcription(coarse.mech, refined_settings(settings))
+    x0, qref = refined_start(coarse, plan, fine)
+    assert x0.shape == (int(fine.x.shape[0]),) and qref.shape == (fine.N - 1, coarse.mb.k)
+    p = np.concatenate([qref.reshape(-1), [plan.step, plan.mu]])
+    Q, TAU, h = (np.array(v) for v in ca.Function("f", [fine.x, fine.p],
+                                                  [fine.Q, fine.TAU, fine.h])(x0, p))
+    shared = np.arange(0, fine.N - 1, 2)
+    np.testing.assert_allclose(Q[:, shared].T, result.q[shared // 2], atol=1e-12)
+    np.testing.assert_allclose(TAU[:, shared].T, result.tau[shared // 2], atol=1e-9)
+    np.testing.assert_allclose(2 * h.ravel()[::2], np.diff(result.times), rtol=1e-12)
+    # every reference configuration is admissible (the null space method needs it)
+    assert max(float(np.abs(np.array(coarse.mb.constraints(q))).max()) for q in qref) < 1e-12
+
+
+def test_refined_start_refuses_a_grid_that_is_not_a_refinement(coarse_walker2d):
+    scene, settings, planner, _ = coarse_walker2d
+    built = planner._built[next(iter(planner._built))]
+    other = Transcription(built.tr.mech, settings_for(scene, intervals_per_phase=4))
+    with pytest.raises(ValueError, match="not a refinement"):
+        refined_start(built.tr, built.stored[-1], other)
+
+
+def test_refinements_must_be_a_small_whole_number():
+    scene = load_scene("walker2d")
+    for bad in (-1, 4, 1.5, True):
+        with pytest.raises(SettingsError, match="refinements"):
+            settings_for(scene, refinements=bad)
+
+
+def test_a_plan_that_misses_the_certificate_is_refined_until_it_passes(coarse_walker2d):
+    scene, settings, _, coarse = coarse_walker2d
+    assert not continuous_certificate(coarse).ok
+    result, cert = plan_certified(Planner(), scene, dataclasses.replace(settings, refinements=1),
+                                  warm_start=False)
+    assert result.success, result.message
+    assert result.n_nodes - 1 == 2 * (coarse.n_nodes - 1)
+    assert cert.ok, cert.summary()
+    assert cert.max_torque_calm < 0.5 * continuous_certificate(coarse).max_torque_calm
+    assert result.duration == pytest.approx(coarse.duration, rel=0.05)  # the same half cycle
+    assert "missed the continuous-dynamics certificate" in result.settings["refinement"]
+    assert result.stats.iterations > coarse.stats.iterations  # both plans counted
+    assert verify_result(result).continuous.ok
+
+
+def test_without_refinements_the_plan_is_returned_as_planned(coarse_walker2d):
+    scene, settings, _, coarse = coarse_walker2d
+    result, cert = plan_certified(Planner(), scene, settings, warm_start=False)
+    assert result.n_nodes == coarse.n_nodes and not cert.ok
+    assert "refinement" not in result.settings
