@@ -236,6 +236,7 @@ def summary(outcome: Outcome) -> dict:
         "max_dynamics_residual": s.max_dynamics_residual,
         "max_friction_violation": s.max_friction_violation,
         "continuous_dynamics": r.settings.get("continuous_dynamics", ""),
+        "refinement": r.settings.get("refinement", ""),
         "nodes": r.n_nodes, "mcap": str(outcome.mcap_path or ""),
         "rrd": str(outcome.rrd_path or ""),
     }
