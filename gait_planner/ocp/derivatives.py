@@ -1,21 +1,32 @@
 """Exact first and second derivatives of the gait NLP from per-node elements, compilable.
 
 CasADi differentiates the expanded NLP as one SX graph: walker3d's Lagrangian Hessian is
-6.7 M instructions (26 ms per evaluation in CasADi's virtual machine), far too large to
+6.7 M instructions (24 ms per evaluation in CasADi's virtual machine), far too large to
 compile (about 200 MB of C). Most of it is the same few formulas at every node. Here the
 phase-independent part of the dynamics rows and the kinetic energy of each interval
 (`Transcription.elements`) are differentiated once, as functions of one node's or one
 interval's unknowns: the Jacobian and the Hessian of y . r (y the rows' multipliers, or
-the cost's). These are evaluated at every node (`Function.map`) and scattered into the
-sparse matrices by constant 0/1 matrices (entries of an unknown that an element sees twice,
-such as a sigma shared by both of its intervals, are summed); CasADi differentiates the
-rest of the NLP (contact forces, contacts, path constraints, torque term) as a whole.
+the cost's). These are evaluated at every node (`Function.map`); CasADi differentiates the
+rest of the NLP (contact forces, contacts, path constraints, torque term) as a whole. The
+sparse matrices are summed from their nonzeros by index lists (`_sum`; entries of an
+unknown that an element sees twice, such as a sigma shared by both of its intervals, are
+added), in the order of a sum of one matrix per group: IPOPT's iterates depend on
+round-off, and another order of the same additions took walker3d's cold solve from 64 to
+79 iterations.
 
 The elements are what makes compiling possible: walker3d's dynamics Hessian element is
-5 MB of C, built once per machine (`ocp.compile`), and then the Hessian takes 11 ms and the
-Jacobian 6 ms per evaluation instead of 26 and 13. Left in the virtual machine they are
-slower than CasADi's one graph (49 ms), which shares each node's reparametrisation among
-all rows, so the planner uses them only compiled.
+5 MB of C, built once per machine (`ocp.compile`), and then the Hessian takes 14.7 ms and
+the Jacobian 4.0 ms per evaluation instead of 24 and 6.1 (2-core machine, 2026-11-23).
+Left in the virtual machine they are slower than CasADi's one graph (44 and 11 ms), which
+shares each node's reparametrisation among all rows, so the planner uses them only
+compiled. Of the Hessian's time the rest takes 3 ms and the summing 0.1 ms (with constant
+0/1 matrices and sparse matrix additions 0.8-0.9 ms, and 1.1-1.7 ms of the Jacobian's). The
+pieces timed alone, their code and data in the caches, add up to only 9.4 ms, but one
+evaluation runs 13 MB of compiled Hessian elements and the rest's 1 M instructions: cold,
+the pieces add up to 13.6 ms, 2.8 ms of it the mirrored variants (7.5 MB of code, each run
+for one node; 0.3 ms warm). Mapping over 2 threads (bit for bit the same) measured 1.5 ms
+faster in one run and 1.2-4 ms slower in another (the second core is shared with other
+jobs), so the maps run serially.
 
 The Functions returned have the signatures of nlpsol's own (options grad_f, jac_g,
 hess_lag): grad_f(x, p) -> (f, grad_f_x), jac_g(x, p) -> (g, jac_g_x) and
@@ -61,25 +72,27 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     f_val, grad = rest_grad(x, p)
     g_val, jac = rest_jac(x, p)
     hess = rest_hess(x, p, lam_f, lam_g)
+    grads, jacs, hessians = [_whole(grad.T)], [_whole(jac)], [_whole(hess)]
     for group, (jac_fn, hess_fn) in zip(tr.elements, pairs):
         n = group.z_index.shape[1]
         z, pz, c = x[group.z_index], p[group.p_index], ca.DM(group.constants)
         if group.rows is None:  # a cost term
             y = ca.repmat(lam_f, 1, n)
-            grad = grad + _scatter(jac_fn.map(n)(z, pz, c), jac_fn.sparsity_out(0),
-                                   np.zeros((1, n), dtype=int), group.z_index, (1, nx),
-                                   upper=False).T
+            grads.append(_entries(jac_fn.map(n)(z, pz, c), np.zeros((1, n), dtype=int),
+                                  group.z_index, jac_fn.sparsity_out(0)))
         else:
             y = lam_g[group.rows]
-            jac = jac + _scatter(jac_fn.map(n)(z, pz, c), jac_fn.sparsity_out(0), group.rows,
-                                 group.z_index, (ng, nx), upper=False)
-        hess = hess + _scatter(hess_fn.map(n)(z, pz, c, y), hess_fn.sparsity_out(0),
-                               group.z_index, group.z_index, (nx, nx), upper=True)
+            jacs.append(_entries(jac_fn.map(n)(z, pz, c), group.rows, group.z_index,
+                                 jac_fn.sparsity_out(0)))
+        hessians.append(_entries(hess_fn.map(n)(z, pz, c, y), group.z_index, group.z_index,
+                                 hess_fn.sparsity_out(0)))
     return {
-        "grad_f": ca.Function("nlp_grad_f", [x, p], [f_val, grad],
+        "grad_f": ca.Function("nlp_grad_f", [x, p], [f_val, _sum(grads, (1, nx)).T],
                               ["x", "p"], ["f", "grad_f_x"]),
-        "jac_g": ca.Function("nlp_jac_g", [x, p], [g_val, jac], ["x", "p"], ["g", "jac_g_x"]),
-        "hess_lag": ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], [hess],
+        "jac_g": ca.Function("nlp_jac_g", [x, p], [g_val, _sum(jacs, (ng, nx))],
+                             ["x", "p"], ["g", "jac_g_x"]),
+        "hess_lag": ca.Function("nlp_hess_l", [x, p, lam_f, lam_g],
+                                [_sum(hessians, (nx, nx), upper=True)],
                                 ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
     }
 
@@ -113,23 +126,56 @@ def _element_hessian(group: ElementGroup) -> ca.Function:
                        [ca.hessian(ca.dot(y, r), z)[0]], ["z", "pz", "c", "y"], ["hess"])
 
 
-def _scatter(mapped: ca.MX, pattern: ca.Sparsity, row_index: np.ndarray,
-             col_index: np.ndarray, shape: tuple[int, int], upper: bool) -> ca.MX:
-    """Sum the element matrices (pattern, one per column of the index arrays, side by side
-    in `mapped`) into one (shape) matrix: element entry (a, b) of element j goes to
-    (row_index[a, j], col_index[b, j]); with upper, only entries on or above the diagonal
-    (for a full symmetric element matrix this gives the upper triangle of the sum)."""
-    a, b = (np.array(v) for v in pattern.get_triplet())
+def _entries(values: ca.MX, row_index: np.ndarray, col_index: np.ndarray,
+             pattern: ca.Sparsity):
+    """(values, rows, cols): the element matrices (pattern, one per column of the index
+    arrays, side by side in `values`) put the k-th nonzero of `values`, entry (a, b) of
+    element j, at (row_index[a, j], col_index[b, j]) (see `_sum`)."""
+    a, b = (np.array(v, dtype=int) for v in pattern.get_triplet())
     n = row_index.shape[1]
-    rows = row_index[a[:, None], np.arange(n)].T.ravel()  # element-major, like mapped's nonzeros
-    cols = col_index[b[:, None], np.arange(n)].T.ravel()
-    source = np.arange(rows.size)
-    if upper:
-        keep = rows <= cols
-        rows, cols, source = rows[keep], cols[keep], source[keep]
-    keys, target = np.unique(cols * shape[0] + rows, return_inverse=True)  # column-major
+    return (values, row_index[a[:, None], np.arange(n)].T.ravel(),  # element-major
+            col_index[b[:, None], np.arange(n)].T.ravel())
+
+
+def _whole(m: ca.MX):
+    """The entries (`_entries`) of one matrix."""
+    return _entries(m, np.arange(m.size1())[:, None], np.arange(m.size2())[:, None],
+                    m.sparsity())
+
+
+def _sum(entries: list, shape: tuple[int, int], upper: bool = False) -> ca.MX:
+    """The (shape) matrix that is the sum of `entries` (`_entries`); with upper, only the
+    entries on or above the diagonal (for full symmetric element matrices this gives the
+    upper triangle of the sum). Bit for bit the sum of each part's matrix, part after part
+    (as IPOPT's iterates depend on round-off): each part's entries at one position are
+    summed in the order of its nonzeros, then these sums in the order of the parts."""
+    sums, positions = [], []
+    for values, rows, cols in entries:
+        keys = cols * shape[0] + rows  # column-major
+        source = np.flatnonzero(rows <= cols) if upper else np.arange(keys.size)
+        at, slot = np.unique(keys[source], return_inverse=True)
+        sums.append(_ordered_sum(values, source, slot, at.size))
+        positions.append(at)
+    keys, slot = np.unique(np.concatenate(positions), return_inverse=True)
     sparsity = ca.Sparsity.triplet(shape[0], shape[1], (keys % shape[0]).tolist(),
                                    (keys // shape[0]).tolist())
-    gather = ca.DM(ca.Sparsity.triplet(keys.size, pattern.nnz() * n, target.tolist(),
-                                       source.tolist()), 1.0)
-    return ca.MX(sparsity, ca.mtimes(gather, ca.vec(mapped.nz[:])))
+    parts = ca.vertcat(*sums)
+    return ca.MX(sparsity, _ordered_sum(parts, np.arange(parts.numel()), slot, keys.size))
+
+
+def _ordered_sum(values: ca.MX, source: np.ndarray, slot: np.ndarray, n: int) -> ca.MX:
+    """(n,) column: entry i is the sum of the nonzeros values[source[k]] with slot[k] == i
+    (every slot has one), added one after the other in the order of k. Index lists only
+    (CasADi copies a constant matrix into its work vector at every evaluation): step r adds
+    the r-th term of every slot that has one."""
+    values = ca.sparsity_cast(values, ca.Sparsity.dense(values.nnz()))  # its nonzeros
+    order = np.argsort(slot, kind="stable")
+    first = np.searchsorted(slot[order], np.arange(n))
+    rank = np.empty(slot.size, dtype=int)
+    rank[order] = np.arange(slot.size) - first[slot[order]]  # how many precede k in its slot
+    total = values.nz[source[order[first]].tolist()]
+    for r in range(1, int(rank.max(initial=0)) + 1):
+        k = np.flatnonzero(rank == r)
+        at = slot[k].tolist()
+        total.nz[at] = total.nz[at] + values.nz[source[k].tolist()]
+    return total

@@ -1,8 +1,9 @@
 """Per-node derivative elements (gait_planner.ocp.derivatives) and their compilation.
 
 The element derivatives are checked against CasADi's own derivatives of the whole SX graph
-(computed here directly with ca.jacobian / ca.hessian, not through the module), the
-scatter against a dense numpy sum, and compiled functions against the virtual machine.
+(computed here directly with ca.jacobian / ca.hessian, not through the module), the sum
+of element matrices against numpy's (bit for bit) and compiled functions against the
+virtual machine.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
 from gait_planner.ocp.compile import CompileError, compile_functions
-from gait_planner.ocp.derivatives import _scatter, nlp_derivatives
+from gait_planner.ocp.derivatives import _entries, _sum, nlp_derivatives
 from gait_planner.ocp.guess import kinematic_guess
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
@@ -90,29 +91,36 @@ def test_elements_and_rest_sum_to_g_and_cost(overrides):
 
 
 @settings(max_examples=30, deadline=None)
-@given(st.integers(1, 4), st.integers(1, 3), st.integers(1, 5), st.integers(0, 2**32 - 1),
-       st.booleans())
-def test_scatter_sums_like_numpy(nz, nr, n, seed, upper):
+@given(st.integers(1, 4), st.integers(1, 3), st.integers(1, 5), st.integers(1, 3),
+       st.integers(0, 2**32 - 1), st.booleans())
+def test_sum_adds_part_after_part_like_numpy(nz, nr, n, parts, seed, upper):
+    """_sum of element matrices (with repeated positions within and across elements and
+    parts) is bit for bit numpy's sum: each part's entries added in the order of its
+    nonzeros, then the parts' matrices one after the other."""
     rng = np.random.default_rng(seed)
     pattern = ca.Sparsity.dense(nz, nz) if upper else ca.Sparsity.dense(nr, nz)
     rows_e, cols_e = pattern.shape
     size = 6
-    row_index = rng.integers(0, size, (rows_e, n))
-    col_index = row_index if upper else rng.integers(0, size, (cols_e, n))
-    values = rng.standard_normal((rows_e, cols_e, n))
-    if upper:  # full symmetric element matrices
-        values = values + values.transpose(1, 0, 2)
-    mapped = ca.DM(np.hstack([values[:, :, j] for j in range(n)]))
-    out = ca.Function("s", [], [_scatter(ca.MX(mapped), pattern, row_index, col_index,
-                                         (size, size), upper)])()["o0"]
-    expected = np.zeros((size, size))
-    for j in range(n):
-        for a in range(rows_e):
-            for b in range(cols_e):
-                expected[row_index[a, j], col_index[b, j]] += values[a, b, j]
-    if upper:
-        expected = np.triu(expected)  # the upper triangle of the symmetric sum
-    assert np.allclose(_dense(out), expected, rtol=0, atol=1e-12)
+    entries, expected = [], np.zeros((size, size))
+    for _ in range(parts):
+        row_index = rng.integers(0, size, (rows_e, n))
+        col_index = row_index if upper else rng.integers(0, size, (cols_e, n))
+        values = rng.standard_normal((rows_e, cols_e, n)) * 10.0 ** rng.integers(-8, 8)
+        if upper:  # full symmetric element matrices
+            values = values + values.transpose(1, 0, 2)
+        mapped = ca.DM(np.hstack([values[:, :, j] for j in range(n)]))
+        entries.append(_entries(ca.MX(mapped), row_index, col_index, pattern))
+        part = np.zeros((size, size))
+        for j in range(n):
+            for b in range(cols_e):  # the order of mapped's nonzeros
+                for a in range(rows_e):
+                    if not upper or row_index[a, j] <= col_index[b, j]:
+                        part[row_index[a, j], col_index[b, j]] += values[a, b, j]
+        expected = expected + part
+    out = ca.Function("s", [], [_sum(entries, (size, size), upper)])()["o0"]
+    assert np.array_equal(_dense(out), expected)
+    if upper:  # the upper triangle of the symmetric sum
+        assert out.sparsity().is_triu()
 
 
 def test_compiled_functions_agree_and_are_cached(tmp_path):
