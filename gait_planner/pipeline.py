@@ -154,23 +154,24 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
 
 def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
                    warm_start: bool = True, guess: str = "kinematic"):
-    """`Planner.plan`, then, while the converged plan misses the continuous-dynamics
-    certificate and `settings.refinements` allow, the same request on a grid twice as fine
-    from that plan (`ocp.refine`); the finer plan is kept if it converges with a smaller
-    torque error. All plans share settings.max_solve_time. Returns (result, certificate;
-    None if the plan failed); a refined result's stats count every plan's iterations and
-    time, and its settings["refinement"] says what was refined and why."""
+    """`Planner.plan`, then, while the converged plan has defects of its grid (it misses the
+    continuous-dynamics certificate, or its efforts zigzag: `grid_defects`) and
+    `settings.refinements` allow, the same request on a grid twice as fine from that plan
+    (`ocp.refine`); the finer plan is kept if it converges with fewer defects (or as many
+    and a smaller torque error). All plans share settings.max_solve_time. Returns (result,
+    certificate; None if the plan failed); a refined result's stats count every plan's
+    iterations and time, and its settings["refinement"] says what was refined and why."""
     start = time.perf_counter()
     result = planner.plan(scene, settings, warm_start=warm_start, guess=guess)
     cert = continuous_certificate(result) if result.success else None
+    defects = grid_defects(result, cert) if cert is not None else []
     coarse, notes = settings, []
     for _ in range(settings.refinements):
-        if cert is None or cert.ok:
+        if not defects:
             break
         left = settings.max_solve_time - (time.perf_counter() - start)
         fine = dataclasses.replace(refined_settings(coarse), max_solve_time=max(left, 1e-3))
-        why = (f"the plan on {sum(coarse.intervals)} intervals missed the continuous-dynamics "
-               f"certificate ({'; '.join(cert.failures)})")
+        why = f"the plan on {sum(coarse.intervals)} intervals: {'; '.join(defects)}"
         if left <= 0:
             notes.append(f"{why}; no time left to refine")
             break
@@ -180,19 +181,37 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
             notes.append(f"{why}; refined to {sum(fine.intervals)}: {refined.message}")
             break
         refined_cert = continuous_certificate(refined)
-        notes.append(f"{why}; refined to {sum(fine.intervals)}: {refined_cert.summary()}")
-        if refined_cert.max_torque_calm >= cert.max_torque_calm:
+        refined_defects = grid_defects(refined, refined_cert)
+        notes.append(f"{why}; refined to {sum(fine.intervals)}: "
+                     + ("; ".join(refined_defects) or refined_cert.summary()))
+        if (len(refined_defects), refined_cert.max_torque_calm) >= \
+                (len(defects), cert.max_torque_calm):
             break
         stats = dataclasses.replace(
             refined.stats, iterations=result.stats.iterations + refined.stats.iterations,
             solve_time=result.stats.solve_time + refined.stats.solve_time,
             evaluation_time=result.stats.evaluation_time + refined.stats.evaluation_time)
         message = f"{refined.message} on the refined grid ({stats.iterations} in all)"
-        result, cert, coarse = (dataclasses.replace(refined, stats=stats, message=message),
-                                refined_cert, fine)
+        result, cert, defects, coarse = (
+            dataclasses.replace(refined, stats=stats, message=message), refined_cert,
+            refined_defects, fine)
     if notes:
         result.settings["refinement"] = " | ".join(notes)
     return result, cert
+
+
+def grid_defects(result: PlanResult, cert) -> list[str]:
+    """What a finer grid can cure, in sentences: the continuous-dynamics certificate's
+    failures (`cert`, of `result`) and efforts that zigzag from node to node away from
+    contact switches (`gait_planner.verify.physical`; walker2d and walker3d on 6 intervals
+    per phase: the swing knee's effort as it reaches its 75 deg limit)."""
+    from gait_planner.io.messages import node_efforts
+    from gait_planner.verify.physical import effort_zigzags
+
+    zigzags = effort_zigzags(node_efforts(result), result.active_contacts,
+                             result.joint_angle_names)
+    return list(cert.failures) + ([f"efforts zigzag at (angle, node) {zigzags[:4]}"]
+                                  if zigzags else [])
 
 
 def continuous_certificate(result: PlanResult):

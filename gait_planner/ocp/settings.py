@@ -80,7 +80,7 @@ class GaitSettings:
     twist_regularisation: float = 0.0
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
-    refinements: int = 1
+    refinements: int = 2
     max_iterations: int = 3000
     max_solve_time: float = 600.0
     tolerance: float = 1e-8

@@ -119,6 +119,14 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
         switch_nodes=switches, failures=tuple(failures))
 
 
+def effort_zigzags(effort: np.ndarray, active, names) -> list[tuple[str, int]]:
+    """[(angle, node)] where efforts (N+1, na) zigzag away from contact switches (module
+    docstring); active: the held contacts of every node, names: the angles'."""
+    active = tuple(tuple(a) for a in active)
+    return _torque_roughness(np.asarray(effort, dtype=float),
+                             near_switch(len(active), switch_nodes(active)), names)[1]
+
+
 def _torque_roughness(effort: np.ndarray, switch: np.ndarray, names) -> tuple[float, list]:
     """(largest |second difference| / peak away from switches, [(angle, node) of zigzags])
     of efforts (N+1, na); a zigzag at node n: d_{n-1}, d_n, d_{n+1} (d_m = e_{m+1} - e_m)
