@@ -88,6 +88,11 @@ def _progress(iteration: int, cost: float, violation: float, seconds: float) -> 
               flush=True)
 
 
+def _stage(name: str) -> None:
+    """The phase a plan enters (building, cold stage 1, refining the grid, ...)."""
+    print(f"-- {name}", file=sys.stderr, flush=True)
+
+
 def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     import json
     from pathlib import Path
@@ -105,7 +110,7 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     print(f"planning {args.scene} (building the problem takes up to a minute the first "
           "time) ...", file=sys.stderr, flush=True)
     try:
-        outcome = plan_and_record(Planner(progress=_progress), request,
+        outcome = plan_and_record(Planner(progress=_progress, stage=_stage), request,
                                   target.parent if str(target.parent) else ".",
                                   rrd=not args.no_rrd)
     except RequestError as err:
