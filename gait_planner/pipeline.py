@@ -132,13 +132,15 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
     stem = output_stem(request, scene.name)
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    result, _ = plan_certified(planner, scene, settings, warm_start=not request.cold_start)
+    result, cert = plan_certified(planner, scene, settings, warm_start=not request.cold_start)
     if not result.success:
         return Outcome(result, None, None)
     if stage is not None:
         stage("recording")
-    result = walk_on(result, request.steps)
-    result.settings.update(certificate_metadata(continuous_certificate(result)))
+    walked = walk_on(result, request.steps)
+    if walked is not result:  # more half cycles: certify what is published
+        result, cert = walked, continuous_certificate(walked)
+    result.settings.update(certificate_metadata(cert))
     from gait_planner.io.mcap_writer import write_plan_mcap
 
     if not request.output_name:  # an automatic name never replaces an earlier recording
