@@ -56,18 +56,12 @@ def refined_start(coarse: Transcription, plan: StoredPlan,
     qref_fine = Q[:, m].T
     w = (r / factor)[None, :]
     tau = (1 - w) * TAU[:, m] + w * TAU[:, m + 1]
-    lam = x[coarse.U.numel() + coarse.T.numel(): coarse.U.numel() + coarse.T.numel()
-            + coarse.L.numel()]
-    coarse_lam, offset = {}, 0
-    for n, size in zip(coarse.lam_nodes, coarse.lam_sizes):
-        coarse_lam[n] = lam[offset: offset + size]
-        offset += size
+    coarse_lam = coarse.node_multipliers(x)
     parts = []
-    for n, size in zip(fine.lam_nodes, fine.lam_sizes):
+    for n, size in zip(fine.lam_nodes, fine.lam_sizes):  # a phase's nodes share a layout
         phase, nearest = fine.phase_of_interval[n], round(n / factor)
         same = [j for j in coarse.lam_nodes if coarse.phase_of_interval[j] == phase]
-        j = min(same, key=lambda j: abs(j - nearest)) if same else None
-        parts.append(coarse_lam[j] if j is not None and coarse_lam[j].size == size
+        parts.append(coarse_lam[min(same, key=lambda j: abs(j - nearest))] if same
                      else np.zeros(size))
     sigma = x[-int(coarse.S.shape[0]):]
     x0 = np.concatenate([np.zeros(fine.U.numel()), (tau / TORQUE_SCALE).T.reshape(-1),

@@ -109,11 +109,8 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
 
     forces = {c.name: np.zeros((N + 1, 3)) for c in scene.contacts}
     rolls = {c.body: np.zeros(N + 1) for c in scene.contacts}
-    lam = x[tr.U.numel() + tr.T.numel() : tr.U.numel() + tr.T.numel() + tr.L.numel()]
-    offset = 0
-    for n, size in zip(tr.lam_nodes, tr.lam_sizes):
-        values, inner = FORCE_SCALE * lam[offset : offset + size], 0
-        offset += size
+    for n, lam in tr.node_multipliers(x).items():
+        values, inner = FORCE_SCALE * lam, 0
         for bc in tr.contacts[tr.phase_of_interval[n]]:
             own = values[inner : inner + bc.n_multipliers]
             for name, f in bc.point_forces(own, q[n]).items():

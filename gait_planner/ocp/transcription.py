@@ -174,6 +174,12 @@ class Transcription:
             g = ca.Function(f"contact_force_phase{k}", [q1, lam], [contact]).expand()
             self._without_elements[name] = ca.vec(g.map(len(nodes))(self.Q[:, idx], lam_cols))
 
+    def node_multipliers(self, x: np.ndarray) -> dict[int, np.ndarray]:
+        """The scaled contact multipliers (entries of L, FORCE_SCALE N) of each node
+        1..N-1 in a numeric x."""
+        ends = self.U.numel() + self.T.numel() + np.cumsum([0, *self.lam_sizes])
+        return {n: x[a:b] for n, a, b in zip(self.lam_nodes, ends[:-1], ends[1:])}
+
     def _row_multipliers(self, n: int):
         """The multipliers of node n's contact rows (the along-line shares left out), N."""
         lam, parts, offset = self.lam_of_node[n], [], 0
