@@ -1,11 +1,11 @@
 """Solving the collocation NLP with the product's IPOPT set-up.
 
-Same options as `gait_planner.ocp.solve.Planner` (`ipopt_options`: MUMPS, tol and
-constr_viol_tol of the settings, adaptive mu, warm_start_init_point), the same solver variants
-and cold-start stages (`VARIANTS`, `COLD_ATTEMPTS`: sigma fixed at its upper bound with
-the swing clearance and joint speed limits relaxed, then everything free; the
-inertia-free curvature test first, IPOPT's inertia correction as the fallback), the same
-progress callback and time limit.
+Same options as `gait_planner.ocp.solve.Planner` (`gait_planner.ocp.ipopt.ipopt_options`:
+MUMPS, tol and constr_viol_tol of the settings, adaptive mu, warm_start_init_point), the
+same solver variants and cold-start stages (`VARIANTS`, `COLD_ATTEMPTS`: sigma fixed at its
+upper bound with the swing clearance and joint speed limits relaxed, then everything free;
+the inertia-free curvature test first, IPOPT's inertia correction as the fallback), the
+same progress callback and time limit.
 
 The NLP is built with recursive Newton-Euler dynamics (`collocation.rnea.SpatialModel`, the
 same values as `MinimalModel` to round-off) and expanded to one SX graph before IPOPT
@@ -62,8 +62,8 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
-from gait_planner.ocp.solve import (COLD_ATTEMPTS, INERTIA_FREE, VARIANTS, Progress,
-                                     IterationCallback, ipopt_options, run_attempt)
+from gait_planner.ocp.ipopt import IterationCallback, Progress, ipopt_options, run_attempt
+from gait_planner.ocp.solve import COLD_ATTEMPTS, INERTIA_FREE, VARIANTS
 from gait_planner.result import PlanResult
 
 # Solver variants: the product's, except that the first attempt keeps 150 iterations per
