@@ -102,8 +102,8 @@ def row(method: str, scene_name: str, case: Case, plan: Callable, settings) -> d
            "max_dynamics_residual": result.stats.max_dynamics_residual,
            "most_violated": result.stats.most_violated, "reason": "",
            "intervals": f"{sum(settings.intervals)}" + (
-               f" -> {len(result.times) - 1}" if result.success
-               and len(result.times) - 1 != sum(settings.intervals) else "")}
+               f" -> {result.n_nodes - 1}" if result.success
+               and result.n_nodes - 1 != sum(settings.intervals) else "")}
     if not result.success:
         out["outcome"], out["reason"] = "failed", result.message
         return out

@@ -201,7 +201,7 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
             result.stats, iterations=sum(r.iterations for r in runs),
             solve_time=sum(r.solve_time for r in runs),
             evaluation_time=sum(r.evaluation_time for r in runs))
-        grid = ("on the refined grid" if len(result.times) - 1 != sum(settings.intervals)
+        grid = ("on the refined grid" if result.n_nodes - 1 != sum(settings.intervals)
                 else "on the requested grid")
         result = dataclasses.replace(
             result, stats=stats,
