@@ -15,8 +15,12 @@ round-off, and another order of the same additions took walker3d's cold solve fr
 79 iterations.
 
 The elements are what makes compiling possible: walker3d's dynamics Hessian element is
-5 MB of C, built once per machine (`ocp.compile`), and then the Hessian takes 14.7 ms and
-the Jacobian 4.0 ms per evaluation instead of 24 and 6.1 (2-core machine, 2026-11-23).
+5 MB of C, built once per machine (`ocp.compile`). A group of LANES nodes or more is
+compiled as one vector pass over LANES nodes (`ocp.vectorize`; a last pass is padded with
+copies of the group's last node, whose entries are not summed), bit for bit the node by
+node results: walker3d's Hessian then takes 10.1 ms and the Jacobian 2.2-3.2 ms per
+evaluation, node by node 14.7 and 3.1-4.1, in CasADi's one graph 24 and 6.1 (2-core
+machine, 2026-11-23; the paragraph below was measured node by node).
 Left in the virtual machine they are slower than CasADi's one graph (44 and 11 ms), which
 shares each node's reparametrisation among all rows, so the planner uses them only
 compiled. Of the Hessian's time the rest takes 3 ms and the summing 0.1 ms (with constant
@@ -42,6 +46,7 @@ import numpy as np
 
 from gait_planner.ocp.compile import Source
 from gait_planner.ocp.transcription import ElementGroup, Transcription
+from gait_planner.ocp.vectorize import LANES
 
 # Given the element derivatives to form, returns them (e.g. compiled) in the same order.
 Compiler = Callable[[list[Source]], list[ca.Function]]
@@ -75,17 +80,20 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     grads, jacs, hessians = [_whole(grad.T)], [_whole(jac)], [_whole(hess)]
     for group, (jac_fn, hess_fn) in zip(tr.elements, pairs):
         n = group.z_index.shape[1]
-        z, pz, c = x[group.z_index], p[group.p_index], ca.DM(group.constants)
+        lanes = jac_fn.size2_in(0)  # nodes per call: 1, or LANES (_sources)
+        calls = -(-n // lanes)
+        z, pz = x[_padded(group.z_index, calls * lanes)], p[_padded(group.p_index, calls * lanes)]
+        c = ca.DM(group.constants)
         if group.rows is None:  # a cost term
-            y = ca.repmat(lam_f, 1, n)
-            grads.append(_entries(jac_fn.map(n)(z, pz, c), np.zeros((1, n), dtype=int),
-                                  group.z_index, jac_fn.sparsity_out(0)))
+            y = ca.repmat(lam_f, 1, calls * lanes)
+            grads.append(_entries(jac_fn.map(calls)(z, pz, c), np.zeros((1, n), dtype=int),
+                                  group.z_index, _block(jac_fn)))
         else:
-            y = lam_g[group.rows]
-            jacs.append(_entries(jac_fn.map(n)(z, pz, c), group.rows, group.z_index,
-                                 jac_fn.sparsity_out(0)))
-        hessians.append(_entries(hess_fn.map(n)(z, pz, c, y), group.z_index, group.z_index,
-                                 hess_fn.sparsity_out(0)))
+            y = lam_g[_padded(group.rows, calls * lanes)]
+            jacs.append(_entries(jac_fn.map(calls)(z, pz, c), group.rows, group.z_index,
+                                 _block(jac_fn)))
+        hessians.append(_entries(hess_fn.map(calls)(z, pz, c, y), group.z_index,
+                                 group.z_index, _block(hess_fn)))
     return {
         "grad_f": ca.Function("nlp_grad_f", [x, p], [f_val, _sum(grads, (1, nx)).T],
                               ["x", "p"], ["f", "grad_f_x"]),
@@ -99,10 +107,34 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
 
 def _sources(group: ElementGroup) -> tuple[Source, Source]:
     """The element's Jacobian and Hessian (`_element_jacobian`, `_element_hessian`) to
-    compile, identified by the element's serialisation."""
+    compile, identified by the element's serialisation: at a group of LANES nodes or more
+    as maps over LANES nodes computed in one vector pass (`ocp.vectorize`), at fewer
+    (the mirrored nodes) node by node."""
     name, key = group.function.name(), group.function.serialize()
-    return (Source(f"{name}_jac", f"jacobian\n{key}", lambda: _element_jacobian(group)),
-            Source(f"{name}_hess", f"hessian\n{key}", lambda: _element_hessian(group)))
+    if group.z_index.shape[1] < LANES:
+        return (Source(f"{name}_jac", f"jacobian\n{key}", lambda: _element_jacobian(group)),
+                Source(f"{name}_hess", f"hessian\n{key}", lambda: _element_hessian(group)))
+    jac, hess = f"{name}_jac_x{LANES}", f"{name}_hess_x{LANES}"
+    return (Source(jac, f"jacobian x{LANES}\n{key}",
+                   lambda: _element_jacobian(group).map(jac, "serial", LANES, [], []), LANES),
+            Source(hess, f"hessian x{LANES}\n{key}",
+                   lambda: _element_hessian(group).map(hess, "serial", LANES, [], []), LANES))
+
+
+def _padded(index: np.ndarray, columns: int) -> np.ndarray:
+    """index (m, n) with its last column repeated up to `columns` columns: the lanes of a
+    last vector pass beyond the group's nodes compute a copy of its last node (their
+    entries are not summed, `_entries`)."""
+    return np.concatenate([index, np.repeat(index[:, -1:], columns - index.shape[1], axis=1)],
+                          axis=1)
+
+
+def _block(fn: ca.Function) -> ca.Sparsity:
+    """The pattern of one node's matrix in the output of fn (one node's, or LANES nodes'
+    side by side)."""
+    pattern, lanes = fn.sparsity_out(0), fn.size2_in(0)
+    rows, cols = pattern.size1(), pattern.size2() // lanes
+    return pattern.sub(list(range(rows)), list(range(cols)), False)[0]
 
 
 def _symbols(fn: ca.Function):
@@ -130,7 +162,8 @@ def _entries(values: ca.MX, row_index: np.ndarray, col_index: np.ndarray,
              pattern: ca.Sparsity):
     """(values, rows, cols): the element matrices (pattern, one per column of the index
     arrays, side by side in `values`) put the k-th nonzero of `values`, entry (a, b) of
-    element j, at (row_index[a, j], col_index[b, j]) (see `_sum`)."""
+    element j, at (row_index[a, j], col_index[b, j]) (see `_sum`). Nonzeros of `values`
+    beyond the index arrays' columns (padding) are left out of the sum."""
     a, b = (np.array(v, dtype=int) for v in pattern.get_triplet())
     n = row_index.shape[1]
     return (values, row_index[a[:, None], np.arange(n)].T.ravel(),  # element-major

@@ -186,3 +186,24 @@ def test_one_compiled_library_serves_every_base_time_step(tmp_path):
     compile_functions([functions[1].function], tmp_path)
     assert sorted(tmp_path.glob("*.so")) == libraries
     assert functions[1].constants.tolist() == [0.02]
+
+
+def test_compiled_vector_derivatives_equal_the_virtual_machine_bit_for_bit(tmp_path):
+    """Groups of at least LANES nodes are compiled as vector passes (ocp.vectorize), with
+    a last pass padded by copies of the last node; their matrices, and so IPOPT's iterates,
+    are bit for bit those of CasADi's evaluation of the same elements."""
+    from gait_planner.ocp.compile import compile_sources
+    from gait_planner.ocp.vectorize import LANES
+
+    tr, x, p, lam_g = _problem("compass")
+    sizes = [group.z_index.shape[1] for group in tr.elements]
+    assert any(n >= LANES and n % LANES for n in sizes) and any(n < LANES for n in sizes)
+    compiled = nlp_derivatives(tr, lambda sources: compile_sources(sources, tmp_path))
+    plain = nlp_derivatives(tr)
+    assert any("_x4_" in lib.name for lib in tmp_path.glob("*.so"))
+    for name, args in (("grad_f", (x, p)), ("jac_g", (x, p)), ("hess_lag", (x, p, 0.7, lam_g))):
+        ours, theirs = compiled[name](*args), plain[name](*args)
+        for a, b in zip(ours if isinstance(ours, tuple) else [ours],
+                        theirs if isinstance(theirs, tuple) else [theirs]):
+            assert a.sparsity() == b.sparsity()
+            assert np.array_equal(np.array(a.nonzeros()), np.array(b.nonzeros())), name
