@@ -84,30 +84,28 @@ def _vector_statement(line: str, strides: dict) -> str:
     if m is None:
         raise Unsupported(f"statement {s!r}")
     target, rhs = m[1], m[2]
-    if re.fullmatch(_CONSTANT, rhs):
-        return f"  {target}=v_all({rhs});"
-    if re.fullmatch(rf"\((?:-{_VAR}|{_OPERAND}[-+*/]{_OPERAND})\)", rhs):
-        return f"  {target}={rhs};"  # GCC applies scalar constants to every lane
-    for op, name in LOGIC.items():
-        m = re.fullmatch(rf"\(({_OPERAND}){re.escape(op)}({_OPERAND})\)", rhs)
+    for pattern, vector in _RULES:
+        m = re.fullmatch(pattern, rhs)
         if m:
-            return f"  {target}={name}({_vector(m[1])},{_vector(m[2])});"
-    m = re.fullmatch(rf"\(!({_VAR})\)", rhs)
-    if m:
-        return f"  {target}=v_not({m[1]});"
-    m = re.fullmatch(rf"\(({_VAR})\?({_OPERAND}):({_OPERAND})\)", rhs)
-    if m:
-        return f"  {target}=v_select({m[1]},{_vector(m[2])},{_vector(m[3])});"
-    m = re.fullmatch(rf"casadi_sq\(({_VAR})\)", rhs)
-    if m:
-        return f"  {target}=({m[1]}*{m[1]});"
-    m = re.fullmatch(rf"(\w+)\(({_VAR})\)", rhs)
-    if m:
-        return f"  {target}=v_call1({m[1]},{m[2]});"
-    m = re.fullmatch(rf"(\w+)\(({_VAR}),({_VAR})\)", rhs)
-    if m:
-        return f"  {target}=v_call2({m[1]},{m[2]},{m[3]});"
+            return f"  {target}={vector(m)};"
     raise Unsupported(f"statement {s!r}")
+
+
+# The right-hand sides of the kernel's assignments, as vector expressions
+_RULES = [
+    (_CONSTANT, lambda m: f"v_all({m[0]})"),
+    # arithmetic: GCC applies scalar constants to every lane
+    (rf"\((?:-{_VAR}|{_OPERAND}[-+*/]{_OPERAND})\)", lambda m: m[0]),
+    *((rf"\(({_OPERAND}){re.escape(op)}({_OPERAND})\)",
+       lambda m, name=name: f"{name}({_vector(m[1])},{_vector(m[2])})")
+      for op, name in LOGIC.items()),
+    (rf"\(!({_VAR})\)", lambda m: f"v_not({m[1]})"),
+    (rf"\(({_VAR})\?({_OPERAND}):({_OPERAND})\)",
+     lambda m: f"v_select({m[1]},{_vector(m[2])},{_vector(m[3])})"),
+    (rf"casadi_sq\(({_VAR})\)", lambda m: f"({m[1]}*{m[1]})"),
+    (rf"(\w+)\(({_VAR})\)", lambda m: f"v_call1({m[1]},{m[2]})"),
+    (rf"(\w+)\(({_VAR}),({_VAR})\)", lambda m: f"v_call2({m[1]},{m[2]},{m[3]})"),
+]
 
 
 def _stride(table: dict, index: str) -> int:
