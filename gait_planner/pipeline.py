@@ -118,8 +118,16 @@ def request_settings(request: PlanRequest) -> tuple[Scene, GaitSettings]:
 
 def prepare(planner: Planner, request: PlanRequest) -> str:
     """Build the problem of `request` in `planner` now (`Planner.prepare`), so that a
-    request like it pays no build; returns how its derivatives are evaluated."""
-    return planner.prepare(*request_settings(request))
+    request like it pays no build, and load the modules that certify and record a plan
+    (Pinocchio, the MCAP writer, rerun: ~0.3 s that a first request paid, as `plan_and_record`
+    imports them when it first needs them); returns how its derivatives are evaluated."""
+    how = planner.prepare(*request_settings(request))
+    import gait_planner.io.mcap_writer  # noqa: F401
+    import gait_planner.io.messages  # noqa: F401
+    import gait_planner.io.rerun_view  # noqa: F401
+    import gait_planner.verify.continuous  # noqa: F401
+    import gait_planner.verify.mechanics  # noqa: F401
+    return how
 
 
 def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Path, *,

@@ -1,0 +1,26 @@
+"""`pipeline.prepare` (the node's prepare_on_start, `gait-planner prepare`) leaves a first
+request nothing to load: the problem is built and the modules that certify and record a
+plan are imported (in a fresh process, as this test process has imported them already)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+CHILD = """
+import sys
+from gait_planner.ocp.solve import Planner
+from gait_planner.pipeline import PlanRequest, prepare
+recording = ["gait_planner.io.mcap_writer", "gait_planner.io.rerun_view", "pinocchio",
+             "gait_planner.verify.continuous", "gait_planner.io.messages"]
+before = [m for m in recording if m in sys.modules]
+planner = Planner()
+prepare(planner, PlanRequest(scene="compass", compiled=False))
+print(before, [m for m in recording if m not in sys.modules], len(planner._built))
+"""
+
+
+def test_prepare_builds_the_problem_and_loads_the_recording_path():
+    out = subprocess.run([sys.executable, "-c", CHILD], capture_output=True, text=True,
+                         check=True, timeout=300)
+    assert out.stdout.strip().splitlines()[-1] == "[] [] 1"
