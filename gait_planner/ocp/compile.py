@@ -76,12 +76,17 @@ def _flags(src: Source) -> tuple[str, ...]:
     return vector_flags() if src.lanes > 1 else FLAGS
 
 
+@functools.cache
+def _rewriter_source() -> str:
+    return Path(vectorize.__file__).read_text()
+
+
 def _identity(src: Source) -> bytes:
     """What a library is built from: the Source's key, the flags, CasADi's version and,
     for vector code, the rewriter's own source."""
     parts = [src.key, " ".join(_flags(src)), ca.__version__]
     if src.lanes > 1:
-        parts.append(Path(vectorize.__file__).read_text())
+        parts.append(_rewriter_source())
     return "\n".join(parts).encode()
 
 
