@@ -2,7 +2,9 @@
 request and answer, with feedback while the plan is made and cancel.
 
 * One plan at a time: a goal that arrives while a plan runs (from the action or the service)
-  is rejected at once. A ROS 2 goal rejection carries no reason; this node rejects goals for
+  is rejected at once. An accepted goal holds the node from its acceptance; if the acceptance
+  cannot be sent (rclpy then drops the goal: see `gait_planner.ros.worker`), the hold lapses
+  after `RESERVATION_TIMEOUT` s. A ROS 2 goal rejection carries no reason; this node rejects goals for
   no other reason than "busy" (a bad request is accepted and aborted with its message) and
   logs it, and `gait-planner call --action` prints it.
 * Feedback: the phase at every phase change and iteration, cost and constraint violation
@@ -24,7 +26,7 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
 from gait_planner.ocp.solve import STOPPED
-from gait_planner.ros.worker import Closed, PlanWorker
+from gait_planner.ros.worker import Closed, Lapsed, PlanWorker
 from gait_planner_msgs.action import PlanGait as PlanGaitAction
 
 ACTION = "/gait_planner/plan_gait"
@@ -50,8 +52,9 @@ class PlanGaitActionServer:
         self._server.destroy()
 
     def _on_goal(self, goal: PlanGaitAction.Goal) -> GoalResponse:
-        if self._worker.try_reserve():
-            self._tickets[id(goal)] = self._worker.ticket  # goal_handle.request is `goal`
+        ticket = self._worker.try_reserve()
+        if ticket is not None:
+            self._tickets[id(goal)] = ticket  # goal_handle.request is `goal`
             return GoalResponse.ACCEPT
         self._node.get_logger().warning(
             "plan goal rejected: busy (one plan at a time; the running plan goes on)")
@@ -91,8 +94,9 @@ class PlanGaitActionServer:
 
         result = PlanGaitAction.Result()
         try:
-            self._worker.run(lambda: self._plan(goal_handle.request, result), feedback)
-        except Closed as err:
+            self._worker.run(self._tickets[id(goal_handle.request)],
+                             lambda: self._plan(goal_handle.request, result), feedback)
+        except (Closed, Lapsed) as err:
             result.success, result.message = False, str(err)
         self._tickets.pop(id(goal_handle.request), None)
         if result.message == STOPPED:

@@ -11,6 +11,7 @@ from typing import Callable, TextIO
 import rclpy
 from action_msgs.msg import GoalStatus
 from rclpy.action import ActionClient
+from rclpy.action.client import ClientGoalHandle
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
@@ -22,6 +23,8 @@ from gait_planner_msgs.srv import PlanGait
 REJECTED = ("rejected: busy (the node plans one request at a time and is planning another "
             "one; try again later)")
 CANCEL_WAIT = 10.0  # s to wait for the node to answer a cancel request
+GOAL_RESPONSE_WAIT = 5.0  # s to wait for a goal's acceptance before sending the goal again
+GOAL_ATTEMPTS = 3
 
 
 def request_msg(args: argparse.Namespace, kind=PlanGait.Request):
@@ -96,6 +99,40 @@ def _spin_until(node: Node, done: Callable[[], bool], timeout: float, what: str)
         rclpy.spin_once(node, timeout_sec=0.1)
 
 
+def send_goal(action: ActionClient, goal: PlanGaitAction.Goal, spin_once: Callable[[], None],
+              feedback_callback: Callable | None = None, note: Callable[[str], None] | None = None,
+              wait: float = GOAL_RESPONSE_WAIT, attempts: int = GOAL_ATTEMPTS) -> ClientGoalHandle:
+    """Send `goal` to the node's action and return its goal handle, accepted or rejected
+    (busy), calling `spin_once()` (a short spin of the client's node) meanwhile.
+
+    A goal unanswered for `wait` s is sent again as a new goal, `attempts` goals in all (each
+    sending is told to `note`). Fast DDS drops the answer to a request that arrives before the
+    node has discovered the client's response reader (it waits 100 ms), which can happen to
+    a goal sent as soon as the client discovered the action; the node lets such a goal's
+    hold go after `gait_planner.ros.worker.RESERVATION_TIMEOUT` s, so the next goal is
+    accepted. An earlier goal that is answered late still counts. Raises RuntimeError if no
+    goal is answered."""
+    sent: list = []
+    deadline = 0.0
+    while True:
+        answered = [future.result() for future in sent if future.done()]
+        accepted = [handle for handle in answered if handle.accepted]
+        if accepted:
+            return accepted[0]
+        if sent and len(answered) == len(sent):
+            return answered[-1]  # rejected: busy
+        if time.monotonic() >= deadline:
+            if len(sent) == attempts:
+                raise RuntimeError(f"no goal response from {ACTION} within {wait:g} s, "
+                                   f"{attempts} goals sent")
+            if sent and note is not None:
+                note(f"no answer to the goal within {wait:g} s (lost in discovery?); "
+                     "sending it again")
+            sent.append(action.send_goal_async(goal, feedback_callback=feedback_callback))
+            deadline = time.monotonic() + wait
+        spin_once()
+
+
 def call_plan_gait_action(args: argparse.Namespace, *, timeout: float,
                           out: TextIO = sys.stderr) -> dict:
     """Send one goal to the action, print each feedback to `out` as it arrives, and return
@@ -110,12 +147,12 @@ def call_plan_gait_action(args: argparse.Namespace, *, timeout: float,
         if not client.wait_for_server(timeout_sec=min(timeout, 10.0)):
             raise RuntimeError(f"no action {ACTION}: is `gait-planner node` running "
                                "(same ROS_DOMAIN_ID)?")
-        sent = client.send_goal_async(
-            request_msg(args, PlanGaitAction.Goal),
+        goal = send_goal(
+            client, request_msg(args, PlanGaitAction.Goal),
+            lambda: rclpy.spin_once(node, timeout_sec=0.1),
             feedback_callback=lambda msg: print(feedback_line(msg.feedback), file=out,
-                                                flush=True))
-        _spin_until(node, sent.done, 10.0, "goal response")
-        goal = sent.result()
+                                                flush=True),
+            note=lambda text: print(text, file=out, flush=True))
         if not goal.accepted:
             return {"status": "rejected", "success": False, "message": REJECTED}
         result = goal.get_result_async()

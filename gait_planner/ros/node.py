@@ -22,6 +22,7 @@ from __future__ import annotations
 import os
 import sys
 import time
+from typing import Callable
 
 import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
@@ -37,7 +38,7 @@ from gait_planner.ocp.solve import STOPPED, Planner
 from gait_planner.pipeline import PlanRequest, RequestError, plan_and_record, prepare
 from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
-from gait_planner.ros.worker import Closed, PlanWorker, Stopped
+from gait_planner.ros.worker import Closed, Lapsed, PlanWorker, Stopped
 from gait_planner_msgs.msg import ContactForces, MultibodyState
 from gait_planner_msgs.srv import PlanGait
 from trajectory_msgs.msg import JointTrajectory
@@ -84,6 +85,7 @@ class GaitPlannerNode(Node):
     def __init__(self, *, planner: Planner | None = None, **kwargs):
         self._worker, self._action = PlanWorker(), None  # (destroy_node may run early)
         super().__init__("gait_planner", **kwargs)
+        self._worker.on_lapse = self._on_lapse
         parameters.declare(self)
         for path in remove_stale_temporaries(self._param("output_dir")):
             self.get_logger().info(f"removed the stale temporary file {path}")
@@ -140,15 +142,21 @@ class GaitPlannerNode(Node):
         return self.get_parameter(name).value
 
     def _on_plan(self, request: PlanGait.Request, response: PlanGait.Response):
-        if not self._worker.try_reserve():
+        ticket = self._worker.try_reserve()
+        if ticket is None:
             response.success, response.message = False, BUSY
             self.get_logger().warning("plan request answered busy")
             return response
         try:
-            self._worker.run(lambda: self._plan_into(request, response))
-        except Closed as err:
+            self._worker.run(ticket, lambda: self._plan_into(request, response))
+        except (Closed, Lapsed) as err:
             response.success, response.message = False, str(err)
         return response
+
+    def _on_lapse(self, ticket: int, age: float) -> None:
+        self.get_logger().warning(
+            f"request {ticket}, accepted {age:.1f} s ago, never started (its acceptance did not "
+            "reach the client); the node takes the next request")
 
     def _plan_into(self, request, answer) -> None:
         """Plan `request` (service request or action goal), record and publish the plan,
@@ -198,6 +206,25 @@ class GaitPlannerNode(Node):
             self._pub_forces.publish(messages.fill_message(ContactForces(), forces))
 
 
+def serve(node: GaitPlannerNode, executor: MultiThreadedExecutor,
+          until: Callable[[], bool] = lambda: False) -> None:
+    """Spin `executor` (which serves `node`) until the node's context shuts down or `until()`.
+
+    Not `executor.spin()`: its wait has no timeout, and a signal arriving while the executor
+    builds its wait set was seen lost (the wait never woke; 1 in ~25 runs). An answer that
+    cannot be sent does not end the service: Fast DDS refuses to send a response to a client
+    whose response reader it has not discovered 100 ms after the request ("client will not
+    receive response"; rclpy raises it from the service's callback task), which happens to a
+    request sent right after the client discovered the node."""
+    while node.context.ok() and not until():
+        try:
+            executor.spin_once(timeout_sec=SHUTDOWN_POLL)
+        except _rclpy.RCLError as err:
+            if not node.context.ok():  # a signal shut the context down during this turn
+                return  # ("failed to initialize wait set": seen in CI)
+            node.get_logger().warning(f"an answer could not be sent: {err}")
+
+
 def main(args=None) -> int:
     """Run the node until SIGINT or SIGTERM (``gait-planner node``). rclpy's signal
     handlers shut the context down, which ends the spin (within `SHUTDOWN_POLL` s); a
@@ -216,14 +243,7 @@ def main(args=None) -> int:
     executor.add_node(node)
     node.get_logger().info(f"serving the service and the action {SERVICE}")
     try:
-        # not `executor.spin()`: its wait has no timeout, and a signal arriving while the
-        # executor builds its wait set was seen lost (the wait never woke; 1 in ~25 runs)
-        while node.context.ok():
-            try:
-                executor.spin_once(timeout_sec=SHUTDOWN_POLL)
-            except _rclpy.RCLError:  # the signal shut the context down during this turn
-                if node.context.ok():  # ("failed to initialize wait set": seen in CI)
-                    raise
+        serve(node, executor)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

@@ -1,7 +1,11 @@
 """One plan at a time, in a thread of its own that a stop request ends within an iteration.
 
-The node's service and action callbacks reserve the worker (`try_reserve`: False = busy,
-answered at once), then wait in `run` for the plan thread. When the node shuts down (SIGINT,
+The node's service and action callbacks reserve the worker (`try_reserve`: None = busy,
+answered at once), then wait in `run` for the plan thread. A reservation that no `run` claims
+within `RESERVATION_TIMEOUT` s lapses, and the next request takes it over: a goal whose
+acceptance could not be sent never executes (rclpy logs "Failed to send goal response"; Fast
+DDS gives up when it has not yet discovered the client's response reader 100 ms after the
+request), and it must not keep the node busy forever. When the node shuts down (SIGINT,
 SIGTERM) `close` stops the solve and lets every waiting callback return, so the executor
 never waits for a plan. The build of a problem cannot be interrupted: the plan thread is a
 daemon, and `gait_planner.ros.node.main` leaves without waiting for it (`wait_idle`).
@@ -10,6 +14,7 @@ daemon, and `gait_planner.ros.node.main` leaves without waiting for it (`wait_id
 from __future__ import annotations
 
 import threading
+import time
 from typing import Callable, TypeVar
 
 from gait_planner.ocp.solve import STOPPED
@@ -17,6 +22,9 @@ from gait_planner.ocp.solve import STOPPED
 T = TypeVar("T")
 # phase, iteration, cost, violation (cost NaN: a phase change, iteration = the count so far)
 Listener = Callable[[str, int, float, float], None]
+# s from a reservation to its plan's start (`run`) after which the next request takes it over;
+# a goal's plan starts milliseconds after its acceptance was sent
+RESERVATION_TIMEOUT = 2.0
 
 
 class Stopped(Exception):
@@ -30,6 +38,16 @@ class Closed(Exception):
     """The node shut down while a caller waited for its plan."""
 
 
+class Lapsed(Exception):
+    """A reservation was claimed after it lapsed (`RESERVATION_TIMEOUT`) and another request
+    had taken the worker over."""
+
+    def __init__(self, ticket: int, current: int):
+        super().__init__(
+            f"busy: the plan's reservation (ticket {ticket}) lapsed before the plan could start "
+            f"and request {current} holds the node now; try again later")
+
+
 class PlanWorker:
     """Busy flag, stop flag, current phase and the plan thread of one node."""
 
@@ -41,17 +59,28 @@ class PlanWorker:
         self._listener: Listener | None = None
         self.phase, self.iterations = "", 0
         self.ticket = 0  # numbers the reservations: a stop names the plan it is meant for
+        self._claimed, self._reserved_at = True, 0.0  # the current reservation's
+        # on_lapse(ticket, age): told when a lapsed reservation is taken over (the node logs it)
+        self.on_lapse: Callable[[int, float], None] | None = None
 
-    def try_reserve(self) -> bool:
-        """Reserve the worker for one plan (`ticket` then numbers it); False if a plan runs
-        (or the node is closing)."""
-        if self._closed.is_set() or not self._busy.acquire(blocking=False):
-            return False
+    def try_reserve(self) -> int | None:
+        """Reserve the worker for one plan and return the reservation's ticket (it numbers
+        the plans); None if a plan runs or is about to (or the node is closing). A reservation
+        unclaimed (`run`) for `RESERVATION_TIMEOUT` s is taken over."""
+        if self._closed.is_set():
+            return None
         with self._guard:
+            if not self._busy.acquire(blocking=False):
+                age = time.monotonic() - self._reserved_at
+                if self._claimed or age < RESERVATION_TIMEOUT:
+                    return None
+                if self.on_lapse is not None:  # the lock stays held: it is the new reservation's
+                    self.on_lapse(self.ticket, age)
             self._stop.clear()
             self.phase, self.iterations = "", 0
             self.ticket += 1
-        return True
+            self._claimed, self._reserved_at = False, time.monotonic()
+            return self.ticket
 
     def stopped(self) -> bool:
         """The planner's stop callback: True once a stop was requested."""
@@ -85,10 +114,15 @@ class PlanWorker:
         if listener is not None:
             listener(self.phase, iteration, cost, violation)
 
-    def run(self, work: Callable[[], T], listener: Listener | None = None) -> T:
-        """Run `work` in the plan thread of a reservation (`try_reserve`) and return its value
-        (or raise its error); `listener` hears phases and iterations meanwhile. Raises
-        `Closed` if the node closes first. The reservation ends with the plan thread."""
+    def run(self, ticket: int, work: Callable[[], T], listener: Listener | None = None) -> T:
+        """Run `work` in the plan thread of the reservation `ticket` (`try_reserve`) and return
+        its value (or raise its error); `listener` hears phases and iterations meanwhile.
+        Raises `Lapsed` if another request took the reservation over, `Closed` if the node
+        closes first. The reservation ends with the plan thread."""
+        with self._guard:
+            if ticket != self.ticket or self._claimed:
+                raise Lapsed(ticket, self.ticket)
+            self._claimed = True
         outcome: dict = {}
         done = threading.Event()
         self._listener = listener

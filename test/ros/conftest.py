@@ -141,16 +141,17 @@ def spin_until(executor: SingleThreadedExecutor) -> Callable[..., bool]:
 def planner_node(ros_context: Context, tmp_path: Path) -> Iterator[Callable[..., Node]]:
     """``planner_node(**parameters)``: a `GaitPlannerNode` writing to `tmp_path` (its only
     allowed output folder; prepare_on_start and plan_library false unless given, so a test's
-    first plan is cold whatever earlier processes planned), served by its own multi-threaded
-    executor on a background thread
-    as `gait-planner node` serves it, so a test's client spins apart from it. Closed, shut
-    down and destroyed after the test."""
+    first plan is cold whatever earlier processes planned), served on a background thread by
+    its own multi-threaded executor and `gait_planner.ros.node.serve`, as `gait-planner node`
+    serves it, so a test's client spins apart from it. Closed, shut down and destroyed after
+    the test."""
     from rclpy.executors import MultiThreadedExecutor
     from rclpy.parameter import Parameter
 
-    from gait_planner.ros.node import EXECUTOR_THREADS, GaitPlannerNode
+    from gait_planner.ros.node import EXECUTOR_THREADS, GaitPlannerNode, serve
 
     started: list[tuple[Node, MultiThreadedExecutor, threading.Thread]] = []
+    stop = threading.Event()
 
     def start(**parameters) -> Node:
         values = {"output_dir": str(tmp_path), "allowed_output_dirs": [str(tmp_path)],
@@ -159,7 +160,7 @@ def planner_node(ros_context: Context, tmp_path: Path) -> Iterator[Callable[...,
             Parameter(name, value=value) for name, value in values.items()])
         serving = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS, context=ros_context)
         serving.add_node(node)
-        thread = threading.Thread(target=serving.spin, daemon=True)
+        thread = threading.Thread(target=serve, args=(node, serving, stop.is_set), daemon=True)
         thread.start()
         started.append((node, serving, thread))
         return node
@@ -167,10 +168,11 @@ def planner_node(ros_context: Context, tmp_path: Path) -> Iterator[Callable[...,
     try:
         yield start
     finally:
+        stop.set()
         for node, serving, thread in started:
             node.close()
-            serving.shutdown(timeout_sec=TIMEOUT)
             thread.join(TIMEOUT)
+            serving.shutdown(timeout_sec=TIMEOUT)
             node.destroy_node()
 
 

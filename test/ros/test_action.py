@@ -13,6 +13,7 @@ from rclpy.action import ActionClient
 from trajectory_msgs.msg import JointTrajectory
 
 from gait_planner.ros.action_server import ACTION
+from gait_planner.ros.client import send_goal
 from gait_planner.ros.node import SERVICE, TOPIC_TRAJECTORY
 from gait_planner_msgs.action import PlanGait as PlanGaitAction
 from gait_planner_msgs.srv import PlanGait
@@ -38,10 +39,8 @@ def client(make_node, executor, spin_until):
 
 def _send(action, spin_until, feedback: list, **goal):
     assert spin_until(action.server_is_ready, 20), f"{ACTION} not discovered"
-    sent = action.send_goal_async(PlanGaitAction.Goal(**goal),
-                                  feedback_callback=lambda m: feedback.append(m.feedback))
-    assert spin_until(sent.done, 10)
-    return sent.result()
+    return send_goal(action, PlanGaitAction.Goal(**goal), lambda: spin_until(lambda: False, 0.05),
+                     feedback_callback=lambda m: feedback.append(m.feedback))
 
 
 def _result(handle, spin_until, timeout=60.0):

@@ -12,6 +12,7 @@ import pytest
 from rclpy.action import ActionClient
 
 from gait_planner.ros.action_server import ACTION
+from gait_planner.ros.client import send_goal
 from gait_planner_msgs.action import PlanGait as PlanGaitAction
 
 pytestmark = pytest.mark.timeout(300)
@@ -43,9 +44,10 @@ def test_a_signal_ends_the_node_within_2_s_and_nothing_is_recorded(
     assert spin_until(lambda: action.server_is_ready() or process.poll() is not None, 60)
     assert process.poll() is None, (tmp_path / "node.log").read_text()
     feedback: list = []
-    sent = action.send_goal_async(PlanGaitAction.Goal(cold_start=True, output_name="signal"),
-                                  feedback_callback=lambda m: feedback.append(m.feedback))
-    assert spin_until(sent.done, 10) and sent.result().accepted
+    handle = send_goal(action, PlanGaitAction.Goal(cold_start=True, output_name="signal"),
+                       lambda: spin_until(lambda: False, 0.05),
+                       feedback_callback=lambda m: feedback.append(m.feedback))
+    assert handle.accepted
     if when == "solving":
         wait_for_feedback(feedback, lambda f: f.iteration >= 3, timeout=240)
     else:
