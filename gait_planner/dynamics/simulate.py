@@ -22,6 +22,7 @@ from typing import Callable, Sequence
 import casadi as ca
 import numpy as np
 
+from gait_planner.buffered import bind
 from gait_planner.dynamics.discrete import DiscreteMechanics
 
 
@@ -84,23 +85,13 @@ class Simulator:
                     "h": np.zeros(1), "w": np.zeros(1), "tau": np.zeros(mb.nt)}
         self._res, self._jac_flat = np.zeros(n), np.zeros(n * n)
         self._jac = self._jac_flat.reshape(n, n, order="F")  # a view: CasADi is column-major
-        self._newton_eval = self._bind(
+        self._newton_eval = bind(
             self._newton, [self._in[k] for k in ("x", "q", "p", "h", "w", "tau")],
             [self._res, self._jac_flat])
         self._q_next, self._p_next = np.zeros(mb.k), np.zeros(mb.k)
-        self._advance_eval = self._bind(
+        self._advance_eval = bind(
             self._advance, [self._in["x"][: mb.ndof], self._in["q"], self._in["h"],
                             self._in["tau"]], [self._q_next, self._p_next])
-
-    @staticmethod
-    def _bind(function: ca.Function, args: list[np.ndarray], results: list[np.ndarray]):
-        """A no-argument callable evaluating `function` from `args` into `results`."""
-        buffer, evaluate = function.buffer()
-        for i, a in enumerate(args):
-            buffer.set_arg(i, memoryview(a))
-        for i, r in enumerate(results):
-            buffer.set_res(i, memoryview(r))
-        return lambda: (buffer, evaluate())  # keeps the buffer alive with the callable
 
     def initial_momentum(self, q0: np.ndarray, nu0: np.ndarray) -> np.ndarray:
         """p_0 = M P(q_0) nu_0 (k,)."""
