@@ -28,7 +28,8 @@ compiled. Of the Hessian's time the rest takes 3 ms and the summing 0.1 ms (with
 pieces timed alone, their code and data in the caches, add up to only 9.4 ms, but one
 evaluation runs 13 MB of compiled Hessian elements and the rest's 1 M instructions: cold,
 the pieces add up to 13.6 ms, 2.8 ms of it the mirrored variants (7.5 MB of code, each run
-for one node; 0.3 ms warm). Mapping over 2 threads (bit for bit the same) measured 1.5 ms
+for one node; 0.3 ms warm), which is why the larger variants are interpreted instead
+(`INTERPRETED_ABOVE`). Mapping over 2 threads (bit for bit the same) measured 1.5 ms
 faster in one run and 1.2-4 ms slower in another (the second core is shared with other
 jobs), so the maps run serially.
 
@@ -50,6 +51,15 @@ from gait_planner.ocp.vectorize import LANES
 
 # Given the element derivatives to form, returns them (e.g. compiled) in the same order.
 Compiler = Callable[[list[Source]], list[ca.Function]]
+# Operations above which a one-node element derivative is evaluated in CasADi's virtual
+# machine instead of compiled. It runs once per evaluation of the NLP's derivatives: its
+# machine code (~8 bytes an operation) comes from memory every time, since the vector passes
+# and MUMPS have evicted it from the caches, while the virtual machine's loop stays cached
+# and streams its instruction list. Measured on the 2-core EPYC (2026-11-24, A/B in fresh
+# processes, the same iterates bit for bit): walker3d's six variants above it (97 000 to
+# 194 000 operations) interpreted, its cold plan 1.27-1.33 s instead of 1.40-1.48 s; walker2d's
+# mirrored dynamics Hessian (74 000) interpreted, 0.31-0.32 s instead of 0.30-0.31 s.
+INTERPRETED_ABOVE = 90_000
 
 
 def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict[str, ca.Function]:
@@ -68,8 +78,10 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
 
     if compiler is None:
         pairs = [(_element_jacobian(group), _element_hessian(group)) for group in tr.elements]
-    else:  # every element, also those of one node: a cached library is loaded, not formed
-        done = iter(compiler([source for group in tr.elements for source in _sources(group)]))
+    else:  # a cached library is loaded, not formed; large one-node derivatives stay in the VM
+        derived = [d for group in tr.elements for d in _element_derivatives(group)]
+        built = iter(compiler([d for d in derived if isinstance(d, Source)]))
+        done = iter([next(built) if isinstance(d, Source) else d for d in derived])
         pairs = [(next(done), next(done)) for _ in tr.elements]
 
     x, p = ca.MX.sym("x", nx), ca.MX.sym("p", int(tr.p.shape[0]))
@@ -80,7 +92,7 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     grads, jacs, hessians = [_whole(grad.T)], [_whole(jac)], [_whole(hess)]
     for group, (jac_fn, hess_fn) in zip(tr.elements, pairs):
         n = group.z_index.shape[1]
-        lanes = jac_fn.size2_in(0)  # nodes per call: 1, or LANES (_sources)
+        lanes = jac_fn.size2_in(0)  # nodes per call: 1, or LANES (_element_derivatives)
         calls = -(-n // lanes)
         z, pz = x[_padded(group.z_index, calls * lanes)], p[_padded(group.p_index, calls * lanes)]
         c = ca.DM(group.constants)
@@ -105,15 +117,20 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     }
 
 
-def _sources(group: ElementGroup) -> tuple[Source, Source]:
-    """The element's Jacobian and Hessian (`_element_jacobian`, `_element_hessian`) to
-    compile, identified by the element's serialisation: at a group of LANES nodes or more
-    as maps over LANES nodes computed in one vector pass (`ocp.vectorize`), at fewer
-    (the mirrored nodes) node by node."""
+def _element_derivatives(group: ElementGroup) -> tuple[Source | ca.Function, Source | ca.Function]:
+    """The element's Jacobian and Hessian (`_element_jacobian`, `_element_hessian`): to
+    compile (a `Source`, identified by the element's serialisation), or to evaluate in
+    CasADi's virtual machine (the formed Function). A group of LANES nodes or more is
+    compiled as maps over LANES nodes computed in one vector pass (`ocp.vectorize`). A group
+    of fewer (the mirrored nodes' variants, one node each) is formed, and a derivative of
+    more than `INTERPRETED_ABOVE` operations is interpreted, a smaller one compiled node by
+    node."""
     name, key = group.function.name(), group.function.serialize()
     if group.z_index.shape[1] < LANES:
-        return (Source(f"{name}_jac", f"jacobian\n{key}", lambda: _element_jacobian(group)),
-                Source(f"{name}_hess", f"hessian\n{key}", lambda: _element_hessian(group)))
+        formed = (_element_jacobian(group), _element_hessian(group))
+        return tuple(fn if fn.n_instructions() > INTERPRETED_ABOVE else
+                     Source(fn.name(), f"{kind}\n{key}", lambda fn=fn: fn)
+                     for kind, fn in zip(("jacobian", "hessian"), formed))
     jac, hess = f"{name}_jac_x{LANES}", f"{name}_hess_x{LANES}"
     return (Source(jac, f"jacobian x{LANES}\n{key}",
                    lambda: _element_jacobian(group).map(jac, "serial", LANES, [], []), LANES),

@@ -17,7 +17,7 @@ from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
 from gait_planner.ocp.compile import Source, compile_sources, vector_flags
-from gait_planner.ocp.derivatives import _sources
+from gait_planner.ocp.derivatives import _element_derivatives
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.transcription import Transcription
 from gait_planner.ocp.vectorize import LANES, Unsupported, vectorize_map
@@ -109,7 +109,8 @@ def test_every_element_of_the_planner_is_rewritten(name):
     """No element derivative falls back to CasADi's loop (generating the code only)."""
     scene = load_scene(name)
     tr = Transcription(DiscreteMechanics(Multibody(scene)), settings_for(scene))
-    vector = [src for group in tr.elements for src in _sources(group) if src.lanes > 1]
+    vector = [d for group in tr.elements if group.z_index.shape[1] >= LANES
+              for d in _element_derivatives(group)]
     assert vector
     for src in vector:
         code = ca.CodeGenerator(f"{src.name}.c", {"with_header": False})
