@@ -6,6 +6,7 @@ import argparse
 import math
 import sys
 import time
+import uuid
 from typing import Callable, TextIO
 
 import rclpy
@@ -14,6 +15,7 @@ from rclpy.action import ActionClient
 from rclpy.action.client import ClientGoalHandle
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from unique_identifier_msgs.msg import UUID
 
 from gait_planner.ros.action_server import ACTION
 from gait_planner.ros.node import SERVICE
@@ -105,30 +107,44 @@ def send_goal(action: ActionClient, goal: PlanGaitAction.Goal, spin_once: Callab
     """Send `goal` to the node's action and return its goal handle, accepted or rejected
     (busy), calling `spin_once()` (a short spin of the client's node) meanwhile.
 
-    A goal unanswered for `wait` s is sent again as a new goal, `attempts` goals in all (each
-    sending is told to `note`). Fast DDS drops the answer to a request that arrives before the
-    node has discovered the client's response reader (it waits 100 ms), which can happen to
-    a goal sent as soon as the client discovered the action; the node lets such a goal's
-    hold go after `gait_planner.ros.worker.RESERVATION_TIMEOUT` s, so the next goal is
-    accepted. An earlier goal that is answered late still counts. Raises RuntimeError if no
-    goal is answered."""
-    sent: list = []
+    Fast DDS drops the answer to a request that arrives before the node has discovered the
+    client's response reader (it waits 100 ms; rclpy warns "failed to send response
+    (timeout)"), which can happen to a goal sent as soon as the client discovered the action:
+    the goal then runs while its client waits. A goal whose feedback arrives without its
+    acceptance is therefore taken as accepted (the node publishes feedback from the start of
+    a plan). A goal with neither for `wait` s is sent again as a new goal, `attempts` goals in
+    all, each sending told to `note` (if the node dropped the first, its hold lapses after
+    `gait_planner.ros.worker.RESERVATION_TIMEOUT` s). Raises RuntimeError if no goal is
+    answered."""
+    sent: list[tuple[UUID, object, list]] = []  # (goal id, response future, its feedback)
     deadline = 0.0
     while True:
-        answered = [future.result() for future in sent if future.done()]
-        accepted = [handle for handle in answered if handle.accepted]
-        if accepted:
-            return accepted[0]
-        if sent and len(answered) == len(sent):
-            return answered[-1]  # rejected: busy
+        for goal_id, future, heard in sent:
+            if future.done() and future.result().accepted:
+                return future.result()
+            if heard and not future.done():  # running: its acceptance was lost on the way
+                if note is not None:
+                    note("the goal's acceptance was lost on the way; it runs (its feedback "
+                         "arrives)")
+                return ClientGoalHandle(action, goal_id, PlanGaitAction.Impl.SendGoalService
+                                        .Response(accepted=True))
+        if sent and all(future.done() for _, future, _ in sent):
+            return sent[-1][1].result()  # rejected: busy
         if time.monotonic() >= deadline:
             if len(sent) == attempts:
                 raise RuntimeError(f"no goal response from {ACTION} within {wait:g} s, "
                                    f"{attempts} goals sent")
             if sent and note is not None:
-                note(f"no answer to the goal within {wait:g} s (lost in discovery?); "
-                     "sending it again")
-            sent.append(action.send_goal_async(goal, feedback_callback=feedback_callback))
+                note(f"no answer to the goal within {wait:g} s; sending it again")
+            goal_id, heard = UUID(uuid=list(uuid.uuid4().bytes)), []
+
+            def on_feedback(message, heard=heard) -> None:
+                heard.append(message)
+                if feedback_callback is not None:
+                    feedback_callback(message)
+
+            sent.append((goal_id, action.send_goal_async(goal, feedback_callback=on_feedback,
+                                                         goal_uuid=goal_id), heard))
             deadline = time.monotonic() + wait
         spin_once()
 

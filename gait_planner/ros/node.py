@@ -212,10 +212,9 @@ def serve(node: GaitPlannerNode, executor: MultiThreadedExecutor,
 
     Not `executor.spin()`: its wait has no timeout, and a signal arriving while the executor
     builds its wait set was seen lost (the wait never woke; 1 in ~25 runs). An answer that
-    cannot be sent does not end the service: Fast DDS refuses to send a response to a client
-    whose response reader it has not discovered 100 ms after the request ("client will not
-    receive response"; rclpy raises it from the service's callback task), which happens to a
-    request sent right after the client discovered the node."""
+    cannot be sent does not end the service: rclpy raises an RCLError from the callback's
+    task when sending fails (on Fast DDS's timeout for a client whose response reader it
+    has not discovered 100 ms after the request, rclpy 9.1.2 only warns)."""
     while node.context.ok() and not until():
         try:
             executor.spin_once(timeout_sec=SHUTDOWN_POLL)

@@ -2,10 +2,12 @@
 
 The node's service and action callbacks reserve the worker (`try_reserve`: None = busy,
 answered at once), then wait in `run` for the plan thread. A reservation that no `run` claims
-within `RESERVATION_TIMEOUT` s lapses, and the next request takes it over: a goal whose
-acceptance could not be sent never executes (rclpy logs "Failed to send goal response"; Fast
-DDS gives up when it has not yet discovered the client's response reader 100 ms after the
-request), and it must not keep the node busy forever. When the node shuts down (SIGINT,
+within `RESERVATION_TIMEOUT` s lapses, and the next request takes it over: rclpy drops a
+goal whose acceptance it failed to send with an RCLError (it logs "Failed to send goal
+response"), and that goal must not keep the node busy for ever. (When Fast DDS has not yet
+discovered the client's response reader 100 ms after the request, rclpy 9.1.2 only warns
+"failed to send response (timeout)" and the goal runs; `gait_planner.ros.client.send_goal`
+follows it by its feedback.) When the node shuts down (SIGINT,
 SIGTERM) `close` stops the solve and lets every waiting callback return, so the executor
 never waits for a plan. The build of a problem cannot be interrupted: the plan thread is a
 daemon, and `gait_planner.ros.node.main` leaves without waiting for it (`wait_idle`).
