@@ -56,6 +56,9 @@ class Source:
     key: str
     make: Callable[[], ca.Function]
     lanes: int = 1  # > 1: make() is fn.map(lanes), built as one vector pass
+    # if set: a Function of more operations than this is not compiled but returned as
+    # formed, for CasADi's virtual machine (`ocp.derivatives.INTERPRETED_ABOVE`)
+    interpret_above: int | None = None
 
 
 @functools.cache
@@ -87,6 +90,8 @@ def _identity(src: Source) -> bytes:
     parts = [src.key, " ".join(_flags(src)), ca.__version__]
     if src.lanes > 1:
         parts.append(_rewriter_source())
+    if src.interpret_above is not None:
+        parts.append(f"interpreted above {src.interpret_above} operations")
     return "\n".join(parts).encode()
 
 
@@ -98,8 +103,11 @@ def compile_functions(functions: list[ca.Function], folder: Path | None = None) 
 
 
 def compile_sources(sources: list[Source], folder: Path | None = None) -> list[ca.Function]:
-    """The compiled (external) Functions of `sources`, in order. Raises CompileError (no
-    compiler, a failed build, a cache folder that cannot be written)."""
+    """The compiled (external) Functions of `sources`, in order, or, for a Source whose
+    Function has more operations than its `interpret_above`, that Function as formed (no
+    library is built for it, so it is formed at every call). A Source whose library is
+    cached is not formed. Raises CompileError (no compiler, a failed build, a cache folder
+    that cannot be written)."""
     compiler = shutil.which(os.environ.get("CC", "cc"))
     if compiler is None:
         raise CompileError("no C compiler found (set CC, or install gcc)")
@@ -112,16 +120,22 @@ def compile_sources(sources: list[Source], folder: Path | None = None) -> list[c
 
 def _compile(sources: list[Source], compiler: str, folder: Path) -> list[ca.Function]:
     folder.mkdir(parents=True, exist_ok=True)
-    libraries, jobs = [], []
+    libraries: list[Path | ca.Function] = []
+    jobs: list[tuple[Path, Path, tuple[str, ...]]] = []
     with tempfile.TemporaryDirectory(dir=folder) as work:
         for src in sources:
             library = folder / f"{src.name}_{hashlib.sha256(_identity(src)).hexdigest()[:16]}.so"
-            libraries.append(library)
             if library.exists() or library in (job[0] for job in jobs):
+                libraries.append(library)
                 continue
+            function = src.make()
+            if src.interpret_above is not None and function.n_instructions() > src.interpret_above:
+                libraries.append(function)
+                continue
+            libraries.append(library)
             source = Path(work) / f"{src.name}.c"
             generator = ca.CodeGenerator(source.name, {"with_header": False})
-            generator.add(src.make())
+            generator.add(function)
             generator.generate(f"{work}{os.sep}")
             if src.lanes > 1:
                 try:
@@ -130,7 +144,8 @@ def _compile(sources: list[Source], compiler: str, folder: Path) -> list[ca.Func
                     pass  # CasADi's loop, as generated
             jobs.append((library, source, _flags(src)))
         _build_all(compiler, jobs, work)
-    return [ca.external(src.name, str(lib)) for src, lib in zip(sources, libraries)]
+    return [lib if isinstance(lib, ca.Function) else ca.external(src.name, str(lib))
+            for src, lib in zip(sources, libraries)]
 
 
 def _build_all(compiler: str, jobs: list[tuple[Path, Path, tuple[str, ...]]], work: str) -> None:

@@ -79,9 +79,7 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     if compiler is None:
         pairs = [(_element_jacobian(group), _element_hessian(group)) for group in tr.elements]
     else:  # a cached library is loaded, not formed; large one-node derivatives stay in the VM
-        derived = [d for group in tr.elements for d in _element_derivatives(group)]
-        built = iter(compiler([d for d in derived if isinstance(d, Source)]))
-        done = iter([next(built) if isinstance(d, Source) else d for d in derived])
+        done = iter(compiler([s for group in tr.elements for s in _element_derivatives(group)]))
         pairs = [(next(done), next(done)) for _ in tr.elements]
 
     x, p = ca.MX.sym("x", nx), ca.MX.sym("p", int(tr.p.shape[0]))
@@ -117,20 +115,19 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     }
 
 
-def _element_derivatives(group: ElementGroup) -> tuple[Source | ca.Function, Source | ca.Function]:
-    """The element's Jacobian and Hessian (`_element_jacobian`, `_element_hessian`): to
-    compile (a `Source`, identified by the element's serialisation), or to evaluate in
-    CasADi's virtual machine (the formed Function). A group of LANES nodes or more is
+def _element_derivatives(group: ElementGroup) -> tuple[Source, Source]:
+    """The element's Jacobian and Hessian (`_element_jacobian`, `_element_hessian`) to
+    compile, identified by the element's serialisation. A group of LANES nodes or more is
     compiled as maps over LANES nodes computed in one vector pass (`ocp.vectorize`). A group
-    of fewer (the mirrored nodes' variants, one node each) is formed, and a derivative of
-    more than `INTERPRETED_ABOVE` operations is interpreted, a smaller one compiled node by
-    node."""
+    of fewer (the mirrored nodes' variants, one node each) node by node, or, above
+    `INTERPRETED_ABOVE` operations, evaluated in CasADi's virtual machine
+    (`Source.interpret_above`)."""
     name, key = group.function.name(), group.function.serialize()
     if group.z_index.shape[1] < LANES:
-        formed = (_element_jacobian(group), _element_hessian(group))
-        return tuple(fn if fn.n_instructions() > INTERPRETED_ABOVE else
-                     Source(fn.name(), f"{kind}\n{key}", lambda fn=fn: fn)
-                     for kind, fn in zip(("jacobian", "hessian"), formed))
+        return (Source(f"{name}_jac", f"jacobian\n{key}", lambda: _element_jacobian(group),
+                       interpret_above=INTERPRETED_ABOVE),
+                Source(f"{name}_hess", f"hessian\n{key}", lambda: _element_hessian(group),
+                       interpret_above=INTERPRETED_ABOVE))
     jac, hess = f"{name}_jac_x{LANES}", f"{name}_hess_x{LANES}"
     return (Source(jac, f"jacobian x{LANES}\n{key}",
                    lambda: _element_jacobian(group).map(jac, "serial", LANES, [], []), LANES),

@@ -189,6 +189,26 @@ def test_one_compiled_library_serves_every_base_time_step(tmp_path):
     assert functions[1].constants.tolist() == [0.02]
 
 
+def test_a_large_source_is_interpreted_and_a_cached_one_is_not_formed(tmp_path):
+    from gait_planner.ocp.compile import Source, compile_sources
+
+    tr, *_ = _problem("compass")
+    fn = tr.elements[0].function  # 1178 operations
+    big, small = (Source(fn.name(), f"test {limit}", lambda: fn, interpret_above=limit)
+                  for limit in (1000, 2000))
+    interpreted, compiled = compile_sources([big, small], tmp_path)
+    assert interpreted is fn and compiled is not fn and len(list(tmp_path.glob("*.so"))) == 1
+
+    def unformable():
+        raise AssertionError("a cached library was formed again")
+
+    (again,) = compile_sources([Source(fn.name(), "test 2000", unformable,
+                                       interpret_above=2000)], tmp_path)
+    z = np.linspace(0.1, 0.9, fn.nnz_in(0))
+    args = (z, np.ones(fn.nnz_in(1)), np.full(fn.nnz_in(2), 0.02))
+    assert np.array_equal(np.array(again(*args)), np.array(fn(*args)))
+
+
 @pytest.mark.parametrize("interpreted_above", [derivatives.INTERPRETED_ABOVE, 1000])
 def test_compiled_vector_derivatives_equal_the_virtual_machine_bit_for_bit(
         tmp_path, monkeypatch, interpreted_above):
