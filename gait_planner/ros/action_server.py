@@ -2,11 +2,11 @@
 request and answer, with feedback while the plan is made and cancel.
 
 * One plan at a time: a goal that arrives while a plan runs (from the action or the service)
-  is rejected at once. An accepted goal holds the node from its acceptance; if the acceptance
-  cannot be sent (rclpy then drops the goal: see `gait_planner.ros.worker`), the hold lapses
-  after `RESERVATION_TIMEOUT` s. A ROS 2 goal rejection carries no reason; this node rejects goals for
-  no other reason than "busy" (a bad request is accepted and aborted with its message) and
-  logs it, and `gait-planner call --action` prints it.
+  is rejected at once. An accepted goal holds the node from its acceptance; if rclpy drops
+  it because its acceptance could not be sent (see `gait_planner.ros.worker`), the hold
+  lapses after `RESERVATION_TIMEOUT` s. A ROS 2 goal rejection carries no reason; this node
+  rejects goals for no other reason than "busy" (a bad request is accepted and aborted with
+  its message) and logs it, and `gait-planner call --action` prints it.
 * Feedback: the phase at every phase change and iteration, cost and constraint violation
   every ``feedback_every`` IPOPT iterations, with the seconds since the goal was accepted.
 * Cancel: accepted while the problem is built or solved, refused while the found plan is

@@ -7,9 +7,8 @@ goal whose acceptance it failed to send with an RCLError (it logs "Failed to sen
 response"), and that goal must not keep the node busy for ever. (When Fast DDS has not yet
 discovered the client's response reader 100 ms after the request, rclpy 9.1.2 only warns
 "failed to send response (timeout)" and the goal runs; `gait_planner.ros.client.send_goal`
-follows it by its feedback.) When the node shuts down (SIGINT,
-SIGTERM) `close` stops the solve and lets every waiting callback return, so the executor
-never waits for a plan. The build of a problem cannot be interrupted: the plan thread is a
+follows it by its feedback.) When the node shuts down (SIGINT, SIGTERM) `close` stops the
+solve and lets every waiting callback return, so the executor never waits for a plan. The build of a problem cannot be interrupted: the plan thread is a
 daemon, and `gait_planner.ros.node.main` leaves without waiting for it (`wait_idle`).
 """
 

@@ -24,79 +24,77 @@ from gait_planner_msgs.srv import PlanGait
 pytestmark = pytest.mark.timeout(120)
 
 
-def _fail_once(monkeypatch, owner, name: str) -> list:
-    """Make ``owner.name`` raise Fast DDS's RCLError on its first call; returns the list of
-    calls that failed."""
-    original, failed = getattr(owner, name), []
+def _lose_once(monkeypatch, owner, name: str, raising: bool = True) -> list:
+    """Make the first call of ``owner.name`` (a send) lose its answer: raise Fast DDS's
+    RCLError, or (`raising` False, as rclpy 9.1.2 does on the timeout) send nothing and
+    return; returns the list of calls that lost theirs."""
+    original, lost = getattr(owner, name), []
 
     def send(self, *args):
-        if not failed:
-            failed.append(args)
+        if lost:
+            return original(self, *args)
+        lost.append(args)
+        if raising:
             raise _rclpy.RCLError("client will not receive response")
-        return original(self, *args)
+        return None
 
     monkeypatch.setattr(owner, name, send)
-    return failed
+    return lost
+
+
+def _goal_sent(make_node, executor, spin_until, name: str, **options):
+    """(handle, notes): the goal `name` sent by `send_goal` from a new client node, once the
+    action is discovered, with `options` (feedback_callback, wait)."""
+    client = make_node(f"{name}_goal_client")
+    executor.add_node(client)
+    action = ActionClient(client, PlanGaitAction, ACTION)
+    assert spin_until(action.server_is_ready, 20)
+    notes: list[str] = []
+    handle = send_goal(action, PlanGaitAction.Goal(output_name=name),
+                       lambda: spin_until(lambda: False, 0.05), note=notes.append, **options)
+    return handle, notes
+
+
+def _assert_planned(handle, spin_until) -> None:
+    result = handle.get_result_async()
+    assert spin_until(result.done, 60)
+    assert result.result().result.success, result.result().result.message
 
 
 def test_a_goal_whose_acceptance_is_lost_runs_and_its_client_follows_it(
         monkeypatch, planner_node, make_node, executor, spin_until):
     planner_node(default_scene="compass", compile_derivatives=False)
-    original, skipped = _rclpy.ActionServer.send_goal_response, []
-
-    def send(self, *args):  # rclpy's timeout: warned, nothing sent, the goal goes on
-        if not skipped:
-            skipped.append(args)
-            return None
-        return original(self, *args)
-
-    monkeypatch.setattr(_rclpy.ActionServer, "send_goal_response", send)
-    client = make_node("unanswered_goal_client")
-    executor.add_node(client)
-    action = ActionClient(client, PlanGaitAction, ACTION)
-    assert spin_until(action.server_is_ready, 20)
-    notes: list[str] = []
+    lost = _lose_once(monkeypatch, _rclpy.ActionServer, "send_goal_response", raising=False)
     feedback: list = []
-    handle = send_goal(action, PlanGaitAction.Goal(output_name="unanswered"),
-                       lambda: spin_until(lambda: False, 0.05), feedback_callback=feedback.append,
-                       note=notes.append)
-    assert len(skipped) == 1 and handle.accepted and feedback
+    handle, notes = _goal_sent(make_node, executor, spin_until, "unanswered",
+                               feedback_callback=feedback.append)
+    assert len(lost) == 1 and handle.accepted and feedback
     assert len(notes) == 1 and "lost" in notes[0], notes  # one goal sent, followed
-    result = handle.get_result_async()
-    assert spin_until(result.done, 60)
-    assert result.result().result.success, result.result().result.message
+    _assert_planned(handle, spin_until)
 
 
 def test_a_dropped_goal_lapses_and_the_next_goal_is_planned(
         monkeypatch, planner_node, make_node, executor, spin_until):
     planner_node(default_scene="compass", compile_derivatives=False)
-    failed = _fail_once(monkeypatch, _rclpy.ActionServer, "send_goal_response")
-    client = make_node("lost_goal_client")
-    executor.add_node(client)
-    action = ActionClient(client, PlanGaitAction, ACTION)
-    assert spin_until(action.server_is_ready, 20)
-    notes: list[str] = []
-    handle = send_goal(action, PlanGaitAction.Goal(output_name="lost"),
-                       lambda: spin_until(lambda: False, 0.05), note=notes.append,
-                       wait=RESERVATION_TIMEOUT + 1.0)
-    assert len(failed) == 1 and len(notes) == 1, notes
+    lost = _lose_once(monkeypatch, _rclpy.ActionServer, "send_goal_response")
+    handle, notes = _goal_sent(make_node, executor, spin_until, "dropped",
+                               wait=RESERVATION_TIMEOUT + 1.0)
+    assert len(lost) == 1 and len(notes) == 1, notes
     assert handle.accepted  # not "busy": the first goal's hold lapsed
-    result = handle.get_result_async()
-    assert spin_until(result.done, 60)
-    assert result.result().result.success, result.result().result.message
+    _assert_planned(handle, spin_until)
 
 
 def test_a_service_answer_that_cannot_be_sent_does_not_end_the_service(
         monkeypatch, planner_node, make_node, executor, spin_until):
     planner_node(default_scene="compass", compile_derivatives=False)
-    failed = _fail_once(monkeypatch, rclpy.service.Service, "send_response")
+    lost = _lose_once(monkeypatch, rclpy.service.Service, "send_response")
     node = make_node("lost_answer_client")
     executor.add_node(node)
     client = node.create_client(PlanGait, SERVICE)
     assert spin_until(client.service_is_ready, 20)
     bad = PlanGait.Request(scene="no_such_scene")  # answered at once, refused
-    lost = client.call_async(bad)
-    assert not spin_until(lost.done, 2.0) and len(failed) == 1
+    unanswered = client.call_async(bad)
+    assert not spin_until(unanswered.done, 2.0) and len(lost) == 1
     # the executor raises the lost answer's error when the next request wakes it, after it
     # has handed that request on: the request after that one shows whether serving went on
     for _ in range(2):
