@@ -187,7 +187,8 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
             break
         left = settings.max_solve_time - (time.perf_counter() - start)
         fine = dataclasses.replace(refined_settings(coarse), max_solve_time=max(left, 1e-3))
-        why = f"the plan on {sum(coarse.intervals)} intervals: {'; '.join(defects)}"
+        why = (f"the plan on {sum(coarse.intervals)} intervals "
+               f"({latest[0].settings['initial_guess']}): {'; '.join(defects)}")
         if left <= 0:
             notes.append(f"{why}; no time left to refine")
             break

@@ -45,23 +45,20 @@ divided by FORCE_SCALE (N -> 1e-3 units, as the product's).
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from types import SimpleNamespace
 
 import casadi as ca
 import numpy as np
 
 from gait_planner.collocation.mesh import Mesh
 from gait_planner.collocation.minimal import MinimalModel
-from gait_planner.ocp.clearance import clearance_rows
+from gait_planner.ocp.clearance import clearance_rows, clearance_schedule
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import torque_mirror
 from gait_planner.ocp.posture import (joint_limit_constants, joint_limit_margins,
                                       joint_speed_margins, twist_squares)
 from gait_planner.ocp.settings import GaitSettings
-from gait_planner.ocp.transcription import (FORCE_SCALE, TORQUE_SCALE, Transcription,
-                                           relaxed_lower_bounds)
+from gait_planner.ocp.transcription import FORCE_SCALE, TORQUE_SCALE, relaxed_lower_bounds
 
 ACCELERATION_SCALE = 10.0  # rad/s^2
 
@@ -144,13 +141,12 @@ class CollocationTranscription:
         return sum(parts) if parts else ca.DM.zeros(self.mb.k)
 
     def _cones(self, contacts, lam, q, smoothing: float):
-        """The product's friction cones and roll bounds (`Transcription._cone`) of every
+        """The product's friction cones and roll bounds (`BodyContact.cone_rows`) of every
         contact of a collocation point (or impact) with multipliers lam."""
-        s = dataclasses.replace(self.settings, friction_smoothing=smoothing)
         out, offset = [], 0
         for bc in contacts:
-            part = lam[offset : offset + bc.n_multipliers]
-            out += Transcription._cone(SimpleNamespace(mu=self.mu, settings=s), bc, part, q)
+            out += bc.cone_rows(lam[offset : offset + bc.n_multipliers], q, self.mu, smoothing,
+                                self.settings.foot_half_width)
             offset += bc.n_multipliers
         return out
 
@@ -288,7 +284,8 @@ class CollocationTranscription:
         held = [{p for bc in self.contacts[c] for p in bc.points}
                 for c in self.mesh.phase_of_interval]  # interval K: the image of 0
         spacing = s.base_time_step * sum(self.mesh.base_steps) / K  # s at sigma = 1
-        ground, self.clearances = clearance_rows(mb, lambda j: self.q[j], held, s, spacing)
+        ground, self.clearances = clearance_rows(
+            mb, lambda j: self.q[j], clearance_schedule(scene, held, s, spacing))
         if ground:
             self._ineq.append(("ground_clearance", ca.vertcat(*ground)))
         root = mb.block(scene.root.body).start

@@ -72,18 +72,23 @@ def required_clearances(scene: Scene, held: Sequence[frozenset[str] | set[str]],
     return out
 
 
-def clearance_rows(mb: Multibody, q_at: Callable[[int], ca.MX], held: Sequence[set[str]],
-                   settings: GaitSettings, node_spacing: float) -> tuple[list, list[float]]:
-    """The "ground_clearance" rows z - height >= 0 of every swing point at the nodes 1..P
-    (`required_clearances`; q_at(n) the configuration (k,) of node n, node_spacing s the
-    time between nodes at sigma = 1) and their heights (m), in row order; none without
-    settings.ground_clearance."""
+def clearance_schedule(scene: Scene, held: Sequence[set[str]], settings: GaitSettings,
+                       node_spacing: float) -> dict[int, dict[str, float]]:
+    """`required_clearances` of the settings (held as there; node_spacing s the time
+    between nodes at sigma = 1); {} without settings.ground_clearance."""
+    if not settings.ground_clearance:
+        return {}
+    return required_clearances(scene, held, settings.swing_clearance,
+                               settings.swing_clearance_ramp / node_spacing)
+
+
+def clearance_rows(mb: Multibody, q_at: Callable[[int], ca.MX],
+                   schedule: dict[int, dict[str, float]]) -> tuple[list, list[float]]:
+    """The "ground_clearance" rows z - height >= 0 of every swing point of `schedule`
+    (`clearance_schedule`; q_at(n) the configuration (k,) of node n) and their heights (m),
+    in row order."""
     rows: list = []
     heights: list[float] = []
-    if not settings.ground_clearance:
-        return rows, heights
-    schedule = required_clearances(mb.scene, held, settings.swing_clearance,
-                                   settings.swing_clearance_ramp / node_spacing)
     for n, points in schedule.items():
         for name, height in points.items():
             rows.append(ca.mtimes(ca.DM(mb.contact_rows(name)[-1:]), q_at(n)) - height)

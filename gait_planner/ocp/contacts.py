@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from gait_planner.model.multibody import Multibody
@@ -72,6 +73,18 @@ class BodyContact:
         d = [sum(self.span[i, j] * q[j] for j in np.flatnonzero(self.span[i])) for i in range(3)]
         s = lam[self.n_rows] / self.span_length  # d / length = e
         return [[a - s * e for a, e in zip(first, d)], [b + s * e for b, e in zip(second, d)]]
+
+    def cone_rows(self, lam, q, mu, smoothing, half_width) -> list:
+        """Friction cone (>= 0) of every point's ground force, mu F_z - sqrt(F_x^2 + F_y^2
+        + smoothing^2), which makes it push; for a 3D full contact also the roll moment's
+        bound (centre of pressure within the foot's half width (m)). lam, q as for
+        `force_components`, as CasADi expressions."""
+        out = [mu * f[2] - ca.sqrt(f[0] ** 2 + f[1] ** 2 + smoothing**2)
+               for f in self.force_components(lam, q)]
+        if self.full and not self.planar:
+            fz = lam[2] + lam[4]
+            out += [half_width * fz - lam[5], half_width * fz + lam[5]]
+        return out
 
     def point_forces(self, lam: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
         """Ground force (3,) on each point (N, world) from this contact's multipliers

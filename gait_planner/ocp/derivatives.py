@@ -7,8 +7,10 @@ phase-independent part of the dynamics rows and the kinetic energy of each inter
 (`Transcription.elements`) are differentiated once, as functions of one node's or one
 interval's unknowns: the Jacobian and the Hessian of y . r (y the rows' multipliers, or
 the cost's). These are evaluated at every node (`Function.map`); CasADi differentiates the
-rest of the NLP (contact forces, contacts, path constraints, torque term) as a whole. The
-sparse matrices are summed from their nonzeros by index lists (`_sum`; entries of an
+rest of the NLP as a whole: what is left of it since the contact terms, friction cones,
+contact rows, swing clearances and torso bounds are elements too (`Transcription._node_rows`,
+`_hold_elements`, `_clearance_elements`) is the rows of established contacts, the pinned
+start and the cost's torque and share terms. The sparse matrices are summed from their nonzeros by index lists (`_sum`; entries of an
 unknown that an element sees twice, such as a sigma shared by both of its intervals, are
 added), in the order of a sum of one matrix per group: IPOPT's iterates depend on
 round-off, and another order of the same additions took walker3d's cold solve from 64 to

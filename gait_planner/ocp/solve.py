@@ -216,8 +216,10 @@ class Planner:
         """A cold plan of a step length other than the scene's that failed from its own
         guess: plan the scene's step length `step0` cold from its guess (qref), then
         re-plan `step` warm from that optimum (the continuation is one jump). walker3d
-        at 1.0 m (scene: 0.6338 m): its inertia-free attempt stops at the iteration cap
-        (516 iterations), the continuation then converges (851 in all, 31 s; 2026-11-23).
+        at 1.1 m (scene: 0.6338 m): its inertia-free attempt stops at the iteration cap,
+        the continuation then converges (746 iterations in all, 22 s; 2026-11-24; 1.0 m
+        needed it too before the contact rows were elements, and now converges from its
+        own guess in 231).
         At 0.9 m, before the cap was raised to 400: from its own guess no convergence
         within 120 s, this way 64 + 146 iterations (in five steps of 0.05 m 64 + 127).
         Returns (x, g, duals, status, success, p) of the warm stage, or None if a stage

@@ -45,8 +45,8 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
-from gait_planner.ocp.clearance import clearance_rows
-from gait_planner.ocp.contacts import BodyContact, body_contacts, establishing_rows, stacked_rows
+from gait_planner.ocp.clearance import clearance_rows, clearance_schedule
+from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import configuration_mirror, torque_mirror
 from gait_planner.ocp.posture import (joint_limit_constants, joint_limit_margins,
                                       joint_speed_margins, twist_squares)
@@ -126,6 +126,7 @@ class Transcription:
         self._contacts()
         self._path()
         self.cost = self._cost()
+        self._node_rows()
 
     # ---- constraint groups ----------------------------------------------------------
 
@@ -140,8 +141,8 @@ class Transcription:
         (the contact force term; w_n cancels). The first part is the same function in
         every phase; it is also declared as an element of the NLP's own unknowns
         (`ElementGroup`, `_dynamics_element`), so that its derivatives can be formed node by
-        node (`ocp.derivatives`). g itself is built from the configurations Q, which all
-        rows share."""
+        node (`ocp.derivatives`), and so is the contact term (`_node_rows`). g itself is
+        built from the configurations Q, which all rows share."""
         mb, N = self.mb, self.N
         for variant, nodes in self._element_nodes().items():
             self.elements.append(ElementGroup(
@@ -171,8 +172,7 @@ class Transcription:
                 self.h[idx].T, self.TAU[:, idx], lam_cols)
             name = f"dynamics[{self._phase_name(k)}]"
             self._eq.append((name, ca.vec(out)))
-            g = ca.Function(f"contact_force_phase{k}", [q1, lam], [contact]).expand()
-            self._without_elements[name] = ca.vec(g.map(len(nodes))(self.Q[:, idx], lam_cols))
+            self._without_elements[name] = ca.MX(out.numel(), 1)  # contact part: _node_rows
 
     def node_multipliers(self, x: np.ndarray) -> dict[int, np.ndarray]:
         """The scaled contact multipliers (entries of L, FORCE_SCALE N) of each node
@@ -228,6 +228,16 @@ class Transcription:
     def _u_index(self, node: int) -> np.ndarray:
         return np.arange(self.mb.ndof) + self._source(node) * self.mb.ndof
 
+    def _lam_index(self, node: int) -> np.ndarray:
+        """Indices into x of node `node`'s contact multipliers (1 <= node <= N-1)."""
+        j = self.lam_nodes.index(node)
+        start = self.U.numel() + self.T.numel() + sum(self.lam_sizes[:j])
+        return np.arange(start, start + self.lam_sizes[j])
+
+    def _node_p_index(self, node: int) -> np.ndarray:
+        """Indices into p of a node element's pz (qref_n, step length)."""
+        return np.append(self._qref_index(node), self.Qref.numel())
+
     def _qref_index(self, node: int) -> np.ndarray:
         return np.arange(self.mb.k) + self._source(node) * self.mb.k
 
@@ -255,7 +265,9 @@ class Transcription:
             C = self.rows[self.phase_of_interval[n]]
             if C.shape[0]:
                 chain.append(ca.mtimes(ca.DM(C), self.Q[:, n + 1] - self.Q[:, n]))
+        self._hold_elements(sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
         self._eq.append(("contact_hold", ca.vertcat(*chain)))
+        self._without_elements["contact_hold"] = ca.MX(sum(int(c.shape[0]) for c in chain), 1)
         est = []
         for n in range(1, N):
             k_prev, k = self.phase_of_interval[n - 1], self.phase_of_interval[n]
@@ -272,38 +284,59 @@ class Transcription:
             lam = self.lam_of_node[n]
             offset = 0
             for bc in self.contacts[self.phase_of_interval[n]]:
-                cones += self._cone(bc, lam[offset : offset + bc.n_multipliers], self.Q[:, n])
+                cones += bc.cone_rows(lam[offset : offset + bc.n_multipliers], self.Q[:, n],
+                                      self.mu, *self._cone_constants)
                 offset += bc.n_multipliers
         self._ineq.append(("friction_cone", ca.vertcat(*cones)))
+        self._without_elements["friction_cone"] = ca.MX(len(cones), 1)  # _node_rows
 
-    def _cone(self, bc: BodyContact, lam, q) -> list:
-        """Friction cone (>= 0) of every point's ground force, which makes it push; for a 3D
-        full contact also the roll moment's bound (centre of pressure within the foot's
-        half width)."""
-        mu, delta = self.mu, self.settings.friction_smoothing
-        out = [mu * f[2] - ca.sqrt(f[0] ** 2 + f[1] ** 2 + delta**2)
-               for f in bc.force_components(lam, q)]
-        if bc.full and not bc.planar:
-            fz = lam[2] + lam[4]
-            half_width = self.settings.foot_half_width
-            out += [half_width * fz - lam[5], half_width * fz + lam[5]]
-        return out
+    @property
+    def _cone_constants(self) -> tuple[float, float]:
+        """(friction smoothing N, foot half width m) of `BodyContact.cone_rows`."""
+        return self.settings.friction_smoothing, self.settings.foot_half_width
+
+    def _hold_elements(self, first_row: int):
+        """The contact_hold rows C_k (q_{n+1} - q_n) of each interval n (phase k), from
+        row first_row of g on, declared as interval elements."""
+        N, mb = self.N, self.mb
+        q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
+            ca.SX.sym("c", 2)
+        intervals: dict[tuple[int, bool], list[tuple[int, np.ndarray]]] = {}
+        row = first_row
+        for n in range(N - 1):
+            C = self.rows[self.phase_of_interval[n]]
+            if C.shape[0]:
+                key = (int(self.phase_of_interval[n]), n == N - 2)
+                intervals.setdefault(key, []).append((n, row + np.arange(C.shape[0])))
+                row += C.shape[0]
+        for (k, next_mirrored), chosen in intervals.items():
+            fn = ca.Function(f"contact_hold_phase{k}", [q0, q1, h, c],
+                             [ca.mtimes(ca.DM(self.rows[k]), q1 - q0)],
+                             ["q", "q_next", "h", "c"], ["r"])
+            self.elements.append(ElementGroup(
+                self._interval_element(fn, next_mirrored),
+                np.stack([self._interval_z_index(n) for n, _ in chosen], 1),
+                np.stack([self._interval_p_index(n) for n, _ in chosen], 1),
+                np.stack([rows for _, rows in chosen], 1),
+                np.array([self.settings.base_time_step, 0.0])))
 
     def _path(self):
         mb, N, s = self.mb, self.N, self.settings
         held = [{p for bc in self.contacts[k] for p in bc.points}
                 for k in self.phase_of_interval[: N - 1]]  # interval N-1: the image of 0
-        ground, self.clearances = clearance_rows(mb, lambda n: self.Q[:, n], held, s,
-                                                 s.base_time_step)
+        schedule = clearance_schedule(mb.scene, held, s, s.base_time_step)
+        ground, self.clearances = clearance_rows(mb, lambda n: self.Q[:, n], schedule)
         if ground:
+            self._clearance_elements(schedule, sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
             self._ineq.append(("ground_clearance", ca.vertcat(*ground)))
+            self._without_elements["ground_clearance"] = ca.MX(-ca.DM(self.clearances))
         root = mb.block(mb.scene.root.body).start
         inner = self.Q[:, 1:N]
-        if s.torso_lean_max > 0:
-            lean = np.cos(np.radians(s.torso_lean_max))
-            self._ineq.append(("torso_lean", ca.vec(inner[root + 11, :] - lean)))
-        if s.torso_height_min > 0:
-            self._ineq.append(("torso_height", ca.vec(inner[root + 2, :] - s.torso_height_min)))
+        for name, entry, bound in (("torso_lean", 11, self._lean_bound),
+                                   ("torso_height", 2, s.torso_height_min)):
+            if bound > 0:  # the entry itself is in _node_rows
+                self._ineq.append((name, ca.vec(inner[root + entry, :] - bound)))
+                self._without_elements[name] = ca.MX(ca.DM.ones(N - 1) * -bound)
         phase_index = {p.name: k for k, p in enumerate(mb.scene.gait.phases)}
         ranges = [("joint_limits", "joint_limits", list(range(1, N)), s.joint_limits)] + [
             (f"joint_limits[{phase}]", f"joint_limits_phase{phase_index[phase]}",
@@ -323,6 +356,89 @@ class Transcription:
                                          first_row)
             self._ineq.append(("joint_speed", ca.vec(speed)))
             self._without_elements["joint_speed"] = ca.MX(speed.numel(), 1)
+
+    @property
+    def _lean_bound(self) -> float:
+        """d3_z of the torso at its largest lean (0: no lean limit)."""
+        lean_max = self.settings.torso_lean_max
+        return float(np.cos(np.radians(lean_max))) if lean_max > 0 else 0.0
+
+    def _clearance_elements(self, schedule: dict[int, dict[str, float]], first_row: int):
+        """The swing points' heights of the ground_clearance rows (`clearance_rows`, from
+        row first_row of g on) declared as node elements, one Function per set of swing
+        points (the required heights are the rows' constant parts)."""
+        nodes: dict[tuple[tuple[str, ...], bool], list[tuple[int, np.ndarray]]] = {}
+        row = first_row
+        for n, points in schedule.items():
+            if points:
+                nodes.setdefault((tuple(points), n == self.N - 1), []).append(
+                    (n, row + np.arange(len(points))))
+                row += len(points)
+        q, c = ca.SX.sym("q", self.mb.k), ca.SX.sym("c", 1)
+        for (points, mirrored), chosen in nodes.items():
+            heights = ca.vertcat(*[ca.mtimes(ca.DM(self.mb.contact_rows(p)[-1:]), q) for p in points])
+            fn = ca.Function("clearance_" + "_".join(points), [q, c], [heights], ["q", "c"], ["z"])
+            self.elements.append(ElementGroup(
+                self._node_element(fn, mirrored), np.stack([self._u_index(n) for n, _ in chosen], 1),
+                np.stack([self._node_p_index(n) for n, _ in chosen], 1),
+                np.stack([rows for _, rows in chosen], 1), np.zeros(1)))
+
+    def _node_rows(self):
+        """Declares, at each node 1..N-1, the rows that depend on its configuration and
+        contact multipliers alone as node elements (`_node_rows_element`): the contact term
+        of its dynamics rows, its friction cones and its torso lean and height (their
+        entries of q; the bounds are the rows' constant parts)."""
+        N, nd = self.N, self.mb.ndof
+        first, row = {}, 0
+        for name, e in self._eq + self._ineq:
+            first[name], row = row, row + int(e.shape[0])
+        cone_row = first.get("friction_cone", 0)
+        nodes: dict[tuple[int, bool], list[tuple[int, np.ndarray]]] = {}
+        for n in range(1, N):
+            k = int(self.phase_of_interval[n])
+            rows = []
+            if self.rows[k].shape[0]:
+                j = [m for m in range(1, N) if self.phase_of_interval[m] == k].index(n)
+                rows += list(first[f"dynamics[{self._phase_name(k)}]"] + j * nd + np.arange(nd))
+                cones = sum(len(bc.points) + (2 if bc.full and not bc.planar else 0)
+                            for bc in self.contacts[k])
+                rows += list(cone_row + np.arange(cones))
+                cone_row += cones
+            rows += [first[name] + n - 1 for name in ("torso_lean", "torso_height") if name in first]
+            if rows:
+                nodes.setdefault((k, n == N - 1), []).append((n, np.array(rows)))
+        for (k, mirrored), chosen in nodes.items():
+            self.elements.append(ElementGroup(
+                self._node_rows_element(k, mirrored),
+                np.stack([np.concatenate([self._u_index(n), self._lam_index(n)]) for n, _ in chosen], 1),
+                np.stack([np.append(self._node_p_index(n), self.Qref.numel() + 1) for n, _ in chosen], 1),
+                np.stack([rows for _, rows in chosen], 1), np.array(self._cone_constants)))
+
+    def _node_rows_element(self, k: int, mirrored: bool) -> ca.Function:
+        """`_node_rows` of a node of phase k as an SX Function of z = (u_n, lambda_n),
+        pz = (qref_n, step length, mu) and c = `_cone_constants`: the contact term
+        P(q_n)^T C^T lambda_n / FORCE_SCALE (ndof,) if the phase holds contacts, the
+        friction cones, then the torso's d3_z and height if they are limited."""
+        mb, s, nd, kq = self.mb, self.settings, self.mb.ndof, self.mb.k
+        contacts = self.contacts[k]
+        z = ca.SX.sym("z", nd + sum(bc.n_multipliers for bc in contacts))
+        pz, c = ca.SX.sym("pz", kq + 2), ca.SX.sym("c", 2)
+        q = mb.reparametrise(z[0:nd], pz[0:kq])
+        if mirrored:
+            q = ca.mtimes(ca.DM(self.A), q) + pz[kq] * ca.DM(self.shift)
+        lam, held, cones, offset = FORCE_SCALE * z[nd:], [], [], 0
+        for bc in contacts:
+            part = lam[offset : offset + bc.n_multipliers]
+            held.append(part[0 : bc.n_rows])
+            cones += bc.cone_rows(part, q, pz[kq + 1], c[0], c[1])
+            offset += bc.n_multipliers
+        out = [mb.null_space_transpose(q, ca.mtimes(ca.DM(self.rows[k]).T, ca.vertcat(*held)))
+               / FORCE_SCALE] + cones if contacts else []
+        root = mb.block(mb.scene.root.body).start
+        out += [q[root + 11]] if self._lean_bound > 0 else []
+        out += [q[root + 2]] if s.torso_height_min > 0 else []
+        name = f"node_rows_phase{k}" + ("_mirrored" if mirrored else "")
+        return ca.Function(name, [z, pz, c], [ca.vertcat(*out)], ["z", "pz", "c"], ["r"])
 
     def _cost(self):
         """J over the half cycle t_0..t_{N-1} (intervals 0..N-2), plus the torque
@@ -400,8 +516,7 @@ class Transcription:
                 self.elements.append(ElementGroup(
                     self._node_element(fn, mirrored),
                     np.stack([self._u_index(n) for _, n in chosen], 1),
-                    np.stack([np.append(self._qref_index(n), self.Qref.numel())
-                              for _, n in chosen], 1),
+                    np.stack([self._node_p_index(n) for _, n in chosen], 1),
                     np.stack([first_row + size * j + np.arange(size) for j, _ in chosen], 1), c))
         return fn.map(len(nodes))(self.Q[:, nodes], ca.repmat(ca.DM(c), 1, len(nodes)))
 

@@ -70,11 +70,18 @@ def test_element_derivatives_equal_casadi_whole_graph(name, overrides):
     assert my_hess.sparsity().is_triu()
 
 
-@pytest.mark.parametrize("overrides", [{}, HUMAN])
-def test_elements_and_rest_sum_to_g_and_cost(overrides):
-    tr, x, p, _ = _problem("walker2d", **overrides)
-    assert {"joint_speed_element", "joint_limits_element_mirrored"} <= {
-        group.function.name() for group in tr.elements}
+@pytest.mark.parametrize("name, overrides", [("walker2d", {}), ("walker2d", HUMAN),
+                                             ("walker3d", {})])
+def test_elements_and_rest_sum_to_g_and_cost(name, overrides):
+    """g and the cost are their elements plus the rest, in every kind of element: contact
+    terms, cones and torso bounds of a node (mirrored too), contact rows of an interval,
+    swing clearances (walker3d: full contacts with roll bounds)."""
+    tr, x, p, _ = _problem(name, **overrides)
+    names = {group.function.name() for group in tr.elements}
+    assert {"joint_speed_element", "joint_limits_element_mirrored", "node_rows_phase0",
+            "node_rows_phase4_mirrored", "contact_hold_phase0_element",
+            "contact_hold_phase4_element_next_mirrored"} <= names
+    assert any(n.startswith("clearance_") for n in names)
     g, g_rest, f, f_rest = (np.array(v).ravel() for v in ca.Function(
         "parts", [tr.x, tr.p], [tr.g, tr.g_without_elements, tr.cost, tr.cost_without_elements]
     )(x, p))
