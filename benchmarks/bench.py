@@ -23,6 +23,7 @@ FULL = [
     ["model_size.py", "--compiled"],
     ["cold_solve.py"],
     ["node_latency.py"],
+    ["request_sweep.py"],
     ["work_precision.py"],
     ["hard_cases.py", "--time-limit", "45"],
     ["integrators.py", "--long-steps", "30000"],

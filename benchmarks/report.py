@@ -220,6 +220,26 @@ def hard_cases(doc) -> list[str]:
     return out + [""]
 
 
+def request_sweep(doc) -> list[str]:
+    out = ["## 6. Cold plans over a spread of requests", ""]
+    if doc is None:
+        return out + ["Not measured.", ""]
+    out += [provenance(doc), "",
+            "`request_sweep.py`: one process per scene plans cold from the kinematic guess at "
+            "five step lengths and two friction coefficients (compiled derivatives, "
+            f"{doc['header'].get('time_limit_s', '?')} s per plan). Iteration counts change with "
+            "round-off request by request; the totals are what a change of formulation is "
+            "judged by.", ""]
+    out += table(doc["rows"], [
+        ("scene", "scene", ""), ("step m", "step_length", ".2f"), ("mu", "friction_coefficient", ".1f"),
+        ("converged", "success", ""), ("iterations", "iterations", "d"),
+        ("solve s", "solve_s", ".2f"), ("J", "cost", ".4f")])
+    totals = [{"scene": scene, **t} for scene, t in doc["header"]["totals"].items()]
+    return out + [""] + table(totals, [
+        ("scene", "scene", ""), ("converged", "converged", "d"), ("requests", "requests", "d"),
+        ("iterations in all", "iterations", "d"), ("solve s in all", "solve_s", ".1f")]) + [""]
+
+
 def speed(cold, node) -> list[str]:
     out = ["## 5. Speed as a user meets it (fresh processes)", ""]
     if cold is not None:
@@ -256,7 +276,7 @@ def speed(cold, node) -> list[str]:
 def main() -> None:
     docs = {name: load(name) for name in ("work_precision", "integrators", "model_size",
                                          "model_size_compiled", "hard_cases", "cold_solve",
-                                         "node_latency_walker3d")}
+                                         "node_latency_walker3d", "request_sweep")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
              "`benchmarks/results/*.json`; every number below is in those files with the "
@@ -269,6 +289,7 @@ def main() -> None:
     lines += model_size(docs["model_size_compiled"] or docs["model_size"])
     lines += hard_cases(docs["hard_cases"])
     lines += speed(docs["cold_solve"], docs["node_latency_walker3d"])
+    lines += request_sweep(docs["request_sweep"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
