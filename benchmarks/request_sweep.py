@@ -18,11 +18,10 @@ from __future__ import annotations
 import argparse
 import time
 
-from results_io import write_results
-
-from gait_planner.model.loader import load_scene
+from gait_planner.model.loader import load_scene  # first: it pins numpy's BLAS kernels
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from results_io import write_results
 
 STEPS = (0.45, 0.55, 0.6, 0.7, 0.8)  # m; walker3d's scene step is 0.6338 m
 FRICTION = (0.3, 0.6)

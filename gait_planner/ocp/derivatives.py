@@ -25,7 +25,11 @@ evaluation, node by node 14.7 and 3.1-4.1, in CasADi's one graph 24 and 6.1 (2-c
 machine, 2026-11-23; the paragraph below was measured node by node).
 Left in the virtual machine they are slower than CasADi's one graph (44 and 11 ms), which
 shares each node's reparametrisation among all rows, so the planner uses them only
-compiled. Of the Hessian's time the rest takes 3 ms and the summing 0.1 ms (with constant
+compiled. Of the Hessian's time the rest took 3 ms (1 M operations in CasADi's virtual
+machine, 45 % of walker3d's Hessian and 2/3 of its Jacobian on 2026-11-24, before the
+contact terms, cones, contact rows, clearances and torso bounds became elements: 13 and
+5.4-6.2 ms per evaluation then, 7.6-9.1 and 3.1-3.9 ms after, on a slower hour of the VM)
+and the summing 0.1 ms (with constant
 0/1 matrices and sparse matrix additions 0.8-0.9 ms, and 1.1-1.7 ms of the Jacobian's). The
 pieces timed alone, their code and data in the caches, add up to only 9.4 ms, but one
 evaluation runs 13 MB of compiled Hessian elements and the rest's 1 M instructions: cold,
