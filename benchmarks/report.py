@@ -231,7 +231,8 @@ def request_sweep(doc) -> list[str]:
             "round-off request by request; the totals are what a change of formulation is "
             "judged by.", ""]
     out += table(doc["rows"], [
-        ("scene", "scene", ""), ("step m", "step_length", ".2f"), ("mu", "friction_coefficient", ".1f"),
+        ("scene", "scene", ""), ("step m", "step_length", ".2f"),
+        ("mu", "friction_coefficient", ".1f"),
         ("converged", "success", ""), ("iterations", "iterations", "d"),
         ("solve s", "solve_s", ".2f"), ("J", "cost", ".4f")])
     totals = [{"scene": scene, **t} for scene, t in doc["header"]["totals"].items()]

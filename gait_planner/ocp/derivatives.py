@@ -3,14 +3,14 @@
 CasADi differentiates the expanded NLP as one SX graph: walker3d's Lagrangian Hessian is
 6.7 M instructions (24 ms per evaluation in CasADi's virtual machine), far too large to
 compile (about 200 MB of C). Most of it is the same few formulas at every node. Here the
-phase-independent part of the dynamics rows and the kinetic energy of each interval
-(`Transcription.elements`) are differentiated once, as functions of one node's or one
-interval's unknowns: the Jacobian and the Hessian of y . r (y the rows' multipliers, or
-the cost's). These are evaluated at every node (`Function.map`); CasADi differentiates the
-rest of the NLP as a whole: what is left of it since the contact terms, friction cones,
-contact rows, swing clearances and torso bounds are elements too (`Transcription._node_rows`,
-`_hold_elements`, `_clearance_elements`) is the rows of established contacts, the pinned
-start and the cost's torque and share terms. The sparse matrices are summed from their nonzeros by index lists (`_sum`; entries of an
+parts of the NLP that are one formula per node or interval (`Transcription.elements`: the
+dynamics rows, their contact terms, friction cones, held contacts' rows, swing clearances,
+torso bounds, joint ranges and speeds, the kinetic energy and the twist term) are
+differentiated once, as functions of one node's or one interval's unknowns: the Jacobian
+and the Hessian of y . r (y the rows' multipliers, or the cost's). These are evaluated at
+every node (`Function.map`); CasADi differentiates the rest of the NLP as a whole (the rows
+of contacts established at a node, the pinned start, the cost's torque and share terms).
+The sparse matrices are summed from their nonzeros by index lists (`_sum`; entries of an
 unknown that an element sees twice, such as a sigma shared by both of its intervals, are
 added), in the order of a sum of one matrix per group: IPOPT's iterates depend on
 round-off, and another order of the same additions took walker3d's cold solve from 64 to

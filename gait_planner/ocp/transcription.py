@@ -327,7 +327,8 @@ class Transcription:
         schedule = clearance_schedule(mb.scene, held, s, s.base_time_step)
         ground, self.clearances = clearance_rows(mb, lambda n: self.Q[:, n], schedule)
         if ground:
-            self._clearance_elements(schedule, sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
+            first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
+            self._clearance_elements(schedule, first_row)
             self._ineq.append(("ground_clearance", ca.vertcat(*ground)))
             self._without_elements["ground_clearance"] = ca.MX(-ca.DM(self.clearances))
         root = mb.block(mb.scene.root.body).start
@@ -376,10 +377,12 @@ class Transcription:
                 row += len(points)
         q, c = ca.SX.sym("q", self.mb.k), ca.SX.sym("c", 1)
         for (points, mirrored), chosen in nodes.items():
-            heights = ca.vertcat(*[ca.mtimes(ca.DM(self.mb.contact_rows(p)[-1:]), q) for p in points])
+            heights = ca.vertcat(*[ca.mtimes(ca.DM(self.mb.contact_rows(p)[-1:]), q)
+                                   for p in points])
             fn = ca.Function("clearance_" + "_".join(points), [q, c], [heights], ["q", "c"], ["z"])
             self.elements.append(ElementGroup(
-                self._node_element(fn, mirrored), np.stack([self._u_index(n) for n, _ in chosen], 1),
+                self._node_element(fn, mirrored),
+                np.stack([self._u_index(n) for n, _ in chosen], 1),
                 np.stack([self._node_p_index(n) for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), np.zeros(1)))
 
@@ -404,14 +407,17 @@ class Transcription:
                             for bc in self.contacts[k])
                 rows += list(cone_row + np.arange(cones))
                 cone_row += cones
-            rows += [first[name] + n - 1 for name in ("torso_lean", "torso_height") if name in first]
+            rows += [first[name] + n - 1 for name in ("torso_lean", "torso_height")
+                     if name in first]
             if rows:
                 nodes.setdefault((k, n == N - 1), []).append((n, np.array(rows)))
         for (k, mirrored), chosen in nodes.items():
             self.elements.append(ElementGroup(
                 self._node_rows_element(k, mirrored),
-                np.stack([np.concatenate([self._u_index(n), self._lam_index(n)]) for n, _ in chosen], 1),
-                np.stack([np.append(self._node_p_index(n), self.Qref.numel() + 1) for n, _ in chosen], 1),
+                np.stack([np.concatenate([self._u_index(n), self._lam_index(n)])
+                          for n, _ in chosen], 1),
+                np.stack([np.append(self._node_p_index(n), self.Qref.numel() + 1)
+                          for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), np.array(self._cone_constants)))
 
     def _node_rows_element(self, k: int, mirrored: bool) -> ca.Function:
