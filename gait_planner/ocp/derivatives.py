@@ -95,22 +95,30 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
     grad, jac, hess = rest_grad(x, p), rest_jac(x, p), rest_hess(x, p, lam_f, lam_g)
     grads, jacs, hessians = [_whole(grad.T)], [_whole(jac)], [_whole(hess)]
+    xe, pe = tr.element_inputs(x, p)
+    images = tr.images
+    source, sign = np.arange(nx), np.ones(nx)  # of each entry of xe: xe[i] = sign x[source]
+    if images is not None:
+        source = np.concatenate([source, images["x_source"]])
+        sign = np.concatenate([sign, images["x_sign"]])
     for group, (jac_fn, hess_fn) in zip(tr.elements, pairs):
         n = group.z_index.shape[1]
         lanes = jac_fn.size2_in(0)  # nodes per call: 1, or LANES (_element_derivatives)
         calls = -(-n // lanes)
-        z, pz = x[_padded(group.z_index, calls * lanes)], p[_padded(group.p_index, calls * lanes)]
+        z = xe[_padded(group.z_index, calls * lanes)]
+        pz = pe[_padded(group.p_index, calls * lanes)]
         c = ca.DM(group.constants)
+        z_source, z_sign = source[group.z_index], sign[group.z_index]
         if group.rows is None:  # a cost term
             y = ca.repmat(lam_f, 1, calls * lanes)
             grads.append(_entries(jac_fn.map(calls)(z, pz, c), np.zeros((1, n), dtype=int),
-                                  group.z_index, _block(jac_fn)))
+                                  z_source, _block(jac_fn), col_sign=z_sign))
         else:
             y = lam_g[_padded(group.rows, calls * lanes)]
-            jacs.append(_entries(jac_fn.map(calls)(z, pz, c), group.rows, group.z_index,
-                                 _block(jac_fn)))
-        hessians.append(_entries(hess_fn.map(calls)(z, pz, c, y), group.z_index,
-                                 group.z_index, _block(hess_fn)))
+            jacs.append(_entries(jac_fn.map(calls)(z, pz, c), group.rows, z_source,
+                                 _block(jac_fn), col_sign=z_sign))
+        hessians.append(_entries(hess_fn.map(calls)(z, pz, c, y), z_source, z_source,
+                                 _block(hess_fn), z_sign, z_sign))
     return {
         "grad_f": ValueOnRequest(
             "nlp_grad_f", ca.Function("nlp_f_value", [x_sx, p_sx], [f]),
@@ -233,15 +241,23 @@ def _element_hessian(group: ElementGroup) -> ca.Function:
 
 
 def _entries(values: ca.MX, row_index: np.ndarray, col_index: np.ndarray,
-             pattern: ca.Sparsity):
-    """(values, rows, cols): the element matrices (pattern, one per column of the index
-    arrays, side by side in `values`) put the k-th nonzero of `values`, entry (a, b) of
-    element j, at (row_index[a, j], col_index[b, j]) (see `_sum`). Nonzeros of `values`
-    beyond the index arrays' columns (padding) are left out of the sum."""
+             pattern: ca.Sparsity, row_sign: np.ndarray | None = None,
+             col_sign: np.ndarray | None = None):
+    """(values, rows, cols, signs): the element matrices (pattern, one per column of the
+    index arrays, side by side in `values`) put the k-th nonzero of `values`, entry (a, b)
+    of element j, at (row_index[a, j], col_index[b, j]), times row_sign[a, j] and
+    col_sign[b, j] if given (an element of mirror images, `Transcription.images`: the
+    chain rule through a signed permutation); signs None where all are 1 (see `_sum`).
+    Nonzeros of `values` beyond the index arrays' columns (padding) are left out."""
     a, b = (np.array(v, dtype=int) for v in pattern.get_triplet())
     n = row_index.shape[1]
+    signs = np.ones(a.size * n)
+    for index, sign in ((a, row_sign), (b, col_sign)):
+        if sign is not None:
+            signs *= sign[index[:, None], np.arange(n)].T.ravel()
     return (values, row_index[a[:, None], np.arange(n)].T.ravel(),  # element-major
-            col_index[b[:, None], np.arange(n)].T.ravel())
+            col_index[b[:, None], np.arange(n)].T.ravel(),
+            None if np.all(signs == 1.0) else signs)
 
 
 def _whole(m: ca.MX):
@@ -257,10 +273,14 @@ def _sum(entries: list, shape: tuple[int, int], upper: bool = False) -> ca.MX:
     (as IPOPT's iterates depend on round-off): each part's entries at one position are
     summed in the order of its nonzeros, then these sums in the order of the parts."""
     sums, positions = [], []
-    for values, rows, cols in entries:
+    for values, rows, cols, signs in entries:
         keys = cols * shape[0] + rows  # column-major
         source = np.flatnonzero(rows <= cols) if upper else np.arange(keys.size)
         at, slot = np.unique(keys[source], return_inverse=True)
+        values = ca.sparsity_cast(values, ca.Sparsity.dense(values.nnz()))  # its nonzeros
+        if signs is not None:
+            values = values * ca.DM(np.concatenate(
+                [signs, np.ones(values.numel() - signs.size)]))  # padding lanes: unused
         sums.append(_ordered_sum(values, source, slot, at.size))
         positions.append(at)
     keys, slot = np.unique(np.concatenate(positions), return_inverse=True)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from gait_planner.model.multibody import Multibody
-from gait_planner.model.scene import JointType, Scene
+from gait_planner.model.scene import JointType, RootType, Scene
 
 _S = np.diag([1.0, -1.0, 1.0])
 _F = np.diag([1.0, -1.0, 1.0])
@@ -68,3 +68,26 @@ def torque_mirror(mb: Multibody) -> np.ndarray:
         else:
             B[dst, src] = sign * float((-_F @ np.array(joint.axis)) @ np.array(partner.axis))
     return B
+
+
+def increment_mirror(mb: Multibody) -> np.ndarray | None:
+    """M (ndof, ndof), a signed permutation, with mirror(F_d(u, q)) = F_d(M u, mirror(q)) for
+    the nodal reparametrisation F_d (`Multibody.reparametrise`): the mirror image of a
+    turned configuration is the mirrored configuration turned by the mirrored increments.
+    The root's translation mirrors like phi, its rotation vector (world components) like a
+    couple (-S w); a joint's increments, components in its parent's triad like its
+    torque, mirror as the torques do (`torque_mirror`). None when the root body's mirror
+    image is another body (the compass: its hip swaps parent and child), where no such M
+    exists. Tested on random increments and configurations (test_ocp_mirror.py)."""
+    gait = mb.scene.gait
+    root = mb.scene.root
+    if dict(gait.mirror if gait else {}).get(root.body, root.body) != root.body:
+        return None
+    if root.type is RootType.FREE:
+        root_signs = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0]  # phi like S phi, rotation like -S w
+    else:  # planar: (x, z, pitch) lie in the mirror plane's own motion
+        root_signs = [1.0] * mb.root_dof
+    M = np.zeros((mb.ndof, mb.ndof))
+    M[: mb.root_dof, : mb.root_dof] = np.diag(root_signs)
+    M[mb.root_dof :, mb.root_dof :] = torque_mirror(mb)
+    return M

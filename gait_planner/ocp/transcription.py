@@ -47,7 +47,7 @@ import numpy as np
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.ocp.clearance import clearance_rows, clearance_schedule
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
-from gait_planner.ocp.mirror import configuration_mirror, torque_mirror
+from gait_planner.ocp.mirror import configuration_mirror, increment_mirror, torque_mirror
 from gait_planner.ocp.posture import (joint_limit_constants, joint_limit_margins,
                                       joint_speed_margins, twist_squares)
 from gait_planner.ocp.settings import GaitSettings
@@ -65,8 +65,10 @@ ROTATION_INCREMENT_MAX = np.pi
 @dataclass(frozen=True)
 class ElementGroup:
     """Constraint rows (or cost terms) that are one SX Function of a few entries of x and
-    p, evaluated at several nodes: g[rows[:, j]] += function(x[z_index[:, j]],
-    p[p_index[:, j]], constants), or, with rows None, cost += function(...). Settings
+    p, evaluated at several nodes: g[rows[:, j]] += function(xe[z_index[:, j]],
+    pe[p_index[:, j]], constants), or, with rows None, cost += function(...), where
+    (xe, pe) = `Transcription.element_inputs(x, p)`: x and p followed by the mirror images
+    that the nodes N-1 and N read (`Transcription.images`). Settings
     enter as `constants` (an input, not folded in), so one compiled function serves them
     all."""
 
@@ -92,6 +94,12 @@ class Transcription:
         self.rows = [stacked_rows(c, mb.k) for c in self.contacts]
         self.A, self.shift = configuration_mirror(mb)
         self.B = torque_mirror(mb)
+        # Nodes N-1 and N are mirror images of nodes 0 and 1. Where the mirror commutes with
+        # the reparametrisation (`increment_mirror`), their elements are the regular ones
+        # evaluated at mirrored unknowns and references (`images`), and so join the regular
+        # nodes' vector passes (`ocp.derivatives`); otherwise (the compass) they are
+        # variants of their own that mirror the configuration they compute.
+        self.M = increment_mirror(mb)
 
         nsig = scene.gait.n_scalings
         self.U = ca.MX.sym("u", mb.ndof, N - 1)
@@ -193,7 +201,8 @@ class Transcription:
         q_N are mirror images of q_0 and q_1, and so is tau_{N-1} of tau_0."""
         out: dict[tuple[bool, bool], list[int]] = {}
         for n in range(1, self.N):
-            out.setdefault((n == self.N - 1, n + 1 >= self.N - 1), []).append(n)
+            out.setdefault((self._mirrored(n == self.N - 1),
+                            self._mirrored(n + 1 >= self.N - 1)), []).append(n)
         return out
 
     def _dynamics_element(self, mirrored: bool, next_mirrored: bool) -> ca.Function:
@@ -226,7 +235,12 @@ class Transcription:
         return m - (self.N - 1) if m >= self.N - 1 else m
 
     def _u_index(self, node: int) -> np.ndarray:
-        return np.arange(self.mb.ndof) + self._source(node) * self.mb.ndof
+        """Indices into (x, its images) of node `node`'s u: its own, or for N-1 and N the
+        images of u_0 and u_1 (`images`), or without images u_0 and u_1 themselves."""
+        nd = self.mb.ndof
+        if node >= self.N - 1 and self.M is not None:
+            return self.x.shape[0] + (node - (self.N - 1)) * nd + np.arange(nd)
+        return np.arange(nd) + self._source(node) * nd
 
     def _lam_index(self, node: int) -> np.ndarray:
         """Indices into x of node `node`'s contact multipliers (1 <= node <= N-1)."""
@@ -239,10 +253,18 @@ class Transcription:
         return np.append(self._qref_index(node), self.Qref.numel())
 
     def _qref_index(self, node: int) -> np.ndarray:
-        return np.arange(self.mb.k) + self._source(node) * self.mb.k
+        """Indices into (p, its images) of node `node`'s reference (see `_u_index`)."""
+        k = self.mb.k
+        if node >= self.N - 1 and self.M is not None:
+            return self.p.shape[0] + (node - (self.N - 1)) * k + np.arange(k)
+        return np.arange(k) + self._source(node) * k
 
     def _tau_index(self, node: int) -> np.ndarray:
-        return self.U.numel() + np.arange(self.mb.nt) + self._source(node) * self.mb.nt
+        """Indices into (x, its images) of node `node`'s torques (see `_u_index`)."""
+        nt = self.mb.nt
+        if node == self.N - 1 and self.M is not None:
+            return self.x.shape[0] + 2 * self.mb.ndof + np.arange(nt)
+        return self.U.numel() + np.arange(nt) + self._source(node) * nt
 
     def _scaling_index(self, interval: int) -> int:
         first = self.U.numel() + self.T.numel() + self.L.numel()
@@ -306,7 +328,7 @@ class Transcription:
         for n in range(N - 1):
             C = self.rows[self.phase_of_interval[n]]
             if C.shape[0]:
-                key = (int(self.phase_of_interval[n]), n == N - 2)
+                key = (int(self.phase_of_interval[n]), self._mirrored(n == N - 2))
                 intervals.setdefault(key, []).append((n, row + np.arange(C.shape[0])))
                 row += C.shape[0]
         for (k, next_mirrored), chosen in intervals.items():
@@ -372,7 +394,7 @@ class Transcription:
         row = first_row
         for n, points in schedule.items():
             if points:
-                nodes.setdefault((tuple(points), n == self.N - 1), []).append(
+                nodes.setdefault((tuple(points), self._mirrored(n == self.N - 1)), []).append(
                     (n, row + np.arange(len(points))))
                 row += len(points)
         q, c = ca.SX.sym("q", self.mb.k), ca.SX.sym("c", 1)
@@ -410,7 +432,7 @@ class Transcription:
             rows += [first[name] + n - 1 for name in ("torso_lean", "torso_height")
                      if name in first]
             if rows:
-                nodes.setdefault((k, n == N - 1), []).append((n, np.array(rows)))
+                nodes.setdefault((k, self._mirrored(n == N - 1)), []).append((n, np.array(rows)))
         for (k, mirrored), chosen in nodes.items():
             self.elements.append(ElementGroup(
                 self._node_rows_element(k, mirrored),
@@ -502,7 +524,9 @@ class Transcription:
         c = np.array([self.settings.base_time_step, constant])
         if first_row is not False:
             size = int(fn.size1_out(0))
-            for next_mirrored, intervals in ((False, range(N - 2)), (True, [N - 2])):
+            groups = ((False, range(N - 1)),) if self.M is not None else \
+                ((False, range(N - 2)), (True, [N - 2]))
+            for next_mirrored, intervals in groups:
                 rows = None if first_row is None else np.stack(
                     [first_row + size * n + np.arange(size) for n in intervals], 1)
                 self.elements.append(ElementGroup(
@@ -517,7 +541,8 @@ class Transcription:
         elements of the NLP: rows first_row + r j + (0..r-1) of g for the j-th node."""
         size = int(fn.size1_out(0))
         for mirrored in (False, True):
-            chosen = [(j, n) for j, n in enumerate(nodes) if (n == self.N - 1) == mirrored]
+            chosen = [(j, n) for j, n in enumerate(nodes)
+                      if self._mirrored(n == self.N - 1) == mirrored]
             if chosen:
                 self.elements.append(ElementGroup(
                     self._node_element(fn, mirrored),
@@ -569,6 +594,48 @@ class Transcription:
     @property
     def p(self):
         return ca.vertcat(ca.vec(self.Qref), self.step, self.mu)
+
+    @property
+    def images(self) -> dict[str, np.ndarray] | None:
+        """The mirror images the elements of nodes N-1 and N read, None if they mirror
+        their configurations themselves (`self.M` None). Images of x: M u_0, M u_1, B T_0,
+        entry i being x_sign[i] x[x_source[i]] (signed permutations); images of p: the
+        references A qref_0 + s e and A qref_1 + s e (s the step length), entry i being
+        p_sign[i] p[p_source[i]] + p_shift[i] s."""
+        if self.M is None:
+            return None
+        nd, k = self.mb.ndof, self.mb.k
+
+        def signed(P: np.ndarray, offset: int):
+            j = np.argmax(np.abs(P), axis=1)
+            return offset + j, P[np.arange(P.shape[0]), j]
+
+        parts = [signed(self.M, 0), signed(self.M, nd), signed(self.B, self.U.numel())]
+        refs = [signed(self.A, 0), signed(self.A, k)]
+        return {"x_source": np.concatenate([a for a, _ in parts]),
+                "x_sign": np.concatenate([b for _, b in parts]),
+                "p_source": np.concatenate([a for a, _ in refs]),
+                "p_sign": np.concatenate([b for _, b in refs]),
+                "p_shift": np.tile(self.shift, 2)}
+
+    def element_inputs(self, x, p):
+        """(xe, pe): x and p (numbers or CasADi expressions) followed by their mirror
+        images (`images`), the vectors the elements' z_index and p_index point into."""
+        im = self.images
+        if im is None:
+            return x, p
+        step = p[self.Qref.numel()]
+        if isinstance(x, np.ndarray):
+            return (np.concatenate([x, im["x_sign"] * x[im["x_source"]]]),
+                    np.concatenate([p, im["p_sign"] * p[im["p_source"]] + im["p_shift"] * step]))
+        return (ca.vertcat(x, ca.DM(im["x_sign"]) * x[im["x_source"].tolist()]),
+                ca.vertcat(p, ca.DM(im["p_sign"]) * p[im["p_source"].tolist()]
+                           + ca.DM(im["p_shift"]) * step))
+
+    def _mirrored(self, image: bool) -> bool:
+        """Whether an element of a mirror image node (or interval) is a variant of its own:
+        only where its unknowns have no images (`images`)."""
+        return image and self.M is None
 
     @property
     def g_without_elements(self):

@@ -71,24 +71,32 @@ def test_element_derivatives_equal_casadi_whole_graph(name, overrides):
 
 
 @pytest.mark.parametrize("name, overrides", [("walker2d", {}), ("walker2d", HUMAN),
-                                             ("walker3d", {})])
+                                             ("walker3d", {}), ("compass", {})])
 def test_elements_and_rest_sum_to_g_and_cost(name, overrides):
     """g and the cost are their elements plus the rest, in every kind of element: contact
-    terms, cones and torso bounds of a node (mirrored too), contact rows of an interval,
-    swing clearances (walker3d: full contacts with roll bounds)."""
+    terms, cones and torso bounds of a node, contact rows of an interval, swing clearances
+    (walker3d: full contacts with roll bounds). The mirror image nodes N-1 and N are the
+    regular elements at mirrored unknowns and references (`Transcription.images`) where
+    the mirror commutes with the reparametrisation (the walkers), variants of their own
+    where it does not (the compass, whose root is mirrored into the other leg)."""
     tr, x, p, _ = _problem(name, **overrides)
     names = {group.function.name() for group in tr.elements}
-    assert {"joint_speed_element", "joint_limits_element_mirrored", "node_rows_phase0",
-            "node_rows_phase4_mirrored", "contact_hold_phase0_element",
-            "contact_hold_phase4_element_next_mirrored"} <= names
-    assert any(n.startswith("clearance_") for n in names)
+    if name == "compass":
+        assert tr.images is None
+        assert {"dynamics_element_mirrored", "dynamics_element_next_mirrored"} <= names
+    else:
+        assert tr.images is not None and not any("mirrored" in n for n in names)
+        assert {"joint_speed_element", "joint_limits_element", "node_rows_phase0",
+                "node_rows_phase4", "contact_hold_phase0_element"} <= names
+        assert any(n.startswith("clearance_") for n in names)
     g, g_rest, f, f_rest = (np.array(v).ravel() for v in ca.Function(
         "parts", [tr.x, tr.p], [tr.g, tr.g_without_elements, tr.cost, tr.cost_without_elements]
     )(x, p))
+    xe, pe = tr.element_inputs(x, p)
     g_sum, f_sum = g_rest.copy(), float(f_rest[0])
     for group in tr.elements:
         for j in range(group.z_index.shape[1]):
-            value = np.array(group.function(x[group.z_index[:, j]], p[group.p_index[:, j]],
+            value = np.array(group.function(xe[group.z_index[:, j]], pe[group.p_index[:, j]],
                                             group.constants))
             if group.rows is None:
                 f_sum += value.item()
@@ -100,11 +108,12 @@ def test_elements_and_rest_sum_to_g_and_cost(name, overrides):
 
 @settings(max_examples=30, deadline=None)
 @given(st.integers(1, 4), st.integers(1, 3), st.integers(1, 5), st.integers(1, 3),
-       st.integers(0, 2**32 - 1), st.booleans())
-def test_sum_adds_part_after_part_like_numpy(nz, nr, n, parts, seed, upper):
+       st.integers(0, 2**32 - 1), st.booleans(), st.booleans())
+def test_sum_adds_part_after_part_like_numpy(nz, nr, n, parts, seed, upper, signed):
     """_sum of element matrices (with repeated positions within and across elements and
-    parts) is bit for bit numpy's sum: each part's entries added in the order of its
-    nonzeros, then the parts' matrices one after the other."""
+    parts, and with signs: elements of mirror images) is bit for bit numpy's sum: each
+    part's entries added in the order of its nonzeros, then the parts' matrices one after
+    the other."""
     rng = np.random.default_rng(seed)
     pattern = ca.Sparsity.dense(nz, nz) if upper else ca.Sparsity.dense(nr, nz)
     rows_e, cols_e = pattern.shape
@@ -117,13 +126,19 @@ def test_sum_adds_part_after_part_like_numpy(nz, nr, n, parts, seed, upper):
         if upper:  # full symmetric element matrices
             values = values + values.transpose(1, 0, 2)
         mapped = ca.DM(np.hstack([values[:, :, j] for j in range(n)]))
-        entries.append(_entries(ca.MX(mapped), row_index, col_index, pattern))
+        ones = (np.ones((rows_e, n)), np.ones((cols_e, n)))
+        col_sign = rng.choice([-1.0, 1.0], (cols_e, n)) if signed else ones[1]
+        row_sign = col_sign if upper else (rng.choice([-1.0, 1.0], (rows_e, n)) if signed
+                                           else ones[0])
+        entries.append(_entries(ca.MX(mapped), row_index, col_index, pattern,
+                                row_sign if signed else None, col_sign if signed else None))
         part = np.zeros((size, size))
         for j in range(n):
             for b in range(cols_e):  # the order of mapped's nonzeros
                 for a in range(rows_e):
                     if not upper or row_index[a, j] <= col_index[b, j]:
-                        part[row_index[a, j], col_index[b, j]] += values[a, b, j]
+                        part[row_index[a, j], col_index[b, j]] += \
+                            values[a, b, j] * row_sign[a, j] * col_sign[b, j]
         expected = expected + part
     out = ca.Function("s", [], [_sum(entries, (size, size), upper)])()["o0"]
     assert np.array_equal(_dense(out), expected)
