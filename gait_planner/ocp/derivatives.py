@@ -34,8 +34,12 @@ and the summing 0.1 ms (with constant
 pieces timed alone, their code and data in the caches, add up to only 9.4 ms, but one
 evaluation runs 13 MB of compiled Hessian elements and the rest's 1 M instructions: cold,
 the pieces add up to 13.6 ms, 2.8 ms of it the mirrored variants (7.5 MB of code, each run
-for one node; 0.3 ms warm), which is why the larger variants are interpreted instead
-(`INTERPRETED_ABOVE`). Mapping over 2 threads (bit for bit the same) measured 1.5 ms
+for one node; 0.3 ms warm), which is why the larger variants were interpreted instead
+(`INTERPRETED_ABOVE`; still 2.2 ms of the Hessian and 0.7 ms of the Jacobian on
+2026-11-25). The walkers have no such variants now: the mirror image nodes N-1 and N are
+the regular elements at mirrored unknowns (`Transcription.images`), whose derivatives come
+back through a signed permutation (`_entries`), and they ride in the padding lanes of the
+vector passes. Mapping over 2 threads (bit for bit the same) measured 1.5 ms
 faster in one run and 1.2-4 ms slower in another (the second core is shared with other
 jobs), so the maps run serially.
 
@@ -60,8 +64,9 @@ from gait_planner.ocp.vectorize import LANES
 
 # Given the element derivatives to form, returns them (e.g. compiled) in the same order.
 Compiler = Callable[[list[Source]], list[ca.Function]]
-# Operations above which a one-node element derivative is evaluated in CasADi's virtual
-# machine instead of compiled. It runs once per evaluation of the NLP's derivatives: its
+# Operations above which a one-node element derivative (a mirrored variant of a scene
+# without `Transcription.images`) is evaluated in CasADi's virtual machine instead of
+# compiled. It runs once per evaluation of the NLP's derivatives: its
 # machine code (~8 bytes an operation) comes from memory every time, since the vector passes
 # and MUMPS have evicted it from the caches, while the virtual machine's loop stays cached
 # and streams its instruction list. Measured on the 2-core EPYC (2026-11-24, A/B in fresh
