@@ -111,14 +111,18 @@ def test_a_plan_whose_efforts_zigzag_is_refined():
 
 @pytest.mark.slow
 def test_walker3d_torque_squared_passes_every_check_after_refinement():
-    """The hard case that missed the certificate on its own grid (0.47 % > 0.2 %: the swing
-    leg's large accelerations before toe-off, an O(h^2) error): refined once, from its own
-    optimum, it passes every check (2026-11-23: 0.099 %, J 1018.46, ~25 s)."""
+    """The hard case that misses the certificate on its own grid (the swing leg's large
+    accelerations before toe-off, an O(h^2) error): refined from its own optimum, it passes
+    every check. Which local minimum the cold start finds, and so how many refinements it
+    needs, moves with round-off: 2026-11-23 0.47 % on 40 intervals, 0.099 % on 80 (J
+    1018.46, ~25 s); 2026-11-25 0.84 % on 40, 0.211 % on 80, passing on 160 (J 1072.15,
+    729 iterations, ~46 s)."""
     scene = load_scene("walker3d")
     settings = settings_for(scene, cost="torque_squared", compiled=True, max_solve_time=200.0)
     result, cert = plan_certified(Planner(), scene, settings, warm_start=False)
     assert result.success, result.message
-    assert result.n_nodes - 1 == 2 * sum(settings.intervals)
+    assert result.n_nodes - 1 in [f * sum(settings.intervals)
+                                  for f in (2, 4)[: settings.refinements]]
     assert cert.ok, cert.summary()
     report = verify_result(result)
     assert report.ok, report.failures
