@@ -53,8 +53,15 @@ VARIANTS = {
     "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
     "cold_inertia": {},
     "warm": {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
-                                for push in ("bound_push", "mult_bound_push", "slack_bound_push")}},
+                                for push in ("bound_push", "mult_bound_push", "slack_bound_push")},
+             **{f"ipopt.mumps_{option}": 0 for option in ("permuting_scaling", "scaling")}},
 }
+# A warm re-plan's MUMPS runs without its scalings (IPOPT's defaults let MUMPS choose a
+# permutation and scaling at every factorisation): the same iterations on nine re-plans of
+# walker3d and of walker2d but for one far request (1.3 x step: 126 -> 134), 11-27 % less
+# time (walker3d +2 %: 0.208 -> 0.152 s). Not for cold plans: 18-20 instead of 21-23 ms an
+# iteration there, but the ten requests of request_sweep.py took 1054 iterations instead
+# of 824, the same time in all (2026-11-25, benchmarks/HISTORY.md).
 # Attempts, each a list of stages (variant, sigma fixed, limits relaxed): a cold plan fixes
 # sigma and relaxes the swing clearance and joint speed limits first
 # (`Transcription.relaxed_lower_bounds`), then frees both; if its inertia-free attempt
