@@ -55,6 +55,42 @@ def test_rrd_verify_and_entities(rrd, result):
         assert entity in stats.stdout, entity
 
 
+def _node_values(rrd: Path, entity: str, component: str) -> dict[int, list]:
+    """{node: value} of one temporal component of a saved recording, read back through
+    rerun's own chunk reader."""
+    from rerun.chunk import RrdReader
+
+    out = {}
+    for chunk in RrdReader(rrd).stream():
+        if chunk.entity_path != entity or chunk.is_static:
+            continue
+        batch = chunk.to_record_batch()
+        column = next(n for n in batch.schema.names if n.endswith(component))
+        for row in batch.select(["node", column]).to_pylist():
+            out[row["node"]] = row[column]
+    return out
+
+
+def test_every_node_holds_its_contact_forces_and_skeleton(rrd, result):
+    """Read back: at every node the force arrows are the active contacts' ground forces
+    (FORCE_SCALE m per N), labelled with their names and magnitudes, and the skeleton has
+    the same strips at every node (columnar chunks, one row per node)."""
+    from gait_planner.io.rerun_view import FORCE_SCALE
+
+    vectors = _node_values(rrd, "/world/contacts/forces", "Arrows3D:vectors")
+    labels = _node_values(rrd, "/world/contacts/forces", "Arrows3D:labels")
+    strips = _node_values(rrd, "/world/skeleton", "LineStrips3D:strips")
+    assert sorted(vectors) == sorted(strips) == list(range(result.n_nodes))
+    for n in range(result.n_nodes):
+        names = list(result.active_contacts[n])
+        expected = [np.asarray(result.contact_forces[c], dtype=float)[n] for c in names]
+        assert np.allclose(np.array(vectors[n]).reshape(-1, 3),
+                           np.array(expected).reshape(-1, 3) * FORCE_SCALE, rtol=1e-6,
+                           atol=1e-6)
+        assert [label.split(":")[0] for label in labels[n]] == names
+        assert len(strips[n]) == len(strips[0])
+
+
 def test_failed_save_leaves_nothing(result, tmp_path, monkeypatch):
     import gait_planner.io.rerun_view as view
 
