@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import casadi as ca
 
@@ -595,7 +596,7 @@ class Transcription:
     def p(self):
         return ca.vertcat(ca.vec(self.Qref), self.step, self.mu)
 
-    @property
+    @cached_property
     def images(self) -> dict[str, np.ndarray] | None:
         """The mirror images the elements of nodes N-1 and N read, None if they mirror
         their configurations themselves (`self.M` None). Images of x: M u_0, M u_1, B T_0,
