@@ -299,8 +299,8 @@ def _ordered_sum(values: ca.MX, source: np.ndarray, slot: np.ndarray, n: int) ->
     """(n,) column: entry i is the sum of the nonzeros values[source[k]] with slot[k] == i
     (every slot has one), added one after the other in the order of k. Index lists only
     (CasADi copies a constant matrix into its work vector at every evaluation): step r adds
-    the r-th term of every slot that has one."""
-    values = ca.sparsity_cast(values, ca.Sparsity.dense(values.nnz()))  # its nonzeros
+    the r-th term of every slot that has one. values: a dense column of the nonzeros (`_sum`
+    casts each part's matrix to one)."""
     order = np.argsort(slot, kind="stable")
     first = np.searchsorted(slot[order], np.arange(n))
     rank = np.empty(slot.size, dtype=int)
