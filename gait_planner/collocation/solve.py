@@ -63,7 +63,7 @@ from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
 from gait_planner.ocp.ipopt import IterationCallback, Progress, ipopt_options, run_attempt
-from gait_planner.ocp.solve import COLD_ATTEMPTS, INERTIA_FREE, VARIANTS
+from gait_planner.ocp.solve import COLD_ATTEMPTS, FIRST_STAGE, INERTIA_FREE, VARIANTS
 from gait_planner.result import PlanResult
 
 # Solver variants: the product's, except that the first attempt keeps 150 iterations per
@@ -72,10 +72,12 @@ from gait_planner.result import PlanResult
 # "spline" one, at 0.2-0.4 s an iteration), and the inertia-free test with the settings'
 # whole iteration budget (module docstring; measured with these caps)
 COLLOCATION_VARIANTS = {**VARIANTS, "cold": {**INERTIA_FREE, "ipopt.max_iter": 150},
+                        "cold_first": {**VARIANTS["cold_first"], "ipopt.max_iter": 150},
+                        "cold_full_first": {**INERTIA_FREE, **FIRST_STAGE},
                         "cold_full": INERTIA_FREE}
 # Cold attempts (guess mapping, stages as `COLD_ATTEMPTS`), in order (module docstring)
 ATTEMPTS = (("linear", COLD_ATTEMPTS[0]),
-            ("spline", [("cold_full", True, True), ("cold_full", False, False)]),
+            ("spline", [("cold_full_first", True, True), ("cold_full", False, False)]),
             ("linear", COLD_ATTEMPTS[1]))
 
 

@@ -48,9 +48,21 @@ INERTIA_FREE = {"ipopt.neg_curv_test_tol": 1e-12}
 # 120 s; with 400 they converge in 13 s each (2026-11-23).
 FIRST_ATTEMPT_ITERATIONS = 400
 
+# The first, relaxed stage of a cold attempt (sigma fixed, limits relaxed) only brings the
+# plan near the gait; the second stage then moves it to the full problem's optimum. Solved
+# to tol 1e-3 instead of the settings' tolerances (1e-8, constraints 1e-10), walker3d's
+# default request takes 46 instead of 64 iterations (27 + 19 instead of 44 + 20, the same
+# J), walker2d's 34 instead of 44; request_sweep.py's 2 x 11 requests of each walker under
+# two BLAS kernels for the guess (Haswell, Prescott): walker3d 1884 instead of 2022
+# iterations, walker2d 1334 instead of 1767 (tol 1e-2: 1792 and 1288, but walker3d's
+# default 58; 1e-4: 1886 and 1386; 2026-11-25, benchmarks/HISTORY.md).
+FIRST_STAGE = {"ipopt.tol": 1e-3, "ipopt.constr_viol_tol": 1e-3,
+               "ipopt.acceptable_constr_viol_tol": 1e-3}
 # IPOPT options of the solver variants beyond the common ones (`ipopt_options`)
 VARIANTS = {
+    "cold_first": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS, **FIRST_STAGE},
     "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
+    "cold_inertia_first": FIRST_STAGE,
     "cold_inertia": {},
     "warm": {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
                                 for push in ("bound_push", "mult_bound_push", "slack_bound_push")},
@@ -64,10 +76,10 @@ VARIANTS = {
 # of 824, the same time in all (2026-11-25, benchmarks/HISTORY.md).
 # Attempts, each a list of stages (variant, sigma fixed, limits relaxed): a cold plan fixes
 # sigma and relaxes the swing clearance and joint speed limits first
-# (`Transcription.relaxed_lower_bounds`), then frees both; if its inertia-free attempt
-# fails it starts again with the inertia test.
-COLD_ATTEMPTS = ([("cold", True, True), ("cold", False, False)],
-                 [("cold_inertia", True, True), ("cold_inertia", False, False)])
+# (`Transcription.relaxed_lower_bounds`, solved loosely: FIRST_STAGE), then frees both; if
+# its inertia-free attempt fails it starts again with the inertia test.
+COLD_ATTEMPTS = ([("cold_first", True, True), ("cold", False, False)],
+                 [("cold_inertia_first", True, True), ("cold_inertia", False, False)])
 WARM_ATTEMPTS = ([("warm", False, False)],)
 
 
