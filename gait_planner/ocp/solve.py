@@ -58,22 +58,26 @@ FIRST_ATTEMPT_ITERATIONS = 400
 # default 58; 1e-4: 1886 and 1386; 2026-11-25, benchmarks/HISTORY.md).
 FIRST_STAGE = {"ipopt.tol": 1e-3, "ipopt.constr_viol_tol": 1e-3,
                "ipopt.acceptable_constr_viol_tol": 1e-3}
+# MUMPS without its scalings (IPOPT's defaults let MUMPS choose a permutation and scaling
+# at every factorisation), for the stages that start near an optimum: a warm re-plan took
+# the same iterations on nine re-plans of walker3d and of walker2d but for one far request
+# (1.3 x step: 126 -> 134), 11-27 % less time (walker3d +2 %: 0.208 -> 0.152 s); the
+# second stage of a cold plan took the same iterations on all 2 x 11 requests of walker3d
+# in request_sweep.py but two (82 -> 79, 159 -> 162), 15.3-15.7 s against 15.8-17.2 s
+# for the 11 (2026-11-25). Not for a cold plan's first stage: 18-20 instead of 21-23 ms an
+# iteration there, but the ten requests of request_sweep.py took 1054 iterations instead
+# of 824, the same time in all (2026-11-25, benchmarks/HISTORY.md).
+NEAR_OPTIMUM = {f"ipopt.mumps_{option}": 0 for option in ("permuting_scaling", "scaling")}
 # IPOPT options of the solver variants beyond the common ones (`ipopt_options`)
 VARIANTS = {
     "cold_first": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS, **FIRST_STAGE},
-    "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
+    "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS, **NEAR_OPTIMUM},
     "cold_inertia_first": FIRST_STAGE,
     "cold_inertia": {},
     "warm": {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
                                 for push in ("bound_push", "mult_bound_push", "slack_bound_push")},
-             **{f"ipopt.mumps_{option}": 0 for option in ("permuting_scaling", "scaling")}},
+             **NEAR_OPTIMUM},
 }
-# A warm re-plan's MUMPS runs without its scalings (IPOPT's defaults let MUMPS choose a
-# permutation and scaling at every factorisation): the same iterations on nine re-plans of
-# walker3d and of walker2d but for one far request (1.3 x step: 126 -> 134), 11-27 % less
-# time (walker3d +2 %: 0.208 -> 0.152 s). Not for cold plans: 18-20 instead of 21-23 ms an
-# iteration there, but the ten requests of request_sweep.py took 1054 iterations instead
-# of 824, the same time in all (2026-11-25, benchmarks/HISTORY.md).
 # Attempts, each a list of stages (variant, sigma fixed, limits relaxed): a cold plan fixes
 # sigma and relaxes the swing clearance and joint speed limits first
 # (`Transcription.relaxed_lower_bounds`, solved loosely: FIRST_STAGE), then frees both; if
