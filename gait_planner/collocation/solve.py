@@ -63,7 +63,7 @@ from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
 from gait_planner.ocp.ipopt import IterationCallback, Progress, ipopt_options, run_attempt
-from gait_planner.ocp.solve import COLD_ATTEMPTS, FIRST_STAGE, INERTIA_FREE, VARIANTS
+from gait_planner.ocp.solve import COLD_ATTEMPTS, INERTIA_FREE, VARIANTS
 from gait_planner.result import PlanResult
 
 # Solver variants: the product's, except that the first attempt keeps 150 iterations per
@@ -72,12 +72,11 @@ from gait_planner.result import PlanResult
 # "spline" one, at 0.2-0.4 s an iteration), and the inertia-free test with the settings'
 # whole iteration budget (module docstring; measured with these caps)
 COLLOCATION_VARIANTS = {**VARIANTS, "cold": {**INERTIA_FREE, "ipopt.max_iter": 150},
-                        "cold_first": {**VARIANTS["cold_first"], "ipopt.max_iter": 150},
-                        "cold_full_first": {**INERTIA_FREE, **FIRST_STAGE},
+                        "cold_first": {**INERTIA_FREE, "ipopt.max_iter": 150},
                         "cold_full": INERTIA_FREE}
 # Cold attempts (guess mapping, stages as `COLD_ATTEMPTS`), in order (module docstring)
 ATTEMPTS = (("linear", COLD_ATTEMPTS[0]),
-            ("spline", [("cold_full_first", True, True), ("cold_full", False, False)]),
+            ("spline", [("cold_full", True, True), ("cold_full", False, False)]),
             ("linear", COLD_ATTEMPTS[1]))
 
 
@@ -136,8 +135,9 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
         if kinematics not in x_starts:
             x_starts[kinematics] = initial_guess(tr, settings.step_length, kinematics)
         zero_duals = {"lam_x0": np.zeros(nx), "lam_g0": np.zeros(ng)}
-        x, g, _, status, success = run_attempt(solver, attempt, x_starts[kinematics], zero_duals,
-                                               p, (lbx, ubx, lbg, ubg), sig,
+        x, g, _, status, success = run_attempt(solver, callback, attempt,
+                                               x_starts[kinematics], zero_duals, p,
+                                               (lbx, ubx, lbg, ubg), sig,
                                                tr.relaxed_lower_bounds, totals)
         if success or time.perf_counter() > callback.deadline or number + 1 == len(ATTEMPTS):
             break

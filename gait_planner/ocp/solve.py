@@ -48,20 +48,6 @@ INERTIA_FREE = {"ipopt.neg_curv_test_tol": 1e-12}
 # 120 s; with 400 they converge in 13 s each (2026-11-23).
 FIRST_ATTEMPT_ITERATIONS = 400
 
-# The first, relaxed stage of a cold attempt (sigma fixed, limits relaxed) only brings the
-# plan near the gait; the second stage then moves it to the full problem's optimum. Solved
-# to tol 1e-3 instead of the settings' tolerances (1e-8, constraints 1e-10), walker3d's
-# default request takes 46 instead of 64 iterations (27 + 19 instead of 44 + 20, the same
-# J), walker2d's 34 instead of 44; request_sweep.py's 2 x 11 requests of each walker under
-# two BLAS kernels for the guess (Haswell, Prescott): walker3d 1884 instead of 2022
-# iterations, walker2d 1334 instead of 1767 (tol 1e-2: 1792 and 1288, but walker3d's
-# default 58; 1e-4: 1886 and 1386; 2026-11-25, benchmarks/HISTORY.md). Not for the
-# fallback with the inertia test: walker2d's restart (its inertia-free attempt capped at 3
-# iterations) then ended "locally infeasible" after 101 iterations of its first stage
-# (with constr_viol_tol 1e-6: no convergence in 3000), where the full tolerances converge
-# in 224 + 76.
-FIRST_STAGE = {"ipopt.tol": 1e-3, "ipopt.constr_viol_tol": 1e-3,
-               "ipopt.acceptable_constr_viol_tol": 1e-3}
 # MUMPS without its scalings (IPOPT's defaults let MUMPS choose a permutation and scaling
 # at every factorisation), for the stages that start near an optimum: a warm re-plan took
 # the same iterations on nine re-plans of walker3d and of walker2d but for one far request
@@ -74,7 +60,7 @@ FIRST_STAGE = {"ipopt.tol": 1e-3, "ipopt.constr_viol_tol": 1e-3,
 NEAR_OPTIMUM = {f"ipopt.mumps_{option}": 0 for option in ("permuting_scaling", "scaling")}
 # IPOPT options of the solver variants beyond the common ones (`ipopt_options`)
 VARIANTS = {
-    "cold_first": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS, **FIRST_STAGE},
+    "cold_first": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
     "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS, **NEAR_OPTIMUM},
     "cold_inertia": {},
     "warm": {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
@@ -83,9 +69,9 @@ VARIANTS = {
 }
 # Attempts, each a list of stages (variant, sigma fixed, limits relaxed): a cold plan fixes
 # sigma and relaxes the swing clearance and joint speed limits first
-# (`Transcription.relaxed_lower_bounds`; loosely, FIRST_STAGE, in the inertia-free
-# attempt), then frees both; if its inertia-free attempt fails it starts again with the
-# inertia test.
+# (`Transcription.relaxed_lower_bounds`), up to near that stage's optimum
+# (`ipopt.NEAR_ENOUGH`), then frees both; if its inertia-free attempt fails it starts again
+# with the inertia test.
 COLD_ATTEMPTS = ([("cold_first", True, True), ("cold", False, False)],
                  [("cold_inertia", True, True), ("cold_inertia", False, False)])
 WARM_ATTEMPTS = ([("warm", False, False)],)
@@ -220,7 +206,8 @@ class Planner:
             self.stage("warm" if variant == "warm" else
                        f"cold stage {k + 1}" + (" (inertia test)" if number else ""))
 
-        return run_attempt(lambda variant: self._solver(built, s, variant), attempt, x0, duals,
+        return run_attempt(lambda variant: self._solver(built, s, variant), built.callback,
+                           attempt, x0, duals,
                            p, built.bounds, slice(-int(built.tr.S.shape[0]), None),
                            built.tr.relaxed_lower_bounds, totals, enter)
 
