@@ -135,9 +135,8 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
         if kinematics not in x_starts:
             x_starts[kinematics] = initial_guess(tr, settings.step_length, kinematics)
         zero_duals = {"lam_x0": np.zeros(nx), "lam_g0": np.zeros(ng)}
-        x, g, _, status, success = run_attempt(solver, callback, attempt,
-                                               x_starts[kinematics], zero_duals, p,
-                                               (lbx, ubx, lbg, ubg), sig,
+        x, g, _, status, success = run_attempt(solver, attempt, x_starts[kinematics], zero_duals,
+                                               p, (lbx, ubx, lbg, ubg), sig,
                                                tr.relaxed_lower_bounds, totals)
         if success or time.perf_counter() > callback.deadline or number + 1 == len(ATTEMPTS):
             break

@@ -17,21 +17,9 @@ Progress = Callable[[int, float, float, float], None]  # iteration, cost, violat
 Stop = Callable[[], bool]  # polled every iteration: True stops the plan (nothing is kept)
 
 
-# A relaxed first stage (`run_attempt`) ends at the first iterate within these of its
-# optimum: IPOPT's constraint violation (unscaled) and dual infeasibility (scaled) and the
-# barrier parameter. It only brings the plan near the gait; the second stage solves the full
-# problem to the settings' tolerances. Watched from the iteration callback, so that IPOPT
-# takes the same steps as a stage solved to the end up to there (IPOPT's own tol 1e-3 or
-# its "acceptable" stop change its path: walker3d's 24-interval grid then did not converge,
-# the torque-squared cost went through the fallback; benchmarks/HISTORY.md).
-NEAR_ENOUGH = {"inf_pr": 1e-2, "inf_du": 1e-3, "mu": 1e-4}
-
-
 class IterationCallback(ca.Callback):
     """Called by IPOPT every iteration: reports progress, stops at the deadline or when
-    `stop` says so (IPOPT then ends with User_Requested_Stop after this iteration), and,
-    while `watch` is set to the running solver, at the first iterate within NEAR_ENOUGH of
-    its optimum (then `near_enough` is True)."""
+    `stop` says so (IPOPT then ends with User_Requested_Stop after this iteration)."""
 
     def __init__(self, nx: int, ng: int, lbg: np.ndarray, ubg: np.ndarray):
         ca.Callback.__init__(self)
@@ -41,8 +29,6 @@ class IterationCallback(ca.Callback):
         self.iteration = 0
         self.report: Progress | None = None
         self.stop: Stop | None = None
-        self.watch: ca.Function | None = None
-        self.near_enough = False
         self.construct("iteration_callback", {})
 
     def get_n_in(self):
@@ -75,10 +61,7 @@ class IterationCallback(ca.Callback):
             self.report(self.iteration, cost, viol, time.perf_counter() - self.started)
         self.iteration += 1
         stopped = self.stop is not None and self.stop()
-        if self.watch is not None:
-            last = self.watch.stats()["iterations"]
-            self.near_enough = all(last[k][-1] <= bound for k, bound in NEAR_ENOUGH.items())
-        return [1 if stopped or self.near_enough or time.perf_counter() > self.deadline else 0]
+        return [1 if stopped or time.perf_counter() > self.deadline else 0]
 
 
 def ipopt_options(callback: IterationCallback, s: GaitSettings) -> dict:
@@ -132,19 +115,17 @@ def solve_stage(solver: ca.Function, x0: np.ndarray, duals: dict, p: np.ndarray,
                        bool(stats.get("success", False))))
 
 
-def run_attempt(solver_of: Callable[[str], ca.Function], callback: IterationCallback,
-                attempt, x0: np.ndarray, duals: dict, p: np.ndarray, bounds: tuple, sigma,
-                relaxed_lower_bounds, totals: list,
-                enter: Callable[[int, str], None] = lambda k, variant: None):
+def run_attempt(solver_of: Callable[[str], ca.Function], attempt, x0: np.ndarray,
+                duals: dict, p: np.ndarray, bounds: tuple, sigma, relaxed_lower_bounds,
+                totals: list, enter: Callable[[int, str], None] = lambda k, variant: None):
     """The stages of one attempt, a list of (variant, sigma fixed, limits relaxed), from
     (x0, duals {"lam_x0", "lam_g0"}) with parameters p: each stage is one IPOPT call of
-    `solver_of(variant)` (whose iteration callback is `callback`) within bounds (lbx, ubx,
-    lbg, ubg), with x[sigma] fixed at its current value if asked and lbg replaced by
-    `relaxed_lower_bounds(lbg)` if relaxed; a relaxed stage that is not the last ends near
-    its optimum (NEAR_ENOUGH). `enter(k, variant)` is called before stage k. Adds
-    iterations and evaluation seconds to totals [iterations, seconds] and stops at the first
-    stage that fails. Returns (x, g, duals, status, success) of the last stage run (the
-    DMOCC planner's and the collocation baseline's attempts alike)."""
+    `solver_of(variant)` within bounds (lbx, ubx, lbg, ubg), with x[sigma] fixed at its
+    current value if asked and lbg replaced by `relaxed_lower_bounds(lbg)` if relaxed;
+    `enter(k, variant)` is called before stage k. Adds iterations and evaluation seconds to
+    totals [iterations, seconds] and stops at the first stage that fails. Returns (x, g,
+    duals, status, success) of the last stage run (the DMOCC planner's and the collocation
+    baseline's attempts alike)."""
     lbx, ubx, lbg, ubg = bounds
     g, status, success = None, "not started", False
     for k, (variant, fix_sigma, relaxed) in enumerate(attempt):
@@ -153,16 +134,10 @@ def run_attempt(solver_of: Callable[[str], ca.Function], callback: IterationCall
         if fix_sigma:
             lb[sigma] = ub[sigma] = x0[sigma]
         lower = relaxed_lower_bounds(lbg) if relaxed else lbg
-        solver = solver_of(variant)
-        callback.watch = solver if relaxed and k + 1 < len(attempt) else None
-        callback.near_enough = False
-        try:
-            x0, g, duals, stage = solve_stage(solver, x0, duals, p, lb, ub, lower, ubg)
-        finally:
-            callback.watch = None
+        x0, g, duals, stage = solve_stage(solver_of(variant), x0, duals, p, lb, ub, lower, ubg)
         totals[0] += stage.iterations
         totals[1] += stage.evaluation_time
-        status, success = stage.status, stage.success or callback.near_enough
+        status, success = stage.status, stage.success
         if not success:
             break
     return x0, g, duals, status, success

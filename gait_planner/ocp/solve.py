@@ -69,9 +69,13 @@ VARIANTS = {
 }
 # Attempts, each a list of stages (variant, sigma fixed, limits relaxed): a cold plan fixes
 # sigma and relaxes the swing clearance and joint speed limits first
-# (`Transcription.relaxed_lower_bounds`), up to near that stage's optimum
-# (`ipopt.NEAR_ENOUGH`), then frees both; if its inertia-free attempt fails it starts again
-# with the inertia test.
+# (`Transcription.relaxed_lower_bounds`), then frees both; if its inertia-free attempt
+# fails it starts again with the inertia test. The first stage is solved to the full
+# tolerances: it ends at an optimum that does not depend on round-off, so the second stage
+# reaches the same local minimum with compiled and CasADi derivatives (test_ocp_reproducible;
+# stopped early, by IPOPT's tol 1e-3 or near the first stage's optimum, the sweeps took up
+# to 10 % fewer iterations but CasADi's derivatives ended at J 20.8088 instead of 20.7648;
+# benchmarks/HISTORY.md).
 COLD_ATTEMPTS = ([("cold_first", True, True), ("cold", False, False)],
                  [("cold_inertia", True, True), ("cold_inertia", False, False)])
 WARM_ATTEMPTS = ([("warm", False, False)],)
@@ -206,8 +210,7 @@ class Planner:
             self.stage("warm" if variant == "warm" else
                        f"cold stage {k + 1}" + (" (inertia test)" if number else ""))
 
-        return run_attempt(lambda variant: self._solver(built, s, variant), built.callback,
-                           attempt, x0, duals,
+        return run_attempt(lambda variant: self._solver(built, s, variant), attempt, x0, duals,
                            p, built.bounds, slice(-int(built.tr.S.shape[0]), None),
                            built.tr.relaxed_lower_bounds, totals, enter)
 

@@ -44,7 +44,7 @@ def test_a_long_step_the_guess_cannot_reach_is_planned_by_continuation(monkeypat
     walker3d at 1.1 m (scene: 0.6338 m) needed it with the 400-iteration cap until the
     mirror image nodes became regular elements (2026-11-25; since then its own guess
     converges in 724 iterations), so the cap is lowered here to 100 per stage, which the
-    scene's own request (27 + 19 iterations) fits and 1.1 m from its guess does not. The
+    scene's own request (44 + 20 iterations) fits and 1.1 m from its guess does not. The
     continued plan passes the discrete and physical checks; on 40 intervals it misses the
     continuous-dynamics certificate (0.55 % torque error), which refinement cures
     (`test_ocp_refine.py`)."""
