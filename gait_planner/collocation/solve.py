@@ -72,7 +72,6 @@ from gait_planner.result import PlanResult
 # "spline" one, at 0.2-0.4 s an iteration), and the inertia-free test with the settings'
 # whole iteration budget (module docstring; measured with these caps)
 COLLOCATION_VARIANTS = {**VARIANTS, "cold": {**INERTIA_FREE, "ipopt.max_iter": 150},
-                        "cold_first": {**INERTIA_FREE, "ipopt.max_iter": 150},
                         "cold_full": INERTIA_FREE}
 # Cold attempts (guess mapping, stages as `COLD_ATTEMPTS`), in order (module docstring)
 ATTEMPTS = (("linear", COLD_ATTEMPTS[0]),

@@ -48,20 +48,20 @@ INERTIA_FREE = {"ipopt.neg_curv_test_tol": 1e-12}
 # 120 s; with 400 they converge in 13 s each (2026-11-23).
 FIRST_ATTEMPT_ITERATIONS = 400
 
-# MUMPS without its scalings (IPOPT's defaults let MUMPS choose a permutation and scaling
-# at every factorisation), for the stages that start near an optimum: a warm re-plan took
-# the same iterations on nine re-plans of walker3d and of walker2d but for one far request
-# (1.3 x step: 126 -> 134), 11-27 % less time (walker3d +2 %: 0.208 -> 0.152 s); the
-# second stage of a cold plan took the same iterations on all 2 x 11 requests of walker3d
-# in request_sweep.py but two (82 -> 79, 159 -> 162), 15.3-15.7 s against 15.8-17.2 s
-# for the 11 (2026-11-25). Not for a cold plan's first stage: 18-20 instead of 21-23 ms an
-# iteration there, but the ten requests of request_sweep.py took 1054 iterations instead
-# of 824, the same time in all (2026-11-25, benchmarks/HISTORY.md).
+# A warm re-plan's MUMPS runs without its scalings (IPOPT's defaults let MUMPS choose a
+# permutation and scaling at every factorisation): the same iterations on nine re-plans of
+# walker3d and of walker2d but for one far request (1.3 x step: 126 -> 134), 11-27 % less
+# time (walker3d +2 %: 0.208 -> 0.152 s). Not for cold plans: in the first stage 18-20
+# instead of 21-23 ms an iteration, but the ten requests of request_sweep.py took 1054
+# iterations instead of 824, the same time in all; in the second stage only (which starts
+# near an optimum, as a warm re-plan does) 6 % less time and the same iterations on 20 of
+# 22 sweep requests (measured after a loosely solved first stage), but walker3d's
+# torque-squared plan then missed the continuous-dynamics certificate after both
+# refinements (0.278 %; 2026-11-25, benchmarks/HISTORY.md).
 NEAR_OPTIMUM = {f"ipopt.mumps_{option}": 0 for option in ("permuting_scaling", "scaling")}
 # IPOPT options of the solver variants beyond the common ones (`ipopt_options`)
 VARIANTS = {
-    "cold_first": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
-    "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS, **NEAR_OPTIMUM},
+    "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
     "cold_inertia": {},
     "warm": {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
                                 for push in ("bound_push", "mult_bound_push", "slack_bound_push")},
@@ -76,7 +76,7 @@ VARIANTS = {
 # stopped early, by IPOPT's tol 1e-3 or near the first stage's optimum, the sweeps took up
 # to 10 % fewer iterations but CasADi's derivatives ended at J 20.8088 instead of 20.7648;
 # benchmarks/HISTORY.md).
-COLD_ATTEMPTS = ([("cold_first", True, True), ("cold", False, False)],
+COLD_ATTEMPTS = ([("cold", True, True), ("cold", False, False)],
                  [("cold_inertia", True, True), ("cold_inertia", False, False)])
 WARM_ATTEMPTS = ([("warm", False, False)],)
 

@@ -50,8 +50,7 @@ def test_a_long_step_the_guess_cannot_reach_is_planned_by_continuation(monkeypat
     (`test_ocp_refine.py`)."""
     from gait_planner.ocp import solve
 
-    for variant in ("cold_first", "cold"):
-        monkeypatch.setitem(solve.VARIANTS[variant], "ipopt.max_iter", 100)
+    monkeypatch.setitem(solve.VARIANTS["cold"], "ipopt.max_iter", 100)
     walker3d = load_scene("walker3d")
     settings = settings_for(walker3d, step_length=1.1, max_solve_time=200.0, compiled=True)
     result = Planner().plan(walker3d, settings, warm_start=False)
