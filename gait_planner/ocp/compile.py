@@ -60,6 +60,11 @@ class Source:
     # formed, for CasADi's virtual machine (`ocp.derivatives.INTERPRETED_ABOVE`)
     interpret_above: int | None = None
 
+    @classmethod
+    def formed(cls, fn: ca.Function) -> Source:
+        """A Function already formed, identified by its serialisation."""
+        return cls(fn.name(), fn.serialize(), lambda: fn)
+
 
 @functools.cache
 def vector_flags() -> tuple[str, ...]:
@@ -98,8 +103,7 @@ def _identity(src: Source) -> bytes:
 def compile_functions(functions: list[ca.Function], folder: Path | None = None) -> list[ca.Function]:
     """The compiled (external) equivalents of `functions`, in order, each identified by its
     serialisation. Raises CompileError (see `compile_sources`)."""
-    return compile_sources([Source(fn.name(), fn.serialize(), lambda fn=fn: fn)
-                            for fn in functions], folder)
+    return compile_sources([Source.formed(fn) for fn in functions], folder)
 
 
 def compile_sources(sources: list[Source], folder: Path | None = None) -> list[ca.Function]:

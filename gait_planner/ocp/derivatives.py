@@ -96,8 +96,7 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict
     if compiler is None:
         pairs = [(_element_jacobian(group), _element_hessian(group)) for group in tr.elements]
     else:  # a cached library is loaded, not formed; large one-node derivatives stay in the VM
-        rest = [Source(fn.name(), f"rest\n{fn.serialize()}", lambda fn=fn: fn)
-                for fn in (rest_grad, rest_jac, rest_hess)]
+        rest = [Source.formed(fn) for fn in (rest_grad, rest_jac, rest_hess)]
         done = iter(compiler(rest + [s for group in tr.elements
                                      for s in _element_derivatives(group)]))
         rest_grad, rest_jac, rest_hess = next(done), next(done), next(done)
