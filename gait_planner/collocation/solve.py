@@ -71,11 +71,8 @@ from gait_planner.result import PlanResult
 # relaxed stage had not converged after 1000, so a longer first attempt only delays the
 # "spline" one, at 0.2-0.4 s an iteration), and the inertia-free test with the settings'
 # whole iteration budget (module docstring; measured with these caps)
-# (the first stage without the product's COLD_MULTIPLIER_PUSH: measured on the DMOCC
-# problem only, 2026-11-25; the collocation figures in benchmarks/REPORT.md are without it)
 COLLOCATION_VARIANTS = {**VARIANTS, "cold": {**INERTIA_FREE, "ipopt.max_iter": 150},
                         "cold_full": INERTIA_FREE}
-COLLOCATION_VARIANTS["cold_start"] = COLLOCATION_VARIANTS["cold"]
 # Cold attempts (guess mapping, stages as `COLD_ATTEMPTS`), in order (module docstring)
 ATTEMPTS = (("linear", COLD_ATTEMPTS[0]),
             ("spline", [("cold_full", True, True), ("cold_full", False, False)]),

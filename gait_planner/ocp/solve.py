@@ -59,23 +59,8 @@ FIRST_ATTEMPT_ITERATIONS = 400
 # torque-squared plan then missed the continuous-dynamics certificate after both
 # refinements (0.278 %; 2026-11-25, benchmarks/HISTORY.md).
 NEAR_OPTIMUM = {f"ipopt.mumps_{option}": 0 for option in ("permuting_scaling", "scaling")}
-# The bound multipliers (and those of the inequality rows) a cold plan's first stage starts
-# from. A cold start passes zero multipliers with warm_start_init_point, and IPOPT lifts each
-# to warm_start_mult_bound_push (1e-3 by default): products of slack and multiplier far
-# below the barrier parameter, a start off the central path, and the adaptive mu jumped
-# between 1e-2 and 1e-8 in the first iterations, with steps cut to 1-20 % by the
-# fraction-to-the-boundary rule. From 0.1 walker3d's default request took 46 instead of 64
-# iterations (26 + 20; Prescott numpy kernels 47 instead of 78) to the same optimum, and on
-# 6, 10, 12 intervals per phase 62, 74, 52 instead of 85, 69, 109 (two of them lower
-# minima); walker2d 43 instead of 44. Over request_sweep.py's eleven requests under two
-# kernels: walker3d 2068 against 2022 iterations, walker2d 1704 against 1767; 1e-2 was
-# worse (2111, 1466; 2026-11-25, benchmarks/HISTORY.md). The second stage starts from the
-# first one's multipliers and keeps IPOPT's push (1e-2 there: 112 instead of 20 iterations).
-COLD_MULTIPLIER_PUSH = 0.1
 # IPOPT options of the solver variants beyond the common ones (`ipopt_options`)
 VARIANTS = {
-    "cold_start": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS,
-                   "ipopt.warm_start_mult_bound_push": COLD_MULTIPLIER_PUSH},
     "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
     "cold_inertia": {},
     "warm": {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
@@ -91,7 +76,7 @@ VARIANTS = {
 # stopped early, by IPOPT's tol 1e-3 or near the first stage's optimum, the sweeps took up
 # to 10 % fewer iterations but CasADi's derivatives ended at J 20.8088 instead of 20.7648;
 # benchmarks/HISTORY.md).
-COLD_ATTEMPTS = ([("cold_start", True, True), ("cold", False, False)],
+COLD_ATTEMPTS = ([("cold", True, True), ("cold", False, False)],
                  [("cold_inertia", True, True), ("cold_inertia", False, False)])
 WARM_ATTEMPTS = ([("warm", False, False)],)
 

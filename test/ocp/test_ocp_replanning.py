@@ -141,7 +141,7 @@ def test_failed_inertia_free_attempt_restarts_with_the_inertia_test(monkeypatch)
     guess with IPOPT's inertia correction, converges, and says so."""
     from gait_planner.ocp import solve
 
-    monkeypatch.setitem(solve.VARIANTS, "cold_start", {**solve.VARIANTS["cold_start"], "ipopt.max_iter": 3})
+    monkeypatch.setitem(solve.VARIANTS, "cold", {**solve.VARIANTS["cold"], "ipopt.max_iter": 3})
     scene = load_scene("compass")
     result = Planner().plan(scene, settings_for(scene))
     assert result.success, result.message

@@ -53,7 +53,7 @@ def test_a_warm_start_from_the_plan_library_passes_the_checker(walker2d, tmp_pat
 
 
 def test_the_inertia_test_restart_passes_the_checker(walker2d, monkeypatch):
-    monkeypatch.setitem(solve.VARIANTS, "cold_start", {**solve.VARIANTS["cold_start"], "ipopt.max_iter": 3})
+    monkeypatch.setitem(solve.VARIANTS, "cold", {**solve.VARIANTS["cold"], "ipopt.max_iter": 3})
     result = Planner().plan(walker2d, settings_for(walker2d, compiled=True), warm_start=False)
     assert "restarted with IPOPT's inertia test" in result.settings["initial_guess"]
     _passes(result)
