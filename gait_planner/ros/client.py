@@ -27,24 +27,6 @@ REJECTED = ("rejected: busy (the node plans one request at a time and is plannin
 CANCEL_WAIT = 10.0  # s to wait for the node to answer a cancel request
 GOAL_RESPONSE_WAIT = 5.0  # s to wait for a goal's acceptance before sending the goal again
 GOAL_ATTEMPTS = 3
-# s between checks for the node's service or action server. rclpy's wait_for_service and
-# wait_for_server sleep 0.25 s between checks (rclpy issue #58), and a client process always
-# pays at least one: its first check comes before discovery has found the server. Checked
-# every POLL s, a fresh client found a running node's service after a median of 0.08 s
-# instead of 0.25 s (12 fresh processes, 2026-11-25; discovery itself now and then takes
-# 0.4-2.4 s either way).
-POLL = 0.005
-
-
-def wait_until(ready: Callable[[], bool], timeout: float) -> bool:
-    """Check `ready` (a client's service_is_ready, an action client's server_is_ready)
-    every POLL s until it returns True (then True) or `timeout` s have passed (False)."""
-    deadline = time.monotonic() + timeout
-    while not ready():
-        if time.monotonic() >= deadline:
-            return False
-        time.sleep(POLL)
-    return True
 
 
 def request_msg(args: argparse.Namespace, kind=PlanGait.Request):
@@ -88,7 +70,7 @@ def call_plan_gait(args: argparse.Namespace, *, timeout: float) -> dict:
     node = rclpy.create_node("gait_planner_client")
     try:
         client = node.create_client(PlanGait, SERVICE)
-        if not wait_until(client.service_is_ready, min(timeout, 10.0)):
+        if not client.wait_for_service(timeout_sec=min(timeout, 10.0)):
             raise RuntimeError(f"no service {SERVICE}: is `gait-planner node` running "
                                "(same ROS_DOMAIN_ID)?")
         future = client.call_async(request_msg(args))
@@ -178,7 +160,7 @@ def call_plan_gait_action(args: argparse.Namespace, *, timeout: float,
     node = rclpy.create_node("gait_planner_action_client")
     try:
         client = ActionClient(node, PlanGaitAction, ACTION)
-        if not wait_until(client.server_is_ready, min(timeout, 10.0)):
+        if not client.wait_for_server(timeout_sec=min(timeout, 10.0)):
             raise RuntimeError(f"no action {ACTION}: is `gait-planner node` running "
                                "(same ROS_DOMAIN_ID)?")
         goal = send_goal(
