@@ -6,9 +6,12 @@ the kinematic guess, then re-plans warm with the step length +2 %.
     .venv/bin/python benchmarks/cold_solve.py --scenes walker2d --runs 3
 
 Per run: process start to planner ready (imports and build), the cold plan's time (guess and
-IPOPT), its iterations and the split of IPOPT's time into function/derivative evaluation
-and the rest (mostly MUMPS factorisation and solves), and the warm re-plan. Medians over
-the runs, rows to benchmarks/results/cold_solve.json.
+IPOPT), its iterations, and the warm re-plan. The cold plan's time split by IPOPT's own
+timers (written to a file, `print_timing_statistics`, summed over the plan's IPOPT calls):
+function and derivative evaluation, the primal-dual system (MUMPS's factorisations and
+solves with IPOPT's residuals around them), the rest of IPOPT (line search, barrier update,
+vector operations, the progress callback), and what is outside IPOPT (the guess, the
+result). Medians over the runs, rows to benchmarks/results/cold_solve.json.
 """
 
 from __future__ import annotations
@@ -22,21 +25,31 @@ import time
 import numpy as np
 
 CHILD = """
-import dataclasses, json, time
+import dataclasses, json, os, re, tempfile, time
 start = time.perf_counter()
 from gait_planner.model.loader import load_scene
+from gait_planner.ocp import solve
 from gait_planner.ocp.settings import settings_for
-from gait_planner.ocp.solve import Planner
+timers = os.path.join(tempfile.mkdtemp(), "ipopt.out")
+for options in solve.VARIANTS.values():  # IPOPT's summary and timers to a file, nothing else
+    options.update({{"ipopt.output_file": timers, "ipopt.file_print_level": 3,
+                    "ipopt.file_append": "yes", "ipopt.print_timing_statistics": "yes"}})
 scene = load_scene({scene!r})
 settings = settings_for(scene, compiled=True)
-planner = Planner()
+planner = solve.Planner()
 planner.prepare(scene, settings)
 ready = time.perf_counter() - start
 cold = planner.plan(scene, settings, warm_start=False)
+text = open(timers).read()
+split = {{key: sum(float(v) for v in re.findall(name + r"\\.*:.*?wall:\\s*([0-9.]+)\\)", text))
+         for key, name in (("ipopt", "OverallAlgorithm"), ("kkt", "PDSystemSolverTotal"),
+                           ("evaluation", "Function Evaluations"))}}
 warm = planner.plan(scene, dataclasses.replace(settings, step_length=1.02 * settings.step_length))
 print(json.dumps({{"ready_s": ready,
     "cold_s": cold.stats.solve_time, "cold_iterations": cold.stats.iterations,
     "cold_evaluation_s": cold.stats.evaluation_time, "cold_success": cold.success,
+    "cold_ipopt_s": split["ipopt"], "cold_kkt_s": split["kkt"],
+    "cold_ipopt_evaluation_s": split["evaluation"],
     "cost": cold.cost_value, "warm_s": warm.stats.solve_time,
     "warm_iterations": warm.stats.iterations, "warm_success": warm.success}}))
 """
@@ -50,6 +63,12 @@ def one_run(scene: str) -> dict:
     row["process_s"] = time.perf_counter() - start
     row["cold_per_iteration_ms"] = 1e3 * row["cold_s"] / max(row["cold_iterations"], 1)
     row["cold_evaluation_share"] = row["cold_evaluation_s"] / row["cold_s"]
+    per_iteration = 1e3 / max(row["cold_iterations"], 1)
+    row["cold_evaluation_ms"] = per_iteration * row["cold_ipopt_evaluation_s"]
+    row["cold_kkt_ms"] = per_iteration * row["cold_kkt_s"]
+    row["cold_other_ipopt_ms"] = per_iteration * (row["cold_ipopt_s"] - row["cold_kkt_s"]
+                                                  - row["cold_ipopt_evaluation_s"])
+    row["cold_outside_ipopt_s"] = row["cold_s"] - row["cold_ipopt_s"]
     return row
 
 
@@ -61,7 +80,9 @@ def run(scenes=("walker3d", "walker2d"), runs: int = 5) -> list[dict]:
             r = rows[-1]
             print(f"{scene} run {i}: ready {r['ready_s']:.2f} s, cold {r['cold_s']:.2f} s "
                   f"({r['cold_iterations']} it, {r['cold_per_iteration_ms']:.1f} ms/it, "
-                  f"evaluation {100 * r['cold_evaluation_share']:.0f} %), warm {r['warm_s']:.3f} s "
+                  f"evaluation {r['cold_evaluation_ms']:.1f}, KKT {r['cold_kkt_ms']:.1f}, other "
+                  f"{r['cold_other_ipopt_ms']:.1f} ms/it, outside IPOPT "
+                  f"{r['cold_outside_ipopt_s']:.3f} s), warm {r['warm_s']:.3f} s "
                   f"({r['warm_iterations']} it), J {r['cost']:.6f}", flush=True)
     return rows
 
@@ -72,7 +93,9 @@ def medians(rows: list[dict]) -> dict[str, dict]:
         mine = [r for r in rows if r["scene"] == scene]
         out[scene] = {k: float(np.median([r[k] for r in mine])) for k in
                       ("ready_s", "cold_s", "cold_iterations", "cold_per_iteration_ms",
-                       "cold_evaluation_share", "warm_s", "warm_iterations")}
+                       "cold_evaluation_share", "cold_evaluation_ms", "cold_kkt_ms",
+                       "cold_other_ipopt_ms", "cold_outside_ipopt_s", "warm_s",
+                       "warm_iterations")}
     return out
 
 
