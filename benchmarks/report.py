@@ -248,7 +248,8 @@ def speed(cold, node) -> list[str]:
                 "from the compiled cache, cold plan, warm re-plan at step length +2 %); the cold plan's "
                 "time per iteration split by IPOPT's timers (evaluation, the primal-dual system "
                 "MUMPS factorises and solves, the rest of IPOPT) and the time outside IPOPT "
-                "(guess, result); medians:",
+                "(guess, result), from one more process per scene with the timers on; "
+                "medians:",
                 ""]
         rows = [{"scene": s, **m} for s, m in cold["header"]["medians"].items()]
         out += table(rows, [
