@@ -49,8 +49,8 @@ warm = planner.plan(scene, dataclasses.replace(settings, step_length=1.02 * sett
 print(json.dumps({{"ready_s": ready,
     "cold_s": cold.stats.solve_time, "cold_iterations": cold.stats.iterations,
     "cold_evaluation_s": cold.stats.evaluation_time, "cold_success": cold.success,
-    "cold_ipopt_s": split["ipopt"], "cold_kkt_s": split["kkt"],
-    "cold_ipopt_evaluation_s": split["evaluation"],
+    **({{"cold_ipopt_s": split["ipopt"], "cold_kkt_s": split["kkt"],
+        "cold_ipopt_evaluation_s": split["evaluation"]}} if {timers} else {{}}),
     "cost": cold.cost_value, "warm_s": warm.stats.solve_time,
     "warm_iterations": warm.stats.iterations, "warm_success": warm.success}}))
 """

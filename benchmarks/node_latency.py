@@ -47,10 +47,9 @@ def wait_until(ready, timeout: float) -> bool:
     (False). rclpy's wait_for_service sleeps 0.25 s between checks, which rounded every
     "service offered" before 2026-11-25 up to a multiple of 0.25 s (1.75 s). Here the client
     is an old participant, which a new node's discovery finds before the node creates its
-    service. `gait-planner call` keeps rclpy's waits: with this check a fresh client sends
-    within 5 ms of seeing the server, before the server may have matched its reply reader
-    (the lost answers of test_lost_answers.py), and a fresh clone's test run then failed
-    test_call_action's cancel test once (benchmarks/HISTORY.md)."""
+    service. `gait-planner call` keeps rclpy's waits: with this check a fresh client would
+    send within 5 ms of seeing the server, possibly before the server has matched its reply
+    reader (the lost answers of test_lost_answers.py; benchmarks/HISTORY.md)."""
     deadline = time.monotonic() + timeout
     while not ready():
         if time.monotonic() >= deadline:
