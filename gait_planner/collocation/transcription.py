@@ -55,10 +55,11 @@ from gait_planner.collocation.minimal import MinimalModel
 from gait_planner.ocp.clearance import clearance_rows, clearance_schedule
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import torque_mirror
-from gait_planner.ocp.posture import (joint_limit_constants, joint_limit_margins,
+from gait_planner.ocp.posture import (joint_limit_constants, joint_limit_rows,
                                       joint_speed_margins, twist_squares)
 from gait_planner.ocp.settings import GaitSettings
-from gait_planner.ocp.transcription import FORCE_SCALE, TORQUE_SCALE, relaxed_lower_bounds
+from gait_planner.ocp.transcription import (FORCE_SCALE, TORQUE_SCALE, relaxed_lower_bounds,
+                                            upper_bounds)
 
 ACCELERATION_SCALE = 10.0  # rad/s^2
 
@@ -312,7 +313,7 @@ class CollocationTranscription:
 
     def _limits(self, limits):
         """The product's joint-range margins (`ocp.posture`) and their constants."""
-        return (joint_limit_margins(self.mb, tuple(a for a, _, _ in limits)),
+        return (joint_limit_rows(self.mb, tuple(a for a, _, _ in limits)),
                 ca.DM(joint_limit_constants(self.mb, limits)))
 
     # ---- NLP assembly ----------------------------------------------------------------
@@ -336,16 +337,15 @@ class CollocationTranscription:
 
     def bounds(self):
         """(lbx, ubx, lbg, ubg): sigma within the scaling bounds, the chart's angles within
-        `MinimalModel.chart_limits`; equalities 0, inequalities >= 0."""
+        `MinimalModel.chart_limits`; equalities 0, inequalities >= 0 (joint ranges within
+        [0, 2], `ocp.transcription.upper_bounds`)."""
         blocks = self.variables.blocks
         lbx, ubx = np.concatenate([b[2] for b in blocks]), np.concatenate([b[3] for b in blocks])
         sig = self.variables.index("sigma")
         lbx[sig], ubx[sig] = self.settings.scaling_bounds
         groups = self.constraint_groups()
         lbg = np.zeros(sum(size for _, size, _ in groups))
-        ubg = np.concatenate([np.zeros(size) if eq else np.full(size, np.inf)
-                              for _, size, eq in groups])
-        return lbx, ubx, lbg, ubg
+        return lbx, ubx, lbg, upper_bounds(groups)
 
     def relaxed_lower_bounds(self, lbg: np.ndarray) -> np.ndarray:
         """lbg of the first stage, as the product's (`Transcription.relaxed_lower_bounds`):

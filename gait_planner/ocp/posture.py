@@ -5,9 +5,8 @@ Minimal kinetic energy alone leaves light bodies free to turn far (DESIGN.md sec
 foot spun 143 deg about the shank when nothing held it), so a scene declares ranges,
 e.g. ``joint_limits: {ankle_r_yaw: [-20, 20], knee_r: [0, 70]}`` (degrees) in its gait
 options, checked (and converted to radians) by `gait_planner.model.posture` when the scene
-loads and when a request overrides them. An angle theta is never computed (atan2 would put
-a branch cut into the NLP): with R = D_p^T D_c the rotation of the child relative to the
-parent (D = [d1 d2 d3]),
+loads and when a request overrides them. With R = D_p^T D_c the rotation of the child
+relative to the parent (D = [d1 d2 d3]),
 
 * spherical joints, R = Ry(pitch) Rx(roll) Rz(yaw) (`angles.spherical_rotation`):
   cos(roll) (sin pitch, cos pitch) = (R02, R22), sin roll = -R12,
@@ -15,9 +14,16 @@ parent (D = [d1 d2 d3]),
 * revolute joints about the unit axis a, with b, c = a x b completing a right-handed
   basis: (sin theta, cos theta) = (c^T R b, b^T R b),
 
-and theta in [lo, hi] is k sin(theta - lo) >= 0 and k sin(hi - theta) >= 0 with the
-positive factor k (cos roll, or 1), exact for hi - lo < 180 deg and |roll| < 90 deg; a roll
-range is sin(roll) in [sin lo, sin hi]. All margins are bilinear in the directors.
+and theta in [lo, hi] is one row per angle, (theta - lo) / w in [0, JOINT_RANGE_ROW_UPPER
+= 2] with the half width w = (hi - lo) / 2 (< 90 deg): the distance from the lower bound
+in half widths, computed as 1 + atan2(k sin(theta - m), k cos(theta - m)) / w about the
+range's middle m with the positive factor k (cos roll, or 1). atan2's branch cut lies at
+theta = m +- 180 deg, where the row is below 0 on one side and above 2 on the other: never
+in or next to the range. A roll range is (sin roll - sin lo) / w_s in [0, 2] with
+w_s = (sin hi - sin lo) / 2. One row with two bounds per angle: IPOPT gives every
+inequality row a slack and a row of its KKT system, and the earlier two rows per angle,
+k sin(theta - lo) >= 0 and k sin(hi - theta) >= 0, were 1092 of walker3d's 1565
+inequality rows (14 of them active at the optimum; benchmarks/HISTORY.md).
 """
 
 from __future__ import annotations
@@ -60,14 +66,19 @@ def _angle_parts(scene: Scene) -> dict[str, tuple[str, str, np.ndarray, np.ndarr
     return out
 
 
-def joint_limit_margins(mb: Multibody, names: tuple[str, ...],
-                        function_name: str = "joint_limits") -> ca.Function:
-    """CasADi Function `function_name`: (q (k,), c (6 len(names),)) -> margins
-    (2 len(names),), each >= 0 exactly when its angle lies in its range (module docstring),
-    with the ranges given by c = `joint_limit_constants(limits)` (an input, so that one
-    compiled function serves any range of the same angles)."""
+# Upper bound of every joint-range row (`joint_limit_rows`); the lower bound is 0.
+JOINT_RANGE_ROW_UPPER = 2.0
+
+
+def joint_limit_rows(mb: Multibody, names: tuple[str, ...],
+                     function_name: str = "joint_limits") -> ca.Function:
+    """CasADi Function `function_name`: (q (k,), c (4 len(names),)) -> rows (len(names),),
+    each in [0, JOINT_RANGE_ROW_UPPER] exactly when its angle lies in its range: (theta -
+    lo) / w, or (sin roll - sin lo) / w_s for a roll (module docstring), with the ranges
+    given by c = `joint_limit_constants(limits)` (an input, so that one compiled function
+    serves any range of the same angles)."""
     parts = _angle_parts(mb.scene)
-    q, c = ca.SX.sym("q", mb.k), ca.SX.sym("c", 6 * len(names))
+    q, c = ca.SX.sym("q", mb.k), ca.SX.sym("c", 4 * len(names))
 
     def directors(body):
         start = mb.block(body).start
@@ -78,25 +89,29 @@ def joint_limit_margins(mb: Multibody, names: tuple[str, ...],
         parent, child, S, C = parts[name]
         R = ca.mtimes(directors(parent).T, directors(child))
         sin_part = ca.sum1(ca.sum2(ca.DM(S) * R))
-        cos_part = 0 if C is None else ca.sum1(ca.sum2(ca.DM(C) * R))
-        a = c[6 * i : 6 * i + 6]
-        rows += [a[0] * sin_part + a[1] * cos_part + a[2],
-                 a[3] * sin_part + a[4] * cos_part + a[5]]
-    return ca.Function(function_name, [q, c], [ca.vertcat(*rows)], ["q", "c"], ["margins"])
+        a = c[4 * i : 4 * i + 4]
+        if C is None:  # a roll: (sin roll - sin lo) / w_s
+            rows.append((sin_part - a[0]) * a[1])
+        else:  # 1 + atan2(k sin(theta - m), k cos(theta - m)) / w
+            cos_part = ca.sum1(ca.sum2(ca.DM(C) * R))
+            rows.append(1 + a[2] * ca.atan2(a[0] * sin_part - a[1] * cos_part,
+                                            a[0] * cos_part + a[1] * sin_part))
+    return ca.Function(function_name, [q, c], [ca.vertcat(*rows)], ["q", "c"], ["rows"])
 
 
 def joint_limit_constants(mb: Multibody, limits: tuple[tuple[str, float, float], ...]) -> np.ndarray:
-    """c (6 len(limits),) of `joint_limit_margins` for (angle, lower rad, upper rad) ranges,
-    as returned by `gait_planner.model.posture.check_joint_limits`: per angle the
-    coefficients (a, b, d) of the lower and the upper margin a k sin + b k cos + d, i.e.
-    k sin(theta - lo) and k sin(hi - theta), or sin(roll) - sin lo and sin hi - sin(roll)."""
+    """c (4 len(limits),) of `joint_limit_rows` for (angle, lower rad, upper rad) ranges,
+    as returned by `gait_planner.model.posture.check_joint_limits` (0 < hi - lo < 180 deg):
+    per angle (cos m, sin m, 1 / w, 0) with the range's middle m and half width w, or for a
+    roll (sin lo, 1 / w_s, 0, 0)."""
     parts = _angle_parts(mb.scene)
     out = []
     for name, lo, hi in limits:
         if parts[name][3] is None:
-            out += [1.0, 0.0, -math.sin(lo), -1.0, 0.0, math.sin(hi)]
+            out += [math.sin(lo), 2.0 / (math.sin(hi) - math.sin(lo)), 0.0, 0.0]
         else:
-            out += [math.cos(lo), -math.sin(lo), 0.0, -math.cos(hi), math.sin(hi), 0.0]
+            middle, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+            out += [math.cos(middle), math.sin(middle), 1.0 / half, 0.0]
     return np.array(out)
 
 

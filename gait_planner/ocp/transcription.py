@@ -49,7 +49,8 @@ from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.ocp.clearance import clearance_rows, clearance_schedule
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import configuration_mirror, increment_mirror, torque_mirror
-from gait_planner.ocp.posture import (joint_limit_constants, joint_limit_margins,
+from gait_planner.ocp.posture import (JOINT_RANGE_ROW_UPPER, joint_limit_constants,
+                                      joint_limit_rows,
                                       joint_speed_margins, twist_squares)
 from gait_planner.ocp.settings import GaitSettings
 
@@ -369,11 +370,11 @@ class Transcription:
         for name, function_name, nodes, limits in ranges:
             if nodes and limits:
                 first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
-                margins = self._node_terms(
-                    joint_limit_margins(mb, tuple(a for a, _, _ in limits), function_name),
+                rows = self._node_terms(
+                    joint_limit_rows(mb, tuple(a for a, _, _ in limits), function_name),
                     joint_limit_constants(mb, limits), first_row, nodes)
-                self._ineq.append((name, ca.vec(margins)))
-                self._without_elements[name] = ca.MX(margins.numel(), 1)
+                self._ineq.append((name, ca.vec(rows)))
+                self._without_elements[name] = ca.MX(rows.numel(), 1)
         if s.joint_speed_max > 0 and mb.scene.joints:
             first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
             speed = self._interval_terms(joint_speed_margins(mb), math.radians(s.joint_speed_max),
@@ -664,8 +665,7 @@ class Transcription:
         nsig = int(self.S.shape[0])
         lbx[-nsig:], ubx[-nsig:] = self.settings.scaling_bounds
         lbg = np.concatenate([np.zeros(n_eq), np.zeros(n_in)])
-        ubg = np.concatenate([np.zeros(n_eq), np.full(n_in, np.inf)])
-        return lbx, ubx, lbg, ubg
+        return lbx, ubx, lbg, upper_bounds(self.constraint_groups())
 
     def relaxed_lower_bounds(self, lbg: np.ndarray) -> np.ndarray:
         """lbg of a first, relaxed stage: swing points only above the ground (not by
@@ -674,6 +674,15 @@ class Transcription:
         every limit from the start its inertia-free attempt stalled (walker3d: 851
         iterations through the fallback; benchmarks/HISTORY.md)."""
         return relaxed_lower_bounds(self.constraint_groups(), lbg, self.clearances)
+
+
+def upper_bounds(groups) -> np.ndarray:
+    """ubg of the groups [(name, size, is_equality)] in the order of g: 0 for equalities,
+    JOINT_RANGE_ROW_UPPER for the joint ranges ("joint_limits", "joint_limits[phase]",
+    `posture.joint_limit_rows`), no bound for the other inequalities (>= 0)."""
+    return np.concatenate([np.zeros(size) if eq else np.full(
+        size, JOINT_RANGE_ROW_UPPER if name.startswith("joint_limits") else np.inf)
+        for name, size, eq in groups])
 
 
 def relaxed_lower_bounds(groups, lbg: np.ndarray, clearances: list[float]) -> np.ndarray:

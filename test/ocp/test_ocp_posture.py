@@ -1,7 +1,8 @@
-"""Posture: joint-range margins (`gait_planner.ocp.posture`) against the angles of
-`gait_planner.model.angles` (for random poses and random ranges, every margin is >= 0
-exactly when the numpy angle lies in its range, and the margin's size is the sine of the
-distance to the bound, times cos roll for pitch and yaw); the posture options' checks
+"""Posture: joint-range rows (`gait_planner.ocp.posture`) against the angles of
+`gait_planner.model.angles` (for random poses and random ranges, every row lies in
+[0, JOINT_RANGE_ROW_UPPER] exactly when the numpy angle lies in its range, and the row is
+the distance from the lower bound in half widths, of the sines for a roll; near the branch
+cut of atan2 both sides are outside); the posture options' checks
 (`gait_planner.model.posture`), torso_lean_max in degrees; walker2d's plan upright."""
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.posture import PostureError, check_joint_limits
 from gait_planner.model.scene import InitialPose, JointType
-from gait_planner.ocp.posture import joint_limit_constants, joint_limit_margins
+from gait_planner.ocp.posture import (JOINT_RANGE_ROW_UPPER, joint_limit_constants,
+                                      joint_limit_rows)
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.transcription import Transcription
 
@@ -29,10 +31,14 @@ _MB = Multibody(_SCENE)
 _NAMES = [n for j in _SCENE.joints for n in j.angle_names]
 
 
-def _margins(limits, q):
-    """The margins of `limits` ((angle, lo, hi) in rad) at configuration q."""
+def _rows(limits, q):
+    """The rows (n,) of `limits` ((angle, lo, hi) in rad) at configuration q."""
     names = tuple(name for name, _, _ in limits)
-    return joint_limit_margins(_MB, names)(q, joint_limit_constants(_MB, limits))
+    return np.array(joint_limit_rows(_MB, names)(q, joint_limit_constants(_MB, limits))).ravel()
+
+
+def _inside(row):
+    return 0.0 <= row <= JOINT_RANGE_ROW_UPPER
 
 
 def _pose(values):
@@ -55,36 +61,47 @@ RANGES = st.lists(st.tuples(st.floats(-80, 80), st.floats(1, 90)),
 
 @settings(max_examples=60, deadline=None)
 @given(values=ANGLES, ranges=RANGES)
-def test_margins_have_the_sign_and_size_of_the_distance_to_the_bounds(values, ranges):
+def test_rows_are_the_distance_from_the_lower_bound_in_half_widths(values, ranges):
     limits = {name: (lo, min(lo + width, 90.0 if _is_roll(name) else lo + width))
               for name, (lo, width) in zip(_NAMES, ranges)}
     limits = {k: v for k, v in limits.items() if v[1] > v[0]}
     checked = check_joint_limits(_SCENE, limits)
     q = configuration(_SCENE, _pose(values))
     theta = dict(zip(_NAMES, joint_angles(_SCENE, q)))
-    margins = np.array(_margins(checked, q)).ravel()
-    for i, (name, lo, hi) in enumerate(checked):
+    rows = _rows(checked, q)
+    for row, (name, lo, hi) in zip(rows, checked):
         t = theta[name]
         if _is_roll(name):
-            expected = (math.sin(t) - math.sin(lo), math.sin(hi) - math.sin(t))
-        else:
-            k = 1.0
-            if name.endswith(("_pitch", "_yaw")):
-                k = math.cos(theta[name.rsplit("_", 1)[0] + "_roll"])
-            expected = (k * math.sin(t - lo), k * math.sin(hi - t))
-        np.testing.assert_allclose(margins[2 * i : 2 * i + 2], expected, atol=1e-12)
+            expected = 2 * (math.sin(t) - math.sin(lo)) / (math.sin(hi) - math.sin(lo))
+        else:  # the angle about the range's middle, in (-180, 180] deg
+            middle = 0.5 * (lo + hi)
+            expected = 1 + math.remainder(t - middle, 2 * math.pi) / (0.5 * (hi - lo))
+        assert row == pytest.approx(expected, abs=1e-9)
         inside = lo <= t <= hi
-        assert (margins[2 * i] >= -1e-12 and margins[2 * i + 1] >= -1e-12) == inside or \
-            min(abs(t - lo), abs(t - hi)) < 1e-9
+        assert _inside(row) == inside or min(abs(t - lo), abs(t - hi)) < 1e-9
+
+
+@settings(max_examples=40, deadline=None)
+@given(offset=st.floats(1e-3, 3.0), width=st.floats(1, 179))
+def test_the_branch_cut_is_outside_the_range_on_both_sides(offset, width):
+    """A knee turned half a revolution from its range's middle, just before and after the
+    cut of atan2: its row is below 0 on one side and above the upper bound on the other."""
+    knee = next(j for j in _SCENE.joints if j.type is JointType.REVOLUTE).angle_names[0]
+    lo, hi = -width / 2, width / 2
+    limits = check_joint_limits(_SCENE, {knee: (lo, hi)})
+    for side in (-1.0, 1.0):
+        angle = math.pi + side * math.radians(offset)
+        values = [0.0] * 3 + [angle] + [0.0] * 10
+        row = _rows(limits, configuration(_SCENE, _pose(values)))[0]
+        assert not _inside(row)
 
 
 def test_upright_pose_is_inside_symmetric_ranges_and_outside_shifted_ones():
     q = configuration(_SCENE)
     inside = check_joint_limits(_SCENE, {n: (-10, 10) for n in _NAMES})
     outside = check_joint_limits(_SCENE, {n: (5, 10) for n in _NAMES})
-    assert np.all(np.array(_margins(inside, q)) > 0.1)
-    low = np.array(_margins(outside, q)).ravel()[0::2]
-    assert np.all(low < -0.08)
+    assert np.allclose(_rows(inside, q), 1.0)  # every angle 0, the ranges' middle
+    assert np.all(_rows(outside, q) < -1.5)  # 5 deg below a range 5 deg wide
 
 
 def test_revolute_axis_of_any_direction():
@@ -92,9 +109,7 @@ def test_revolute_axis_of_any_direction():
     q = configuration(_SCENE, _pose([0.0] * 3 + [0.7] + [0.0] * 10))
     assert joint_angles(_SCENE, q)[3] == pytest.approx(0.7)
     limits = check_joint_limits(_SCENE, {knee.angle_names[0]: (0, 40)})
-    below, above = np.array(_margins(limits, q)).ravel()
-    assert below == pytest.approx(math.sin(0.7)) and above == pytest.approx(
-        math.sin(math.radians(40) - 0.7))
+    assert _rows(limits, q)[0] == pytest.approx(0.7 / math.radians(20))
 
 
 @pytest.mark.parametrize("limits, words", [
