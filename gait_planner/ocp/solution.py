@@ -9,7 +9,7 @@ from gait_planner.model.angles import angle_names, joint_angles
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.mirror import contact_partners
 from gait_planner.ocp.settings import GaitSettings
-from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
+from gait_planner.ocp.transcription import FORCE_SCALE, Transcription, upper_bounds
 from gait_planner.result import PlanResult, SolverStats
 
 STATUS_WORDS = {
@@ -34,13 +34,15 @@ SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
 def violations(tr: Transcription, g: np.ndarray) -> dict[str, float]:
-    """Largest violation of each constraint group (equalities |g|, inequalities max(0, -g));
+    """Largest violation of each constraint group (equalities |g|, inequalities below 0 or
+    above their upper bound, `upper_bounds`: the joint ranges' rows lie in [0, 2]);
     tr: a transcription's constraint_groups() (also the collocation baseline's)."""
-    out, offset = {}, 0
-    for name, size, equality in tr.constraint_groups():
-        part = g[offset : offset + size]
+    groups = tr.constraint_groups()
+    out, offset, upper = {}, 0, upper_bounds(groups)
+    for name, size, equality in groups:
+        part, bound = g[offset : offset + size], upper[offset : offset + size]
         offset += size
-        v = np.abs(part) if equality else np.maximum(0.0, -part)
+        v = np.abs(part) if equality else np.maximum(0.0, np.maximum(-part, part - bound))
         out[name] = max(out.get(name, 0.0), float(v.max()) if size else 0.0)
     return out
 

@@ -104,6 +104,20 @@ def test_upright_pose_is_inside_symmetric_ranges_and_outside_shifted_ones():
     assert np.all(_rows(outside, q) < -1.5)  # 5 deg below a range 5 deg wide
 
 
+def test_a_row_above_its_range_counts_as_violated():
+    """`ocp.solution.violations` judges a joint-range row against both of its bounds."""
+    from gait_planner.ocp.solution import violations
+
+    tr = Transcription(DiscreteMechanics(_MB), settings_for(_SCENE))
+    names = [name for name, size, _ in tr.constraint_groups() for _ in range(size)]
+    rows = np.flatnonzero(np.array(names) == "joint_limits")
+    g = np.zeros(len(names))
+    g[rows] = 1.0  # every angle at its range's middle
+    assert violations(tr, g)["joint_limits"] == 0.0
+    g[rows[3]], g[rows[5]] = JOINT_RANGE_ROW_UPPER + 0.25, -0.125
+    assert violations(tr, g)["joint_limits"] == 0.25
+
+
 def test_revolute_axis_of_any_direction():
     knee = next(j for j in _SCENE.joints if j.type is JointType.REVOLUTE)
     q = configuration(_SCENE, _pose([0.0] * 3 + [0.7] + [0.0] * 10))
