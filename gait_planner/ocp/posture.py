@@ -1,5 +1,5 @@
 """Joint-range path constraints: every joint angle of `gait_planner.model.angles` kept in
-a declared interval, written as smooth margins of the relative rotation.
+a declared interval, written as one row with two bounds per angle of the relative rotation.
 
 Minimal kinetic energy alone leaves light bodies free to turn far (DESIGN.md section 5: a
 foot spun 143 deg about the shank when nothing held it), so a scene declares ranges,
