@@ -52,14 +52,13 @@ import numpy as np
 
 from gait_planner.collocation.mesh import Mesh
 from gait_planner.collocation.minimal import MinimalModel
-from gait_planner.model.angles import angle_names
 from gait_planner.ocp.clearance import clearance_rows, clearance_schedule
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import torque_mirror
-from gait_planner.ocp.posture import joint_speed_margins, twist_squares
+from gait_planner.ocp.posture import (joint_limit_margins, joint_margin_constants,
+                                      joint_speed_margins, twist_squares)
 from gait_planner.ocp.settings import GaitSettings
-from gait_planner.ocp.transcription import (FORCE_SCALE, TORQUE_SCALE, relaxed_lower_bounds,
-                                            upper_bounds)
+from gait_planner.ocp.transcription import FORCE_SCALE, TORQUE_SCALE, relaxed_lower_bounds
 
 ACCELERATION_SCALE = 10.0  # rad/s^2
 
@@ -278,8 +277,7 @@ class CollocationTranscription:
     def _path(self):
         """The product's path constraints at the knots 1..K (knot K, the image of knot 0,
         is its node N-1; the phase of interval K is the last scene phase), joint speeds
-        over the intervals 0..K-1. The joint ranges are bounds on the knots' angles, which
-        are unknowns here (`range_bounds`), not rows."""
+        over the intervals 0..K-1."""
         mb, s, K, scene = self.mb, self.settings, self.K, self.mb.scene
         phase_names = [scene.gait.phases[self.mesh.phases[c]].name
                        for c in self.mesh.phase_of_interval] + [scene.gait.phases[-1].name]
@@ -298,41 +296,29 @@ class CollocationTranscription:
         if s.torso_height_min > 0:
             self._ineq.append(("torso_height",
                                ca.vertcat(*[q[root + 2] - s.torso_height_min for q in inner])))
-        phase_limits = dict(s.phase_joint_limits)
-        self.knot_ranges = [(j, s.joint_limits + phase_limits.get(phase_names[j], ()))
-                            for j in range(1, K + 1)]
+        if s.joint_limits:
+            fn, c = self._limits(s.joint_limits)
+            self._ineq.append(("joint_limits", ca.vertcat(*[fn(q, c) for q in inner])))
+        for phase, limits in s.phase_joint_limits:
+            fn, c = self._limits(limits)
+            rows = [fn(self.q[j], c) for j in range(1, K + 1) if phase_names[j] == phase]
+            if rows:
+                self._ineq.append((f"joint_limits[{phase}]", ca.vertcat(*rows)))
         if s.joint_speed_max > 0 and scene.joints:
             fn, c = joint_speed_margins(mb), ca.DM([s.base_time_step,
                                                    math.radians(s.joint_speed_max)])
             self._ineq.append(("joint_speed", ca.vertcat(
                 *[fn(self.q[j], self.q[j + 1], self.h[j], c) for j in range(K)])))
 
-    def range_bounds(self, lbx: np.ndarray, ubx: np.ndarray) -> None:
-        """Narrows (lbx, ubx) to the joint ranges of every knot 1..K (`knot_ranges`, from
-        the settings' joint_limits and phase_joint_limits): theta holds the joint angles of
-        `gait_planner.model.angles`, so a range is a bound on an unknown; knot K, the
-        mirror image of knot 0, bounds knot 0's angles through the mirror's signed
-        permutation of them. (The product has no angles among its unknowns and writes
-        the ranges as rows, `ocp.posture`; here rows for them made walker3d's baseline
-        miss the 150 s limit on 4 and 6 intervals per phase, benchmarks/HISTORY.md.)"""
-        n, root, K = self.model.n, self.mb.root_dof, self.K
-        index = {name: root + i for i, name in enumerate(angle_names(self.mb.scene))}
-        theta, image = ca.SX.sym("theta", n), self.model.mirror
-        P = np.array(ca.Function("P", [theta], [ca.jacobian(image(theta, 0.0), theta)])(
-            np.zeros(n)))
-        start = self.variables.index("theta").start
-        for j, limits in self.knot_ranges:
-            for name, lo, hi in limits:
-                i = index[name]
-                if j == K:  # the image's angle i is sign * angle `source` of knot 0
-                    source = int(np.flatnonzero(P[i])[0])
-                    sign, i, j = P[i, source], source, 0
-                    lo, hi = (lo, hi) if sign > 0 else (-hi, -lo)
-                at = start + j * n + i
-                lbx[at], ubx[at] = max(lbx[at], lo), min(ubx[at], hi)
-                if lbx[at] > ubx[at]:
-                    raise ValueError(f"the range of {name} lies outside the baseline's chart "
-                                     f"(|roll| <= 80 deg, `MinimalModel.chart_limits`)")
+    def _limits(self, limits):
+        """The joint-range margins (`ocp.posture.joint_limit_margins`, two one-sided rows per
+        angle) and their constants. Not the product's one row per angle with two bounds
+        (`ocp.posture.joint_limit_rows`): with those, and with the ranges as bounds on the
+        knots' angles, this baseline's walker3d plans missed work_precision.py's 150 s limit
+        on 4 and 6 intervals per phase (and with the rows on 8 and 12), where the margins
+        converge on 4, 6 and 8 (benchmarks/HISTORY.md, 2026-11-26)."""
+        return (joint_limit_margins(self.mb, tuple(a for a, _, _ in limits)),
+                ca.DM(joint_margin_constants(self.mb, limits)))
 
     # ---- NLP assembly ----------------------------------------------------------------
 
@@ -355,16 +341,16 @@ class CollocationTranscription:
 
     def bounds(self):
         """(lbx, ubx, lbg, ubg): sigma within the scaling bounds, the chart's angles within
-        `MinimalModel.chart_limits` and the knots' joint angles within their ranges
-        (`range_bounds`); equalities 0, inequalities >= 0."""
+        `MinimalModel.chart_limits`; equalities 0, inequalities >= 0."""
         blocks = self.variables.blocks
         lbx, ubx = np.concatenate([b[2] for b in blocks]), np.concatenate([b[3] for b in blocks])
         sig = self.variables.index("sigma")
         lbx[sig], ubx[sig] = self.settings.scaling_bounds
         groups = self.constraint_groups()
-        self.range_bounds(lbx, ubx)
         lbg = np.zeros(sum(size for _, size, _ in groups))
-        return lbx, ubx, lbg, upper_bounds(groups)
+        ubg = np.concatenate([np.zeros(size) if eq else np.full(size, np.inf)
+                              for _, size, eq in groups])
+        return lbx, ubx, lbg, ubg
 
     def relaxed_lower_bounds(self, lbg: np.ndarray) -> np.ndarray:
         """lbg of the first stage, as the product's (`Transcription.relaxed_lower_bounds`):

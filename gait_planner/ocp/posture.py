@@ -23,7 +23,9 @@ in or next to the range. A roll range is (sin roll - sin lo) / w_s in [0, 2] wit
 w_s = (sin hi - sin lo) / 2. One row with two bounds per angle: IPOPT gives every
 inequality row a slack and a row of its KKT system, and the earlier two rows per angle,
 k sin(theta - lo) >= 0 and k sin(hi - theta) >= 0, were 1092 of walker3d's 1565
-inequality rows (14 of them active at the optimum; benchmarks/HISTORY.md).
+inequality rows (14 of them active at the optimum; benchmarks/HISTORY.md). Those two rows
+remain as `joint_limit_margins`, the form the collocation baseline converges with
+(`collocation.transcription`).
 """
 
 from __future__ import annotations
@@ -79,15 +81,10 @@ def joint_limit_rows(mb: Multibody, names: tuple[str, ...],
     serves any range of the same angles)."""
     parts = _angle_parts(mb.scene)
     q, c = ca.SX.sym("q", mb.k), ca.SX.sym("c", 4 * len(names))
-
-    def directors(body):
-        start = mb.block(body).start
-        return ca.reshape(q[start + 3 : start + 12], 3, 3)  # columns d1, d2, d3
-
     rows = []
     for i, name in enumerate(names):
         parent, child, S, C = parts[name]
-        R = ca.mtimes(directors(parent).T, directors(child))
+        R = _rotation_between(mb, q, parent, child)
         sin_part = ca.sum1(ca.sum2(ca.DM(S) * R))
         a = c[4 * i : 4 * i + 4]
         if C is None:  # a roll: (sin roll - sin lo) / w_s
@@ -115,11 +112,51 @@ def joint_limit_constants(mb: Multibody, limits: tuple[tuple[str, float, float],
     return np.array(out)
 
 
-def _relative_rotation(mb: Multibody, q, joint):
-    """R_rel = D_parent^T D_child (3, 3) of `joint` at configuration q (SX)."""
+def joint_limit_margins(mb: Multibody, names: tuple[str, ...],
+                        function_name: str = "joint_limits") -> ca.Function:
+    """CasADi Function `function_name`: (q (k,), c (6 len(names),)) -> margins
+    (2 len(names),), the collocation baseline's form of the ranges (`collocation.transcription`):
+    two one-sided rows per angle, k sin(theta - lo) >= 0 and k sin(hi - theta) >= 0, or
+    sin(roll) - sin lo and sin hi - sin(roll), each >= 0 exactly when its angle lies in its
+    range (hi - lo < 180 deg, |roll| < 90 deg), with the ranges given by
+    c = `joint_margin_constants(limits)`."""
+    parts = _angle_parts(mb.scene)
+    q, c = ca.SX.sym("q", mb.k), ca.SX.sym("c", 6 * len(names))
+    rows = []
+    for i, name in enumerate(names):
+        parent, child, S, C = parts[name]
+        R = _rotation_between(mb, q, parent, child)
+        sin_part = ca.sum1(ca.sum2(ca.DM(S) * R))
+        cos_part = 0 if C is None else ca.sum1(ca.sum2(ca.DM(C) * R))
+        a = c[6 * i : 6 * i + 6]
+        rows += [a[0] * sin_part + a[1] * cos_part + a[2],
+                 a[3] * sin_part + a[4] * cos_part + a[5]]
+    return ca.Function(function_name, [q, c], [ca.vertcat(*rows)], ["q", "c"], ["margins"])
+
+
+def joint_margin_constants(mb: Multibody, limits: tuple[tuple[str, float, float], ...]) -> np.ndarray:
+    """c (6 len(limits),) of `joint_limit_margins`: per angle the coefficients (a, b, d) of
+    the lower and the upper margin a k sin + b k cos + d."""
+    parts = _angle_parts(mb.scene)
+    out = []
+    for name, lo, hi in limits:
+        if parts[name][3] is None:
+            out += [1.0, 0.0, -math.sin(lo), -1.0, 0.0, math.sin(hi)]
+        else:
+            out += [math.cos(lo), -math.sin(lo), 0.0, -math.cos(hi), math.sin(hi), 0.0]
+    return np.array(out)
+
+
+def _rotation_between(mb: Multibody, q, parent: str, child: str):
+    """R = D_parent^T D_child (3, 3) at configuration q (SX), D = [d1 d2 d3] of a body."""
     D = [ca.reshape(q[mb.block(b).start + 3 : mb.block(b).start + 12], 3, 3)
-         for b in (joint.parent, joint.child)]
+         for b in (parent, child)]
     return ca.mtimes(D[0].T, D[1])
+
+
+def _relative_rotation(mb: Multibody, q, joint):
+    """R_rel of `joint` (`_rotation_between` its parent and child)."""
+    return _rotation_between(mb, q, joint.parent, joint.child)
 
 
 def joint_speed_margins(mb: Multibody) -> ca.Function:

@@ -9,7 +9,7 @@ from gait_planner.model.angles import angle_names, joint_angles
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.mirror import contact_partners
 from gait_planner.ocp.settings import GaitSettings
-from gait_planner.ocp.transcription import FORCE_SCALE, Transcription, upper_bounds
+from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
 from gait_planner.result import PlanResult, SolverStats
 
 STATUS_WORDS = {
@@ -35,10 +35,10 @@ SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 def violations(tr: Transcription, g: np.ndarray) -> dict[str, float]:
     """Largest violation of each constraint group (equalities |g|, inequalities below 0 or
-    above their upper bound, `upper_bounds`: the joint ranges' rows lie in [0, 2]);
-    tr: a transcription's constraint_groups() (also the collocation baseline's)."""
-    groups = tr.constraint_groups()
-    out, offset, upper = {}, 0, upper_bounds(groups)
+    above their upper bound: the product's joint-range rows lie in [0, 2]); tr: a
+    transcription, with constraint_groups() and bounds() (also the collocation baseline's)."""
+    groups, upper = tr.constraint_groups(), tr.bounds()[3]
+    out, offset = {}, 0
     for name, size, equality in groups:
         part, bound = g[offset : offset + size], upper[offset : offset + size]
         offset += size

@@ -22,7 +22,8 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.model.posture import PostureError, check_joint_limits
 from gait_planner.model.scene import InitialPose, JointType
 from gait_planner.ocp.posture import (JOINT_RANGE_ROW_UPPER, joint_limit_constants,
-                                      joint_limit_rows)
+                                      joint_limit_margins, joint_limit_rows,
+                                      joint_margin_constants)
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.transcription import Transcription
 
@@ -79,6 +80,35 @@ def test_rows_are_the_distance_from_the_lower_bound_in_half_widths(values, range
         assert row == pytest.approx(expected, abs=1e-9)
         inside = lo <= t <= hi
         assert _inside(row) == inside or min(abs(t - lo), abs(t - hi)) < 1e-9
+
+
+@settings(max_examples=40, deadline=None)
+@given(values=ANGLES, ranges=RANGES)
+def test_the_baselines_margins_have_the_sign_and_size_of_the_distance_to_the_bounds(
+        values, ranges):
+    """`joint_limit_margins` (the collocation baseline's two rows per angle): each >= 0
+    exactly when the angle lies in its range, the sine of the distance to the bound times
+    cos roll for pitch and yaw, the difference of the sines for a roll."""
+    limits = {name: (lo, min(lo + width, 90.0 if _is_roll(name) else lo + width))
+              for name, (lo, width) in zip(_NAMES, ranges)}
+    checked = check_joint_limits(_SCENE, {k: v for k, v in limits.items() if v[1] > v[0]})
+    q = configuration(_SCENE, _pose(values))
+    theta = dict(zip(_NAMES, joint_angles(_SCENE, q)))
+    names = tuple(name for name, _, _ in checked)
+    margins = np.array(joint_limit_margins(_MB, names)(
+        q, joint_margin_constants(_MB, checked))).ravel()
+    for i, (name, lo, hi) in enumerate(checked):
+        t = theta[name]
+        if _is_roll(name):
+            expected = (math.sin(t) - math.sin(lo), math.sin(hi) - math.sin(t))
+        else:
+            k = math.cos(theta[name.rsplit("_", 1)[0] + "_roll"]) \
+                if name.endswith(("_pitch", "_yaw")) else 1.0
+            expected = (k * math.sin(t - lo), k * math.sin(hi - t))
+        np.testing.assert_allclose(margins[2 * i : 2 * i + 2], expected, atol=1e-12)
+        inside = lo <= t <= hi
+        assert (min(margins[2 * i : 2 * i + 2]) >= -1e-12) == inside or \
+            min(abs(t - lo), abs(t - hi)) < 1e-9
 
 
 @settings(max_examples=40, deadline=None)
