@@ -79,18 +79,13 @@ def joint_limit_rows(mb: Multibody, names: tuple[str, ...],
     lo) / w, or (sin roll - sin lo) / w_s for a roll (module docstring), with the ranges
     given by c = `joint_limit_constants(limits)` (an input, so that one compiled function
     serves any range of the same angles)."""
-    parts = _angle_parts(mb.scene)
     q, c = ca.SX.sym("q", mb.k), ca.SX.sym("c", 4 * len(names))
     rows = []
-    for i, name in enumerate(names):
-        parent, child, S, C = parts[name]
-        R = _rotation_between(mb, q, parent, child)
-        sin_part = ca.sum1(ca.sum2(ca.DM(S) * R))
+    for i, (sin_part, cos_part) in enumerate(_sin_cos_parts(mb, q, names)):
         a = c[4 * i : 4 * i + 4]
-        if C is None:  # a roll: (sin roll - sin lo) / w_s
+        if cos_part is None:  # a roll: (sin roll - sin lo) / w_s
             rows.append((sin_part - a[0]) * a[1])
         else:  # 1 + atan2(k sin(theta - m), k cos(theta - m)) / w
-            cos_part = ca.sum1(ca.sum2(ca.DM(C) * R))
             rows.append(1 + a[2] * ca.atan2(a[0] * sin_part - a[1] * cos_part,
                                             a[0] * cos_part + a[1] * sin_part))
     return ca.Function(function_name, [q, c], [ca.vertcat(*rows)], ["q", "c"], ["rows"])
@@ -120,14 +115,10 @@ def joint_limit_margins(mb: Multibody, names: tuple[str, ...],
     sin(roll) - sin lo and sin hi - sin(roll), each >= 0 exactly when its angle lies in its
     range (hi - lo < 180 deg, |roll| < 90 deg), with the ranges given by
     c = `joint_margin_constants(limits)`."""
-    parts = _angle_parts(mb.scene)
     q, c = ca.SX.sym("q", mb.k), ca.SX.sym("c", 6 * len(names))
     rows = []
-    for i, name in enumerate(names):
-        parent, child, S, C = parts[name]
-        R = _rotation_between(mb, q, parent, child)
-        sin_part = ca.sum1(ca.sum2(ca.DM(S) * R))
-        cos_part = 0 if C is None else ca.sum1(ca.sum2(ca.DM(C) * R))
+    for i, (sin_part, cos_part) in enumerate(_sin_cos_parts(mb, q, names)):
+        cos_part = 0 if cos_part is None else cos_part
         a = c[6 * i : 6 * i + 6]
         rows += [a[0] * sin_part + a[1] * cos_part + a[2],
                  a[3] * sin_part + a[4] * cos_part + a[5]]
@@ -145,6 +136,18 @@ def joint_margin_constants(mb: Multibody, limits: tuple[tuple[str, float, float]
         else:
             out += [math.cos(lo), -math.sin(lo), 0.0, -math.cos(hi), math.sin(hi), 0.0]
     return np.array(out)
+
+
+def _sin_cos_parts(mb: Multibody, q, names: tuple[str, ...]) -> list:
+    """[(k sin theta, k cos theta)] of each angle at configuration q (SX), (sin roll, None)
+    for a roll (`_angle_parts`)."""
+    parts, out = _angle_parts(mb.scene), []
+    for name in names:
+        parent, child, S, C = parts[name]
+        R = _rotation_between(mb, q, parent, child)
+        out.append((ca.sum1(ca.sum2(ca.DM(S) * R)),
+                    None if C is None else ca.sum1(ca.sum2(ca.DM(C) * R))))
+    return out
 
 
 def _rotation_between(mb: Multibody, q, parent: str, child: str):
