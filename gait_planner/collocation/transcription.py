@@ -313,10 +313,10 @@ class CollocationTranscription:
     def _limits(self, limits):
         """The joint-range margins (`ocp.posture.joint_limit_margins`, two one-sided rows per
         angle) and their constants. Not the product's one row per angle with two bounds
-        (`ocp.posture.joint_limit_rows`): with those, and with the ranges as bounds on the
-        knots' angles, this baseline's walker3d plans missed work_precision.py's 150 s limit
-        on 4 and 6 intervals per phase (and with the rows on 8 and 12), where the margins
-        converge on 4, 6 and 8 (benchmarks/HISTORY.md, 2026-11-26)."""
+        (`ocp.posture.joint_limit_rows`): with those this baseline's walker3d plans missed
+        work_precision.py's 150 s limit on all four grids, and with the ranges as bounds on
+        the knots' angles on 4 intervals per phase (the one grid measured), where the
+        margins converge on 4, 6 and 8 (benchmarks/HISTORY.md, 2026-11-26)."""
         return (joint_limit_margins(self.mb, tuple(a for a, _, _ in limits)),
                 ca.DM(joint_margin_constants(self.mb, limits)))
 

@@ -131,6 +131,7 @@ class Transcription:
 
         self._eq, self._ineq = [], []  # (name, expression)
         self._without_elements = {}  # name -> the group's expression without its elements
+        self._upper = {}  # name -> the upper bound of an inequality group's rows (default: none)
         self.elements: list[ElementGroup] = []  # parts of g and cost (see ElementGroup)
         self._dynamics()
         self._contacts()
@@ -375,6 +376,7 @@ class Transcription:
                     joint_limit_constants(mb, limits), first_row, nodes)
                 self._ineq.append((name, ca.vec(rows)))
                 self._without_elements[name] = ca.MX(rows.numel(), 1)
+                self._upper[name] = JOINT_RANGE_ROW_UPPER
         if s.joint_speed_max > 0 and mb.scene.joints:
             first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
             speed = self._interval_terms(joint_speed_margins(mb), math.radians(s.joint_speed_max),
@@ -665,7 +667,9 @@ class Transcription:
         nsig = int(self.S.shape[0])
         lbx[-nsig:], ubx[-nsig:] = self.settings.scaling_bounds
         lbg = np.concatenate([np.zeros(n_eq), np.zeros(n_in)])
-        return lbx, ubx, lbg, upper_bounds(self.constraint_groups())
+        ubg = np.concatenate([np.zeros(n_eq)] + [
+            np.full(int(e.shape[0]), self._upper.get(name, np.inf)) for name, e in self._ineq])
+        return lbx, ubx, lbg, ubg
 
     def relaxed_lower_bounds(self, lbg: np.ndarray) -> np.ndarray:
         """lbg of a first, relaxed stage: swing points only above the ground (not by
@@ -674,15 +678,6 @@ class Transcription:
         every limit from the start its inertia-free attempt stalled (walker3d: 851
         iterations through the fallback; benchmarks/HISTORY.md)."""
         return relaxed_lower_bounds(self.constraint_groups(), lbg, self.clearances)
-
-
-def upper_bounds(groups) -> np.ndarray:
-    """ubg of the groups [(name, size, is_equality)] in the order of g: 0 for equalities,
-    JOINT_RANGE_ROW_UPPER for the joint ranges ("joint_limits", "joint_limits[phase]",
-    `posture.joint_limit_rows`), no bound for the other inequalities (>= 0)."""
-    return np.concatenate([np.zeros(size) if eq else np.full(
-        size, JOINT_RANGE_ROW_UPPER if name.startswith("joint_limits") else np.inf)
-        for name, size, eq in groups])
 
 
 def relaxed_lower_bounds(groups, lbg: np.ndarray, clearances: list[float]) -> np.ndarray:
