@@ -157,11 +157,6 @@ def _rotation_between(mb: Multibody, q, parent: str, child: str):
     return ca.mtimes(D[0].T, D[1])
 
 
-def _relative_rotation(mb: Multibody, q, joint):
-    """R_rel of `joint` (`_rotation_between` its parent and child)."""
-    return _rotation_between(mb, q, joint.parent, joint.child)
-
-
 def joint_speed_margins(mb: Multibody) -> ca.Function:
     """CasADi Function (q_n, q_{n+1}, h_n, c) -> one margin (>= 0) per joint of interval n,
     c = (base time step s, speed_max rad/s): settings enter as an input, so one compiled
@@ -176,7 +171,8 @@ def joint_speed_margins(mb: Multibody) -> ca.Function:
     c = ca.SX.sym("c", 2)
     w = c[1]
     bound = 8 * ca.sin(0.5 * w * h) ** 2
-    rows = [(bound - ca.sumsqr(_relative_rotation(mb, q1, j) - _relative_rotation(mb, q0, j)))
+    rows = [(bound - ca.sumsqr(_rotation_between(mb, q1, j.parent, j.child)
+                               - _rotation_between(mb, q0, j.parent, j.child)))
             / (w * c[0]) ** 2 for j in mb.scene.joints]
     return ca.Function("joint_speed", [q0, q1, h, c], [ca.vertcat(*rows)],
                        ["q", "q_next", "h", "c"], ["margin"])

@@ -50,8 +50,7 @@ from gait_planner.ocp.clearance import clearance_rows, clearance_schedule
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import configuration_mirror, increment_mirror, torque_mirror
 from gait_planner.ocp.posture import (JOINT_RANGE_ROW_UPPER, joint_limit_constants,
-                                      joint_limit_rows,
-                                      joint_speed_margins, twist_squares)
+                                      joint_limit_rows, joint_speed_margins, twist_squares)
 from gait_planner.ocp.settings import GaitSettings
 
 TORQUE_SCALE = 100.0  # N m
