@@ -56,7 +56,7 @@ they cost as much as the whole rest of the gradient and half of the Jacobian's t
 
 from __future__ import annotations
 
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import casadi as ca
 import numpy as np
@@ -79,14 +79,35 @@ Compiler = Callable[[list[Source]], list[ca.Function]]
 INTERPRETED_ABOVE = 90_000
 
 
-def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None) -> dict[str, ca.Function]:
-    """{"grad_f", "jac_g", "hess_lag"} of the NLP (tr.x, tr.p, tr.cost, tr.g)."""
-    nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
-    x_sx, p_sx = ca.SX.sym("x", nx), ca.SX.sym("p", int(tr.p.shape[0]))
-    lam_f_sx, lam_g_sx = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", ng)
+class ExpandedNLP(NamedTuple):
+    """The NLP as SX expressions of SX symbols x (nx,) and p: the cost f and the rows g
+    (IPOPT's nlp_f and nlp_g), and their parts that are not elements (f_rest, g_rest)."""
+
+    x: ca.SX
+    p: ca.SX
+    f: ca.SX
+    f_rest: ca.SX
+    g: ca.SX
+    g_rest: ca.SX
+
+
+def expand_nlp(tr: Transcription) -> ExpandedNLP:
+    """The MX graph of the transcription's mapped per-node Functions expanded into one SX
+    graph, once for the NLP and its derivatives (walker3d: 0.18 s)."""
+    x, p = ca.SX.sym("x", int(tr.x.shape[0])), ca.SX.sym("p", int(tr.p.shape[0]))
     f, f_rest, g, g_rest = ca.Function(
         "fg", [tr.x, tr.p], [tr.cost, tr.cost_without_elements, tr.g, tr.g_without_elements]
-    ).expand()(x_sx, p_sx)
+    ).expand()(x, p)
+    return ExpandedNLP(x, p, f, f_rest, g, g_rest)
+
+
+def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None,
+                    expanded: ExpandedNLP | None = None) -> dict[str, ca.Function]:
+    """{"grad_f", "jac_g", "hess_lag"} of the NLP (tr.x, tr.p, tr.cost, tr.g); expanded:
+    `expand_nlp(tr)` if the caller has it."""
+    nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
+    x_sx, p_sx, f, f_rest, g, g_rest = expand_nlp(tr) if expanded is None else expanded
+    lam_f_sx, lam_g_sx = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", ng)
     lagrangian = lam_f_sx * f_rest + ca.dot(lam_g_sx, g_rest)
     rest_grad = ca.Function("nlp_rest_grad_f", [x_sx, p_sx], [ca.gradient(f_rest, x_sx)])
     rest_jac = ca.Function("nlp_rest_jac_g", [x_sx, p_sx], [ca.jacobian(g_rest, x_sx)])

@@ -21,7 +21,7 @@ from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.compile import CompileError, compile_sources
-from gait_planner.ocp.derivatives import nlp_derivatives
+from gait_planner.ocp.derivatives import expand_nlp, nlp_derivatives
 from gait_planner.ocp.guess import GUESSES, initial_multipliers
 from gait_planner.ocp.ipopt import IterationCallback, Progress, Stop, ipopt_options, run_attempt
 from gait_planner.ocp.library import PlanLibrary, StoredPlan
@@ -143,16 +143,13 @@ class Planner:
             start = time.perf_counter()
             tr = Transcription(DiscreteMechanics(Multibody(scene)), s)
             bounds = tr.bounds()
-            # The MX graph of mapped per-node Functions is expanded into one SX graph for
-            # IPOPT's f and g; their derivatives come from `nlp_derivatives`.
-            fg = ca.Function("fg", [tr.x, tr.p], [tr.cost, tr.g]).expand()
-            x, p = ca.SX.sym("x", tr.x.shape[0]), ca.SX.sym("p", tr.p.shape[0])
-            f, g = fg(x, p)
-            nlp = {"x": x, "p": p, "f": f, "g": g}
+            # IPOPT's f and g are one SX graph; their derivatives come from `nlp_derivatives`.
+            expanded = expand_nlp(tr)
+            nlp = {"x": expanded.x, "p": expanded.p, "f": expanded.f, "g": expanded.g}
             derivatives, used = None, "CasADi, whole SX graph"
             if s.compiled:
                 try:
-                    derivatives = nlp_derivatives(tr, compile_sources)
+                    derivatives = nlp_derivatives(tr, compile_sources, expanded)
                     used = "per-node elements compiled to C"
                 except CompileError as err:
                     used += f" (not compiled: {err})"
