@@ -116,17 +116,20 @@ def request_settings(request: PlanRequest) -> tuple[Scene, GaitSettings]:
     return scene, settings
 
 
-def prepare(planner: Planner, request: PlanRequest) -> str:
+def prepare(planner: Planner, request: PlanRequest, rrd: bool = True) -> str:
     """Build the problem of `request` in `planner` now (`Planner.prepare`), so that a
     request like it pays no build, and load the modules that certify and record a plan
-    (Pinocchio, the MCAP writer, rerun: ~0.3 s that a first request paid, as `plan_and_record`
-    imports them when it first needs them); returns how its derivatives are evaluated."""
+    (Pinocchio, the MCAP writer and its message encoder and, with rrd, rerun: ~0.3 s and
+    0.45 s that a first request paid, as `plan_and_record` loads them when it first needs
+    them); returns how its derivatives are evaluated."""
     how = planner.prepare(*request_settings(request))
-    import gait_planner.io.mcap_writer  # noqa: F401
-    import gait_planner.io.messages  # noqa: F401
-    import gait_planner.io.rerun_view  # noqa: F401
+    from gait_planner.io.mcap_writer import recording_encoder
+
+    recording_encoder()
     import gait_planner.verify.continuous  # noqa: F401
     import gait_planner.verify.mechanics  # noqa: F401
+    if rrd:
+        import gait_planner.io.rerun_view  # noqa: F401
     return how
 
 

@@ -12,7 +12,10 @@ action (`gait_planner.ros.action_server`, feedback and cancel) is rejected. Para
 `gait_planner.ros.parameters` (typed, ranged, checked when set; ``config/gait_planner.yaml``).
 Topics (reliable; volatile so a restarting controller never re-runs an old plan):
 ``/gait_planner/joint_trajectory`` (one message per plan), ``/gait_planner/state`` and
-``/gait_planner/contact_forces`` (one message per node). SIGINT and SIGTERM stop a running
+``/gait_planner/contact_forces`` (one message per node). A plan is answered once its MCAP
+recording is written and its topics are published; its rerun recording (.rrd, same stem)
+follows from a helper process (`gait_planner.io.rrd_recorder`; "wrote the rerun
+recording" in the log). SIGINT and SIGTERM stop a running
 solve within one iteration and end the node (`main`). At start the node removes temporary
 recording files that killed processes left in its output folder.
 """
@@ -33,6 +36,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from gait_planner.io import messages
 from gait_planner.io.atomic import remove_stale_temporaries
+from gait_planner.io.rrd_recorder import RrdRecorder
 from gait_planner.ocp.library import PlanLibrary
 from gait_planner.ocp.solve import STOPPED, Planner
 from gait_planner.pipeline import PlanRequest, RequestError, plan_and_record, prepare
@@ -50,6 +54,7 @@ TOPIC_FORCES = "/gait_planner/contact_forces"
 BUSY = "busy: another plan is running (the node plans one request at a time); try again later"
 EXECUTOR_THREADS = 4  # a waiting plan request holds one; busy answers and cancels need others
 EXIT_GRACE = 0.5  # s a stopped plan gets to end at shutdown before the process leaves anyway
+RECORDING_GRACE = 10.0  # s the .rrd files still being written get at shutdown
 SHUTDOWN_POLL = 0.1  # s between checks that the context is still up (see main)
 
 
@@ -83,12 +88,13 @@ class GaitPlannerNode(Node):
     the node's stage and stop hooks are then not wired to it."""
 
     def __init__(self, *, planner: Planner | None = None, **kwargs):
-        self._worker, self._action = PlanWorker(), None  # (destroy_node may run early)
-        super().__init__("gait_planner", **kwargs)
+        self._worker, self._action, self._recorder = PlanWorker(), None, None  # (destroy_node
+        super().__init__("gait_planner", **kwargs)  # may run early)
         self._worker.on_lapse = self._on_lapse
         parameters.declare(self)
         for path in remove_stale_temporaries(self._param("output_dir")):
             self.get_logger().info(f"removed the stale temporary file {path}")
+        self._recorder = RrdRecorder()  # its helper imports rerun while the problem is built
         library = PlanLibrary() if self._param("plan_library") else None
         self._planner = planner or Planner(progress=self._progress, stage=self._worker.enter,
                                            stop=self._worker.stopped, library=library)
@@ -109,7 +115,7 @@ class GaitPlannerNode(Node):
         request = PlanRequest(scene=self._param("default_scene"),
                               compiled=self._param("compile_derivatives"))
         try:
-            how = prepare(self._planner, request)
+            how = prepare(self._planner, request, rrd=False)
         except (RequestError, ValueError, RuntimeError) as err:
             self.get_logger().warning(f"could not prepare {request.scene}: {err}")
             return
@@ -125,8 +131,11 @@ class GaitPlannerNode(Node):
         return self._worker.wait_idle(timeout)
 
     def destroy_node(self) -> None:
-        """Stop a running plan, then destroy the action server and the node."""
+        """Stop a running plan, wait up to `RECORDING_GRACE` s for the .rrd files being
+        written, then destroy the action server and the node."""
         self.close()
+        if self._recorder is not None and not self._recorder.close(RECORDING_GRACE):
+            self.get_logger().warning("shutting down with .rrd files still being written")
         if self._action is not None:
             self._action.destroy()
         super().destroy_node()
@@ -167,7 +176,7 @@ class GaitPlannerNode(Node):
                 request, self._param("default_scene"), self._param("max_solve_time"),
                 self._param("compile_derivatives"))
             outcome = plan_and_record(self._planner, plan_request, self._param("output_dir"),
-                                      stage=self._worker.enter)
+                                      rrd=False, stage=self._worker.enter)
         except Stopped:
             answer.success, answer.message = False, STOPPED
             self.get_logger().info("plan stopped on request: nothing recorded")
@@ -188,6 +197,7 @@ class GaitPlannerNode(Node):
                 "success": False, "message": result.message,
                 "solver_status": result.stats.status})
         if result.success:
+            self._recorder.submit(result, outcome.mcap_path.with_suffix(".rrd"), self._recorded)
             self._publish(result, stamp)
             self.get_logger().info(
                 f"planned {result.scene.name}: cost {result.cost_value:.6g}, duration "
@@ -196,6 +206,13 @@ class GaitPlannerNode(Node):
             self.get_logger().info("plan stopped on request: nothing recorded")
         else:
             self.get_logger().warning(f"plan failed: {result.message}")
+
+    def _recorded(self, path, error) -> None:
+        """The helper's report on a plan's .rrd (`RrdRecorder.submit`)."""
+        if error is None:
+            self.get_logger().info(f"wrote the rerun recording {path}")
+        else:
+            self.get_logger().warning(f"no rerun recording written: {error}")
 
     def _publish(self, result, start_ns: int) -> None:
         self._pub_trajectory.publish(messages.fill_message(

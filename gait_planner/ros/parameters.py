@@ -52,7 +52,7 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         ParameterType.PARAMETER_BOOL,
         "Build the default scene's problem and load the modules that certify and record a "
         "plan at start, before the service and the action are offered, so that the first "
-        "request pays no build (walker3d: about 3 s from the compiled cache)",
+        "request pays no build (walker3d: about 1 s from the compiled cache)",
         read_only=True)),
     "plan_library": (True, _descriptor(
         ParameterType.PARAMETER_BOOL,
