@@ -4,7 +4,8 @@
 * `gait_planner.io.urdf`: `scene_to_urdf` and the frame scheme /tf follows;
 * `gait_planner.io.mcap_writer`: `write_plan_mcap` (ROS 2 profile, atomic);
 * `gait_planner.io.mcap_reader`: `read_plan_mcap` -> `RecordedPlan` (independent of the writer);
-* `gait_planner.io.rerun_view`: `log_plan`, `save_rrd`, `show`.
+* `gait_planner.io.rerun_view`: `log_plan`, `save_rrd`, `show`;
+* `gait_planner.io.rrd_recorder`: `RrdRecorder`, `save_rrd` in a helper process (the node).
 
 The names below are imported lazily, so ``import gait_planner.io.messages`` (the ROS node)
 loads neither mcap nor rerun.
@@ -25,6 +26,7 @@ _EXPORTS = {
     "log_plan": "rerun_view",
     "save_rrd": "rerun_view",
     "show": "rerun_view",
+    "RrdRecorder": "rrd_recorder",
 }
 
 __all__ = sorted(_EXPORTS)
