@@ -40,7 +40,7 @@ the pieces add up to 13.6 ms, 2.8 ms of it the mirrored variants (7.5 MB of code
 for one node; 0.3 ms warm), which is why the larger variants were interpreted instead
 (`INTERPRETED_ABOVE`; still 2.2 ms of the Hessian and 0.7 ms of the Jacobian on
 2026-11-25). The walkers have no such variants now: the mirror image nodes N-1 and N are
-the regular elements at mirrored unknowns (`Transcription.images`), whose derivatives come
+the regular elements at mirrored unknowns (`Layout.images`), whose derivatives come
 back through a signed permutation (`_entries`), and they ride in the padding lanes of the
 vector passes. Mapping over 2 threads (bit for bit the same) measured 1.5 ms
 faster in one run and 1.2-4 ms slower in another (the second core is shared with other
@@ -62,13 +62,14 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.ocp.compile import Source
-from gait_planner.ocp.transcription import ElementGroup, Transcription
+from gait_planner.ocp.elements import ElementGroup
+from gait_planner.ocp.transcription import Transcription
 from gait_planner.ocp.vectorize import LANES
 
 # Given the element derivatives to form, returns them (e.g. compiled) in the same order.
 Compiler = Callable[[list[Source]], list[ca.Function]]
 # Operations above which a one-node element derivative (a mirrored variant of a scene
-# without `Transcription.images`) is evaluated in CasADi's virtual machine instead of
+# without `Layout.images`) is evaluated in CasADi's virtual machine instead of
 # compiled. It runs once per evaluation of the NLP's derivatives: its
 # machine code (~8 bytes an operation) comes from memory every time, since the vector passes
 # and MUMPS have evicted it from the caches, while the virtual machine's loop stays cached
@@ -127,8 +128,8 @@ def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None,
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
     grad, jac, hess = rest_grad(x, p), rest_jac(x, p), rest_hess(x, p, lam_f, lam_g)
     grads, jacs, hessians = [_whole(grad.T)], [_whole(jac)], [_whole(hess)]
-    xe, pe = tr.element_inputs(x, p)
-    images = tr.images
+    xe, pe = tr.layout.element_inputs(x, p)
+    images = tr.layout.images
     source, sign = np.arange(nx), np.ones(nx)  # of each entry of xe: xe[i] = sign x[source]
     if images is not None:
         source = np.concatenate([source, images["x_source"]])
@@ -278,7 +279,7 @@ def _entries(values: ca.MX, row_index: np.ndarray, col_index: np.ndarray,
     """(values, rows, cols, signs): the element matrices (pattern, one per column of the
     index arrays, side by side in `values`) put the k-th nonzero of `values`, entry (a, b)
     of element j, at (row_index[a, j], col_index[b, j]), times row_sign[a, j] and
-    col_sign[b, j] if given (an element of mirror images, `Transcription.images`: the
+    col_sign[b, j] if given (an element of mirror images, `Layout.images`: the
     chain rule through a signed permutation); signs None where all are 1 (see `_sum`).
     Nonzeros of `values` beyond the index arrays' columns (padding) are left out."""
     a, b = (np.array(v, dtype=int) for v in pattern.get_triplet())

@@ -29,7 +29,8 @@ Unknowns (scaled to O(1)):
 * sigma, the phase scalings (sigma_1 serves phases 1 and 5).
 The periodic end is not a set of unknowns: q_{N-1}, q_N, tau_{N-1}, tau_N are the mirrored
 expressions of q_0, q_1, tau_0, tau_1, the configurations shifted by the step length (paper
-eqs. 7-9).
+eqs. 7-9). Where each unknown sits in x, and the per-node element Functions of the
+derivatives: `ocp.elements`.
 
 Parameters (changeable without rebuilding): the reference configurations, the step length
 and the friction coefficient.
@@ -38,8 +39,6 @@ and the friction coefficient.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from functools import cached_property
 
 import casadi as ca
 
@@ -48,6 +47,7 @@ import numpy as np
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.ocp.clearance import clearance_rows, clearance_schedule
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
+from gait_planner.ocp.elements import ElementGroup, Layout
 from gait_planner.ocp.mirror import configuration_mirror, increment_mirror, torque_mirror
 from gait_planner.ocp.posture import (JOINT_RANGE_ROW_UPPER, joint_limit_constants,
                                       joint_limit_rows, joint_speed_margins, twist_squares)
@@ -61,23 +61,6 @@ FORCE_SCALE = 1000.0  # N
 # cold solves diverged without these bounds (benchmarks/HISTORY.md); no plan measured had
 # one active.
 ROTATION_INCREMENT_MAX = np.pi
-
-
-@dataclass(frozen=True)
-class ElementGroup:
-    """Constraint rows (or cost terms) that are one SX Function of a few entries of x and
-    p, evaluated at several nodes: g[rows[:, j]] += function(xe[z_index[:, j]],
-    pe[p_index[:, j]], constants), or, with rows None, cost += function(...), where
-    (xe, pe) = `Transcription.element_inputs(x, p)`: x and p followed by the mirror images
-    that the nodes N-1 and N read (`Transcription.images`). Settings
-    enter as `constants` (an input, not folded in), so one compiled function serves them
-    all."""
-
-    function: ca.Function  # (z (nz,), pz (np,), c (nc,)) -> r (nr,)
-    z_index: np.ndarray  # (nz, n) int
-    p_index: np.ndarray  # (np, n) int
-    rows: np.ndarray | None  # (nr, n) int; None: a term of the cost
-    constants: np.ndarray  # (nc,) c: the base time step (s), then settings values
 
 
 class Transcription:
@@ -97,7 +80,7 @@ class Transcription:
         self.B = torque_mirror(mb)
         # Nodes N-1 and N are mirror images of nodes 0 and 1. Where the mirror commutes with
         # the reparametrisation (`increment_mirror`), their elements are the regular ones
-        # evaluated at mirrored unknowns and references (`images`), and so join the regular
+        # evaluated at mirrored unknowns and references (`Layout.images`), and join the regular
         # nodes' vector passes (`ocp.derivatives`); otherwise (the compass) they are
         # variants of their own that mirror the configuration they compute.
         self.M = increment_mirror(mb)
@@ -110,12 +93,14 @@ class Transcription:
         self.lam_sizes = [sum(bc.n_multipliers for bc in self.contacts[self.phase_of_interval[n]])
                           for n in self.lam_nodes]
         self.L = ca.MX.sym("lambda", int(sum(self.lam_sizes)))
+        self.layout = Layout(mb, N, self.lam_sizes, nsig,
+                             np.array([phases[k].scaling for k in self.phase_of_interval]),
+                             self.A, self.shift, self.B, self.M)
         self.Qref = ca.MX.sym("qref", mb.k, N - 1)
         self.step, self.mu = ca.MX.sym("step_length"), ca.MX.sym("mu")
 
         q_free = mb.reparametrise.map(N - 1)(self.U, self.Qref)
-        q_end = [ca.mtimes(ca.DM(self.A), q_free[:, j]) + self.step * ca.DM(self.shift)
-                 for j in (0, 1)]
+        q_end = [self.layout.image(q_free[:, j], self.step) for j in (0, 1)]
         self.Q = ca.horzcat(q_free, *q_end)  # (k, N+1)
         tau = TORQUE_SCALE * self.T
         self.TAU = ca.horzcat(tau, ca.mtimes(ca.DM(self.B), tau[:, 0:2]))  # (nt, N+1) nodes
@@ -203,8 +188,8 @@ class Transcription:
         q_N are mirror images of q_0 and q_1, and so is tau_{N-1} of tau_0."""
         out: dict[tuple[bool, bool], list[int]] = {}
         for n in range(1, self.N):
-            out.setdefault((self._mirrored(n == self.N - 1),
-                            self._mirrored(n + 1 >= self.N - 1)), []).append(n)
+            out.setdefault((self.layout.mirrored(n == self.N - 1),
+                            self.layout.mirrored(n + 1 >= self.N - 1)), []).append(n)
         return out
 
     def _dynamics_element(self, mirrored: bool, next_mirrored: bool) -> ca.Function:
@@ -221,7 +206,7 @@ class Transcription:
         q = [mb.reparametrise(z[i * nd : (i + 1) * nd], pz[i * k : (i + 1) * k]) for i in range(3)]
         for i, flag in ((1, mirrored), (2, next_mirrored)):
             if flag:
-                q[i] = ca.mtimes(ca.DM(self.A), q[i]) + step * ca.DM(self.shift)
+                q[i] = self.layout.image(q[i], step)
         tau = TORQUE_SCALE * z[3 * nd : 3 * nd + nt]
         if mirrored:  # tau_{N-1} is the image of tau_0
             tau = ca.mtimes(ca.DM(self.B), tau)
@@ -231,56 +216,17 @@ class Transcription:
         name = "dynamics_element" + ("_mirrored" if mirrored else "_next_mirrored" if next_mirrored else "")
         return ca.Function(name, [z, pz, c], [res], ["z", "pz", "c"], ["r"])
 
-    def _source(self, m: int) -> int:
-        """The free node (or interval) whose unknowns give node m (or interval m): itself, or
-        for the mirror images N-1 and N (interval N-1), node 0 and 1 (interval 0)."""
-        return m - (self.N - 1) if m >= self.N - 1 else m
-
-    def _u_index(self, node: int) -> np.ndarray:
-        """Indices into (x, its images) of node `node`'s u: its own, or for N-1 and N the
-        images of u_0 and u_1 (`images`), or without images u_0 and u_1 themselves."""
-        nd = self.mb.ndof
-        if node >= self.N - 1 and self.M is not None:
-            return self.x.shape[0] + (node - (self.N - 1)) * nd + np.arange(nd)
-        return np.arange(nd) + self._source(node) * nd
-
-    def _lam_index(self, node: int) -> np.ndarray:
-        """Indices into x of node `node`'s contact multipliers (1 <= node <= N-1)."""
-        j = self.lam_nodes.index(node)
-        start = self.U.numel() + self.T.numel() + sum(self.lam_sizes[:j])
-        return np.arange(start, start + self.lam_sizes[j])
-
-    def _node_p_index(self, node: int) -> np.ndarray:
-        """Indices into p of a node element's pz (qref_n, step length)."""
-        return np.append(self._qref_index(node), self.Qref.numel())
-
-    def _qref_index(self, node: int) -> np.ndarray:
-        """Indices into (p, its images) of node `node`'s reference (see `_u_index`)."""
-        k = self.mb.k
-        if node >= self.N - 1 and self.M is not None:
-            return self.p.shape[0] + (node - (self.N - 1)) * k + np.arange(k)
-        return np.arange(k) + self._source(node) * k
-
-    def _tau_index(self, node: int) -> np.ndarray:
-        """Indices into (x, its images) of node `node`'s torques (see `_u_index`)."""
-        nt = self.mb.nt
-        if node == self.N - 1 and self.M is not None:
-            return self.x.shape[0] + 2 * self.mb.ndof + np.arange(nt)
-        return self.U.numel() + np.arange(nt) + self._source(node) * nt
-
-    def _scaling_index(self, interval: int) -> int:
-        first = self.U.numel() + self.T.numel() + self.L.numel()
-        return first + self.mb.scene.gait.phases[self.phase_of_interval[interval]].scaling
-
     def _element_z_index(self, n: int) -> np.ndarray:
         """Indices into x of the dynamics element's z (see _dynamics_element) at node n."""
-        return np.concatenate([self._u_index(n - 1), self._u_index(n), self._u_index(n + 1),
-                               self._tau_index(n), [self._scaling_index(n - 1), self._scaling_index(n)]])
+        lay = self.layout
+        return np.concatenate([lay.u_index(n - 1), lay.u_index(n), lay.u_index(n + 1),
+                               lay.tau_index(n), [lay.scaling_index(n - 1), lay.scaling_index(n)]])
 
     def _element_p_index(self, n: int) -> np.ndarray:
         """Indices into p of the dynamics element's pz at node n."""
-        return np.concatenate([self._qref_index(n - 1), self._qref_index(n),
-                               self._qref_index(n + 1), [self.Qref.numel()]])
+        lay = self.layout
+        return np.concatenate([lay.qref_index(n - 1), lay.qref_index(n), lay.qref_index(n + 1),
+                               [lay.step_index]])
 
     def _contacts(self):
         mb, N = self.mb, self.N
@@ -330,7 +276,7 @@ class Transcription:
         for n in range(N - 1):
             C = self.rows[self.phase_of_interval[n]]
             if C.shape[0]:
-                key = (int(self.phase_of_interval[n]), self._mirrored(n == N - 2))
+                key = (int(self.phase_of_interval[n]), self.layout.mirrored(n == N - 2))
                 intervals.setdefault(key, []).append((n, row + np.arange(C.shape[0])))
                 row += C.shape[0]
         for (k, next_mirrored), chosen in intervals.items():
@@ -338,9 +284,9 @@ class Transcription:
                              [ca.mtimes(ca.DM(self.rows[k]), q1 - q0)],
                              ["q", "q_next", "h", "c"], ["r"])
             self.elements.append(ElementGroup(
-                self._interval_element(fn, next_mirrored),
-                np.stack([self._interval_z_index(n) for n, _ in chosen], 1),
-                np.stack([self._interval_p_index(n) for n, _ in chosen], 1),
+                self.layout.interval_element(fn, next_mirrored),
+                np.stack([self.layout.interval_z_index(n) for n, _ in chosen], 1),
+                np.stack([self.layout.interval_p_index(n) for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1),
                 np.array([self.settings.base_time_step, 0.0])))
 
@@ -397,7 +343,7 @@ class Transcription:
         row = first_row
         for n, points in schedule.items():
             if points:
-                nodes.setdefault((tuple(points), self._mirrored(n == self.N - 1)), []).append(
+                nodes.setdefault((tuple(points), self.layout.mirrored(n == self.N - 1)), []).append(
                     (n, row + np.arange(len(points))))
                 row += len(points)
         q, c = ca.SX.sym("q", self.mb.k), ca.SX.sym("c", 1)
@@ -406,9 +352,9 @@ class Transcription:
                                    for p in points])
             fn = ca.Function("clearance_" + "_".join(points), [q, c], [heights], ["q", "c"], ["z"])
             self.elements.append(ElementGroup(
-                self._node_element(fn, mirrored),
-                np.stack([self._u_index(n) for n, _ in chosen], 1),
-                np.stack([self._node_p_index(n) for n, _ in chosen], 1),
+                self.layout.node_element(fn, mirrored),
+                np.stack([self.layout.u_index(n) for n, _ in chosen], 1),
+                np.stack([self.layout.node_p_index(n) for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), np.zeros(1)))
 
     def _node_rows(self):
@@ -435,13 +381,13 @@ class Transcription:
             rows += [first[name] + n - 1 for name in ("torso_lean", "torso_height")
                      if name in first]
             if rows:
-                nodes.setdefault((k, self._mirrored(n == N - 1)), []).append((n, np.array(rows)))
+                nodes.setdefault((k, self.layout.mirrored(n == N - 1)), []).append((n, np.array(rows)))
         for (k, mirrored), chosen in nodes.items():
             self.elements.append(ElementGroup(
                 self._node_rows_element(k, mirrored),
-                np.stack([np.concatenate([self._u_index(n), self._lam_index(n)])
+                np.stack([np.concatenate([self.layout.u_index(n), self.layout.lam_index(n)])
                           for n, _ in chosen], 1),
-                np.stack([np.append(self._node_p_index(n), self.Qref.numel() + 1)
+                np.stack([np.append(self.layout.node_p_index(n), self.layout.step_index + 1)
                           for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), np.array(self._cone_constants)))
 
@@ -456,7 +402,7 @@ class Transcription:
         pz, c = ca.SX.sym("pz", kq + 2), ca.SX.sym("c", 2)
         q = mb.reparametrise(z[0:nd], pz[0:kq])
         if mirrored:
-            q = ca.mtimes(ca.DM(self.A), q) + pz[kq] * ca.DM(self.shift)
+            q = self.layout.image(q, pz[kq])
         lam, held, cones, offset = FORCE_SCALE * z[nd:], [], [], 0
         for bc in contacts:
             part = lam[offset : offset + bc.n_multipliers]
@@ -474,7 +420,7 @@ class Transcription:
     def _cost(self):
         """J over the half cycle t_0..t_{N-1} (intervals 0..N-2), plus the torque
         regulariser; returns the MX cost and stores the named parts. The kinetic energy is
-        also declared as elements (`_kinetic_element`), for `ocp.derivatives`."""
+        also declared as elements (`_interval_terms`), for `ocp.derivatives`."""
         N, s = self.N, self.settings
         h = self.h[0 : N - 1].T
         squares = ca.sum1(self.TAU[:, 0:N] ** 2)  # nodes 0..N-1
@@ -521,7 +467,7 @@ class Transcription:
     def _interval_terms(self, fn: ca.Function, constant: float, first_row):
         """fn(q_n, q_{n+1}, h_n, c) (r,) of intervals 0..N-2 as an MX (r, N-1), with
         c = (base time step, constant). Declared as elements of the NLP (`ElementGroup`,
-        `_interval_element`): rows first_row + r n + (0..r-1) of g, or with first_row None
+        `Layout.interval_element`): rows first_row + r n + (0..r-1) of g, or with first_row None
         terms of the cost; first_row False declares nothing (a term not in the NLP)."""
         N = self.N
         c = np.array([self.settings.base_time_step, constant])
@@ -533,9 +479,9 @@ class Transcription:
                 rows = None if first_row is None else np.stack(
                     [first_row + size * n + np.arange(size) for n in intervals], 1)
                 self.elements.append(ElementGroup(
-                    self._interval_element(fn, next_mirrored),
-                    np.stack([self._interval_z_index(n) for n in intervals], 1),
-                    np.stack([self._interval_p_index(n) for n in intervals], 1), rows, c))
+                    self.layout.interval_element(fn, next_mirrored),
+                    np.stack([self.layout.interval_z_index(n) for n in intervals], 1),
+                    np.stack([self.layout.interval_p_index(n) for n in intervals], 1), rows, c))
         return fn.map(N - 1)(self.Q[:, 0 : N - 1], self.Q[:, 1:N], self.h[0 : N - 1].T,
                              ca.repmat(ca.DM(c), 1, N - 1))
 
@@ -545,45 +491,14 @@ class Transcription:
         size = int(fn.size1_out(0))
         for mirrored in (False, True):
             chosen = [(j, n) for j, n in enumerate(nodes)
-                      if self._mirrored(n == self.N - 1) == mirrored]
+                      if self.layout.mirrored(n == self.N - 1) == mirrored]
             if chosen:
                 self.elements.append(ElementGroup(
-                    self._node_element(fn, mirrored),
-                    np.stack([self._u_index(n) for _, n in chosen], 1),
-                    np.stack([self._node_p_index(n) for _, n in chosen], 1),
+                    self.layout.node_element(fn, mirrored),
+                    np.stack([self.layout.u_index(n) for _, n in chosen], 1),
+                    np.stack([self.layout.node_p_index(n) for _, n in chosen], 1),
                     np.stack([first_row + size * j + np.arange(size) for j, _ in chosen], 1), c))
         return fn.map(len(nodes))(self.Q[:, nodes], ca.repmat(ca.DM(c), 1, len(nodes)))
-
-    def _node_element(self, fn: ca.Function, mirrored: bool) -> ca.Function:
-        """fn of node n as an SX Function of z = u_n, pz = (qref_n, step length) and c (node
-        N-1, mirrored, is the image of node 0)."""
-        mb, nd, k = self.mb, self.mb.ndof, self.mb.k
-        z, pz = ca.SX.sym("z", nd), ca.SX.sym("pz", k + 1)
-        c = ca.SX.sym("c", fn.sparsity_in(1))
-        q = mb.reparametrise(z, pz[0:k])
-        if mirrored:
-            q = ca.mtimes(ca.DM(self.A), q) + pz[k] * ca.DM(self.shift)
-        name = f"{fn.name()}_element" + ("_mirrored" if mirrored else "")
-        return ca.Function(name, [z, pz, c], [fn(q, c)], ["z", "pz", "c"], ["r"])
-
-    def _interval_element(self, fn: ca.Function, next_mirrored: bool) -> ca.Function:
-        """fn of interval n as an SX Function of z = (u_n, u_{n+1}, sigma_n),
-        pz = (qref_n, qref_{n+1}, step length) and c = (base time step, constant)."""
-        mb, nd, k = self.mb, self.mb.ndof, self.mb.k
-        z, pz, c = ca.SX.sym("z", 2 * nd + 1), ca.SX.sym("pz", 2 * k + 1), ca.SX.sym("c", 2)
-        q0 = mb.reparametrise(z[0:nd], pz[0:k])
-        q1 = mb.reparametrise(z[nd : 2 * nd], pz[k : 2 * k])
-        if next_mirrored:
-            q1 = ca.mtimes(ca.DM(self.A), q1) + pz[2 * k] * ca.DM(self.shift)
-        name = f"{fn.name()}_element" + ("_next_mirrored" if next_mirrored else "")
-        return ca.Function(name, [z, pz, c], [fn(q0, q1, c[0] * z[2 * nd], c)],
-                           ["z", "pz", "c"], ["r"])
-
-    def _interval_z_index(self, n: int) -> np.ndarray:
-        return np.concatenate([self._u_index(n), self._u_index(n + 1), [self._scaling_index(n)]])
-
-    def _interval_p_index(self, n: int) -> np.ndarray:
-        return np.concatenate([self._qref_index(n), self._qref_index(n + 1), [self.Qref.numel()]])
 
     def _phase_name(self, k: int) -> str:
         return self.mb.scene.gait.phases[k].name
@@ -597,48 +512,6 @@ class Transcription:
     @property
     def p(self):
         return ca.vertcat(ca.vec(self.Qref), self.step, self.mu)
-
-    @cached_property
-    def images(self) -> dict[str, np.ndarray] | None:
-        """The mirror images the elements of nodes N-1 and N read, None if they mirror
-        their configurations themselves (`self.M` None). Images of x: M u_0, M u_1, B T_0,
-        entry i being x_sign[i] x[x_source[i]] (signed permutations); images of p: the
-        references A qref_0 + s e and A qref_1 + s e (s the step length), entry i being
-        p_sign[i] p[p_source[i]] + p_shift[i] s."""
-        if self.M is None:
-            return None
-        nd, k = self.mb.ndof, self.mb.k
-
-        def signed(P: np.ndarray, offset: int):
-            j = np.argmax(np.abs(P), axis=1)
-            return offset + j, P[np.arange(P.shape[0]), j]
-
-        parts = [signed(self.M, 0), signed(self.M, nd), signed(self.B, self.U.numel())]
-        refs = [signed(self.A, 0), signed(self.A, k)]
-        return {"x_source": np.concatenate([a for a, _ in parts]),
-                "x_sign": np.concatenate([b for _, b in parts]),
-                "p_source": np.concatenate([a for a, _ in refs]),
-                "p_sign": np.concatenate([b for _, b in refs]),
-                "p_shift": np.tile(self.shift, 2)}
-
-    def element_inputs(self, x, p):
-        """(xe, pe): x and p (numbers or CasADi expressions) followed by their mirror
-        images (`images`), the vectors the elements' z_index and p_index point into."""
-        im = self.images
-        if im is None:
-            return x, p
-        step = p[self.Qref.numel()]
-        if isinstance(x, np.ndarray):
-            return (np.concatenate([x, im["x_sign"] * x[im["x_source"]]]),
-                    np.concatenate([p, im["p_sign"] * p[im["p_source"]] + im["p_shift"] * step]))
-        return (ca.vertcat(x, ca.DM(im["x_sign"]) * x[im["x_source"].tolist()]),
-                ca.vertcat(p, ca.DM(im["p_sign"]) * p[im["p_source"].tolist()]
-                           + ca.DM(im["p_shift"]) * step))
-
-    def _mirrored(self, image: bool) -> bool:
-        """Whether an element of a mirror image node (or interval) is a variant of its own:
-        only where its unknowns have no images (`images`)."""
-        return image and self.M is None
 
     @property
     def g_without_elements(self):

@@ -76,23 +76,23 @@ def test_elements_and_rest_sum_to_g_and_cost(name, overrides):
     """g and the cost are their elements plus the rest, in every kind of element: contact
     terms, cones and torso bounds of a node, contact rows of an interval, swing clearances
     (walker3d: full contacts with roll bounds). The mirror image nodes N-1 and N are the
-    regular elements at mirrored unknowns and references (`Transcription.images`) where
+    regular elements at mirrored unknowns and references (`Layout.images`) where
     the mirror commutes with the reparametrisation (the walkers), variants of their own
     where it does not (the compass, whose root is mirrored into the other leg)."""
     tr, x, p, _ = _problem(name, **overrides)
     names = {group.function.name() for group in tr.elements}
     if name == "compass":
-        assert tr.images is None
+        assert tr.layout.images is None
         assert {"dynamics_element_mirrored", "dynamics_element_next_mirrored"} <= names
     else:
-        assert tr.images is not None and not any("mirrored" in n for n in names)
+        assert tr.layout.images is not None and not any("mirrored" in n for n in names)
         assert {"joint_speed_element", "joint_limits_element", "node_rows_phase0",
                 "node_rows_phase4", "contact_hold_phase0_element"} <= names
         assert any(n.startswith("clearance_") for n in names)
     g, g_rest, f, f_rest = (np.array(v).ravel() for v in ca.Function(
         "parts", [tr.x, tr.p], [tr.g, tr.g_without_elements, tr.cost, tr.cost_without_elements]
     )(x, p))
-    xe, pe = tr.element_inputs(x, p)
+    xe, pe = tr.layout.element_inputs(x, p)
     g_sum, f_sum = g_rest.copy(), float(f_rest[0])
     for group in tr.elements:
         for j in range(group.z_index.shape[1]):

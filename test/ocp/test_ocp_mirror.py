@@ -1,6 +1,6 @@
 """The mirror commutes with the nodal reparametrisation (`ocp.mirror.increment_mirror`):
 mirror(F_d(u, q)) = F_d(M u, mirror(q)), which lets the elements of the mirror image nodes
-be the regular elements at mirrored unknowns (`Transcription.images`)."""
+be the regular elements at mirrored unknowns (`Layout.images`)."""
 
 from __future__ import annotations
 
@@ -66,7 +66,7 @@ def test_no_increment_mirror_when_the_root_is_mirrored_into_another_body():
     mb = Multibody(scene)
     assert increment_mirror(mb) is None
     tr = Transcription(DiscreteMechanics(mb), settings_for(scene))
-    assert tr.images is None and tr.element_inputs(1.0, 2.0) == (1.0, 2.0)
+    assert tr.layout.images is None and tr.layout.element_inputs(1.0, 2.0) == (1.0, 2.0)
 
 
 def test_element_inputs_are_the_mirrored_unknowns_and_references():
@@ -77,7 +77,7 @@ def test_element_inputs_are_the_mirrored_unknowns_and_references():
     x = rng.standard_normal(tr.x.shape[0])
     qref = guess[: tr.N - 1]
     p = np.concatenate([qref.reshape(-1), [0.7, 0.8]])
-    xe, pe = tr.element_inputs(x, p)
+    xe, pe = tr.layout.element_inputs(x, p)
     A, e = configuration_mirror(mb)
     nd, nt = mb.ndof, mb.nt
     U = x[: nd * (tr.N - 1)].reshape(tr.N - 1, nd)
@@ -86,6 +86,6 @@ def test_element_inputs_are_the_mirrored_unknowns_and_references():
     assert np.allclose(pe[p.size:], np.concatenate([A @ qref[0], A @ qref[1]]) + 0.7 * np.tile(e, 2),
                        rtol=0, atol=1e-15)
     xs, ps = ca.MX.sym("x", x.size), ca.MX.sym("p", p.size)
-    symbolic = ca.Function("e", [xs, ps], list(tr.element_inputs(xs, ps)))(x, p)
+    symbolic = ca.Function("e", [xs, ps], list(tr.layout.element_inputs(xs, ps)))(x, p)
     assert np.array_equal(np.array(symbolic[0]).ravel(), xe)
     assert np.array_equal(np.array(symbolic[1]).ravel(), pe)
