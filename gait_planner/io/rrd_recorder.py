@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import multiprocessing
 import threading
-from concurrent.futures import Future, ProcessPoolExecutor, wait
+from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from multiprocessing.reduction import ForkingPickler
 from pathlib import Path
@@ -61,6 +61,7 @@ class RrdRecorder:
 
     def __init__(self):
         self._lock = threading.Lock()
+        self._idle = threading.Condition(self._lock)  # notified when a recording is reported
         self._pending: set[Future] = set()
         self._closed = False
         self._pool = self._start()
@@ -77,32 +78,40 @@ class RrdRecorder:
         another thread when the file is complete, or with the error (at once if the
         recorder is closed)."""
         with self._lock:
-            if self._closed:
-                done(None, RuntimeError(f"{path} not written: the recorder is closed "
-                                        "(shutting down)"))
-                return
-            try:
-                future = self._pool.submit(_save, result, path)
-            except BrokenProcessPool:  # the helper died: a new one
-                self._pool.shutdown(wait=False)
-                self._pool = self._start()
-                future = self._pool.submit(_save, result, path)
-            self._pending.add(future)
+            future = None if self._closed else self._submit(result, path)
+        if future is None:
+            done(None, RuntimeError(f"{path} not written: the recorder is closed "
+                                    "(shutting down)"))
+            return
 
         def finished(f: Future) -> None:
-            with self._lock:
-                self._pending.discard(f)
             error = f.exception()
-            done(None if error else f.result(), error)
+            try:
+                done(None if error else f.result(), error)
+            finally:
+                with self._lock:
+                    self._pending.discard(f)
+                    self._idle.notify_all()
 
         future.add_done_callback(finished)
 
+    def _submit(self, result: PlanResult, path: Path) -> Future:
+        """The helper's Future of the file (under the lock); a dead helper is replaced."""
+        try:
+            future = self._pool.submit(_save, result, path)
+        except BrokenProcessPool:
+            self._pool.shutdown(wait=False)
+            self._pool = self._start()
+            future = self._pool.submit(_save, result, path)
+        self._pending.add(future)
+        return future
+
     def close(self, timeout: float) -> bool:
-        """Wait up to `timeout` s for the recordings submitted, then let the helper go
-        (it finishes what it was given and ends). True if all were written."""
+        """Wait up to `timeout` s for the recordings submitted to be written and reported
+        (`submit`'s done), then let the helper go (it finishes what it was given and ends).
+        True if all were reported."""
         with self._lock:
             self._closed = True
-            pending = set(self._pending)
-        left = wait(pending, timeout).not_done
+            reported = self._idle.wait_for(lambda: not self._pending, timeout)
         self._pool.shutdown(wait=False, cancel_futures=False)
-        return not left
+        return reported
