@@ -7,6 +7,8 @@ from __future__ import annotations
 import os
 import queue
 import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -59,12 +61,49 @@ def test_a_failed_write_is_reported_and_the_next_one_written(recorder, result, t
 
 def test_a_dead_helper_is_replaced(recorder, result, tmp_path):
     _submit(recorder, result, tmp_path / "first.rrd")
-    for pid in list(recorder._pool._processes):  # the helper, killed as by the OOM killer
-        os.kill(pid, signal.SIGKILL)
-    reports = [_submit(recorder, result, tmp_path / "second.rrd")]
-    if reports[0][1] is not None:  # submitted before the pool saw its helper die
-        reports.append(_submit(recorder, result, tmp_path / "second.rrd"))
-    assert reports[-1] == ((tmp_path / "second.rrd").resolve(), None)
+    helper = recorder._helper.process
+    os.kill(helper.pid, signal.SIGKILL)  # as by the OOM killer
+    helper.wait(WAIT)
+    assert _submit(recorder, result, tmp_path / "second.rrd") == (
+        (tmp_path / "second.rrd").resolve(), None)
+    assert recorder._helper.process.pid != helper.pid
+
+
+def test_files_given_to_a_helper_that_dies_are_reported(recorder, result, tmp_path):
+    reports: queue.Queue = queue.Queue()
+    recorder.submit(result, tmp_path / "a.rrd", lambda *report: reports.put(report))
+    recorder.submit(result, tmp_path / "b.rrd", lambda *report: reports.put(report))
+    os.kill(recorder._helper.process.pid, signal.SIGKILL)
+    answers = [reports.get(timeout=WAIT) for _ in range(2)]
+    for written, error in answers:  # written before the kill, or reported not written
+        assert (written is None) != (error is None)
+        if error is not None:
+            assert "helper process ended" in str(error)
+
+
+def test_a_script_without_a_main_guard_is_not_run_again(tmp_path):
+    """The helper is no multiprocessing child: a script that records at its top level
+    (no `if __name__ == "__main__"`) runs once, and its file is written."""
+    script = tmp_path / "script.py"
+    marker = tmp_path / "runs"
+    script.write_text(
+        "import sys\n"
+        "sys.path.insert(0, sys.argv[1])\n"
+        "import queue\n"
+        "from conftest import make_result\n"
+        "from gait_planner.io.rrd_recorder import RrdRecorder\n"
+        f"open({str(marker)!r}, 'a').write('run\\n')\n"
+        "reports = queue.Queue()\n"
+        "recorder = RrdRecorder()\n"
+        f"recorder.submit(make_result(), {str(tmp_path / 'top.rrd')!r}, "
+        "lambda *r: reports.put(r))\n"
+        "print(reports.get(timeout=120))\n"
+        "recorder.close(120)\n")
+    done = subprocess.run([sys.executable, str(script), str(Path(__file__).parent)],
+                          capture_output=True, text=True, timeout=WAIT)
+    assert done.returncode == 0, done.stderr
+    assert marker.read_text() == "run\n"
+    assert (tmp_path / "top.rrd").is_file() and "None)" in done.stdout
 
 
 def test_a_closed_recorder_reports_at_once(result, tmp_path):
