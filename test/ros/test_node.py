@@ -66,6 +66,9 @@ def test_plan_request_plans_records_and_publishes(setup, spin_until):
                       and len(received["forces"]) == nodes and received["trajectory"])
     assert [m.node for m in received["state"]] == list(range(nodes))
     assert received["trajectory"][0].joint_names == ["hip"]
+    # the rerun recording follows the answer, written by the node's helper process
+    assert spin_until((folder / "first.rrd").is_file, timeout=120)
+    assert _rerun_entities(folder / "first.rrd") >= {"/world/walker/leg_r", "/plan"}
 
     # a changed step length re-plans warm from the stored plan
     warm = _call(client, spin_until, step_length=0.32, output_name="second")
@@ -78,6 +81,16 @@ def test_plan_request_plans_records_and_publishes(setup, spin_until):
     assert len(walk.trajectory.points) == 2 * (nodes - 2) + 2
     assert read_plan_mcap(walk.mcap_path).metadata["steps"] == "2"
     assert walk.continuous_dynamics.endswith("OK"), walk.continuous_dynamics
+    assert spin_until((folder / "walk.rrd").is_file, timeout=120)
+    assert sorted(p.name for p in folder.iterdir()) == [
+        f"{stem}.{suffix}" for stem in ("first", "second", "walk") for suffix in ("mcap", "rrd")]
+
+
+def _rerun_entities(path: Path) -> set[str]:
+    """The entity paths of a rerun recording, read by rerun's own reader."""
+    from rerun.chunk import RrdReader
+
+    return {chunk.entity_path for chunk in RrdReader(path).stream()}
 
 
 @pytest.mark.parametrize("fields, words", [
