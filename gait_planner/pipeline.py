@@ -118,10 +118,10 @@ def request_settings(request: PlanRequest) -> tuple[Scene, GaitSettings]:
 
 def prepare(planner: Planner, request: PlanRequest, rrd: bool = True) -> str:
     """Build the problem of `request` in `planner` now (`Planner.prepare`), so that a
-    request like it pays no build, and load the modules that certify and record a plan
-    (Pinocchio, the MCAP writer and its message encoder and, with rrd, rerun: ~0.3 s and
-    0.45 s that a first request paid, as `plan_and_record` loads them when it first needs
-    them); returns how its derivatives are evaluated."""
+    request like it pays no build, and load what certifies and records a plan, which
+    `plan_and_record` would load on first use: Pinocchio, the MCAP writer and its message
+    encoder (~0.4 s) and, with rrd, rerun (~0.45 s; the node leaves it to its .rrd helper,
+    `io.rrd_recorder`). Returns how the problem's derivatives are evaluated."""
     how = planner.prepare(*request_settings(request))
     from gait_planner.io.mcap_writer import recording_encoder
 

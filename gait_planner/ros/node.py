@@ -88,8 +88,9 @@ class GaitPlannerNode(Node):
     the node's stage and stop hooks are then not wired to it."""
 
     def __init__(self, *, planner: Planner | None = None, **kwargs):
-        self._worker, self._action, self._recorder = PlanWorker(), None, None  # (destroy_node
-        super().__init__("gait_planner", **kwargs)  # may run early)
+        # (destroy_node may run before __init__ has ended)
+        self._worker, self._action, self._recorder = PlanWorker(), None, None
+        super().__init__("gait_planner", **kwargs)
         self._worker.on_lapse = self._on_lapse
         parameters.declare(self)
         for path in remove_stale_temporaries(self._param("output_dir")):
