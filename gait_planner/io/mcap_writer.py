@@ -258,7 +258,7 @@ def _write(result: PlanResult, stream, start_ns: int) -> None:
     writer = Writer(stream, compression=CompressionType.ZSTD)
     writer.start(profile="ros2", library=_library())
     texts = recording_schemas()
-    encoder = recording_encoder()
+    encoder = encoder_for(tuple(texts.items()))
     schemas: dict[str, int] = {}  # ROS type -> schema id
     channels: dict[str, int] = {}  # topic -> channel id
     for topic, (ros_type, qos) in TOPICS.items():

@@ -74,15 +74,15 @@ JOINT_RANGE_ROW_UPPER = 2.0
 
 def joint_limit_rows(mb: Multibody, names: tuple[str, ...],
                      function_name: str = "joint_limits") -> ca.Function:
-    """CasADi Function `function_name`: (q (k,), c (4 len(names),)) -> rows (len(names),),
+    """CasADi Function `function_name`: (q (k,), c (3 len(names),)) -> rows (len(names),),
     each in [0, JOINT_RANGE_ROW_UPPER] exactly when its angle lies in its range: (theta -
     lo) / w, or (sin roll - sin lo) / w_s for a roll (module docstring), with the ranges
     given by c = `joint_limit_constants(limits)` (an input, so that one compiled function
     serves any range of the same angles)."""
-    q, c = ca.SX.sym("q", mb.k), ca.SX.sym("c", 4 * len(names))
+    q, c = ca.SX.sym("q", mb.k), ca.SX.sym("c", 3 * len(names))
     rows = []
     for i, (sin_part, cos_part) in enumerate(_sin_cos_parts(mb, q, names)):
-        a = c[4 * i : 4 * i + 4]
+        a = c[3 * i : 3 * i + 3]
         if cos_part is None:  # a roll: (sin roll - sin lo) / w_s
             rows.append((sin_part - a[0]) * a[1])
         else:  # 1 + atan2(k sin(theta - m), k cos(theta - m)) / w
@@ -92,18 +92,18 @@ def joint_limit_rows(mb: Multibody, names: tuple[str, ...],
 
 
 def joint_limit_constants(mb: Multibody, limits: tuple[tuple[str, float, float], ...]) -> np.ndarray:
-    """c (4 len(limits),) of `joint_limit_rows` for (angle, lower rad, upper rad) ranges,
+    """c (3 len(limits),) of `joint_limit_rows` for (angle, lower rad, upper rad) ranges,
     as returned by `gait_planner.model.posture.check_joint_limits` (0 < hi - lo < 180 deg):
-    per angle (cos m, sin m, 1 / w, 0) with the range's middle m and half width w, or for a
-    roll (sin lo, 1 / w_s, 0, 0)."""
+    per angle (cos m, sin m, 1 / w) with the range's middle m and half width w, or for a
+    roll (sin lo, 1 / w_s, 0)."""
     parts = _angle_parts(mb.scene)
     out = []
     for name, lo, hi in limits:
         if parts[name][3] is None:
-            out += [math.sin(lo), 2.0 / (math.sin(hi) - math.sin(lo)), 0.0, 0.0]
+            out += [math.sin(lo), 2.0 / (math.sin(hi) - math.sin(lo)), 0.0]
         else:
             middle, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-            out += [math.cos(middle), math.sin(middle), 1.0 / half, 0.0]
+            out += [math.cos(middle), math.sin(middle), 1.0 / half]
     return np.array(out)
 
 

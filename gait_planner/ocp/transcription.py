@@ -172,8 +172,7 @@ class Transcription:
     def node_multipliers(self, x: np.ndarray) -> dict[int, np.ndarray]:
         """The scaled contact multipliers (entries of L, FORCE_SCALE N) of each node
         1..N-1 in a numeric x."""
-        ends = self.U.numel() + self.T.numel() + np.cumsum([0, *self.lam_sizes])
-        return {n: x[a:b] for n, a, b in zip(self.lam_nodes, ends[:-1], ends[1:])}
+        return {n: x[self.layout.lam_index(n)] for n in self.lam_nodes}
 
     def _row_multipliers(self, n: int):
         """The multipliers of node n's contact rows (the along-line shares left out), N."""
@@ -381,7 +380,8 @@ class Transcription:
             rows += [first[name] + n - 1 for name in ("torso_lean", "torso_height")
                      if name in first]
             if rows:
-                nodes.setdefault((k, self.layout.mirrored(n == N - 1)), []).append((n, np.array(rows)))
+                nodes.setdefault((k, self.layout.mirrored(n == N - 1)), []).append(
+                    (n, np.array(rows)))
         for (k, mirrored), chosen in nodes.items():
             self.elements.append(ElementGroup(
                 self._node_rows_element(k, mirrored),
