@@ -7,8 +7,13 @@ request and answer, with feedback while the plan is made and cancel.
   lapses after `RESERVATION_TIMEOUT` s. A ROS 2 goal rejection carries no reason; this node
   rejects goals for no other reason than "busy" (a bad request is accepted and aborted with
   its message) and logs it, and `gait-planner call --action` prints it.
-* Feedback: the phase at every phase change and iteration, cost and constraint violation
-  every ``feedback_every`` IPOPT iterations, with the seconds since the goal was accepted.
+* Feedback: the phase at every phase change (cost NaN) and iteration, cost and constraint
+  violation every ``feedback_every`` IPOPT iterations, with the seconds since the goal was
+  accepted. While nothing new comes (a build, the guess, the recording, a slow iteration)
+  the phase is sent again every `FEEDBACK_HEARTBEAT` s (cost NaN, the iteration count so
+  far). So a long build shows that the node is alive, and a client that lost the first
+  message still learns the phase (the server's feedback writer may not yet have matched a
+  new client's reader when the goal is accepted: a "building" lost that way failed CI once).
 * Cancel: accepted while the problem is built or solved, refused while the found plan is
   being recorded (a second or two). An accepted cancel stops IPOPT within one iteration, and
   the goal ends canceled with nothing recorded or published.
@@ -17,6 +22,7 @@ request and answer, with feedback while the plan is made and cancel.
 from __future__ import annotations
 
 import math
+import threading
 import time
 from typing import Callable
 
@@ -31,6 +37,7 @@ from gait_planner_msgs.action import PlanGait as PlanGaitAction
 
 ACTION = "/gait_planner/plan_gait"
 CANCEL_MARK_WAIT = 0.5  # s, the longest a stopped goal waits for rclpy's "canceling" mark
+FEEDBACK_HEARTBEAT = 0.5  # s without feedback after which the last one is sent again
 
 # plan(request, answer): plans a request and fills the answer (Response or Result fields)
 Plan = Callable[[object, object], None]
@@ -81,21 +88,38 @@ class PlanGaitActionServer:
     def _execute(self, goal_handle: ServerGoalHandle) -> PlanGaitAction.Result:
         started = time.monotonic()
         every = max(1, int(self._node.get_parameter("feedback_every").value))
+        last = {"message": None, "at": started}  # the last feedback sent, and when
+        order = threading.Lock()  # a heartbeat never repeats a phase after its successor
+
+        def publish(message: PlanGaitAction.Feedback) -> None:  # holding `order`
+            now = time.monotonic()
+            message.elapsed = now - started
+            last["message"], last["at"] = message, now
+            try:
+                goal_handle.publish_feedback(message)
+            except _rclpy.RCLError:  # shutting down (SIGINT, SIGTERM): the solve stops next
+                pass
 
         def feedback(phase: str, iteration: int, cost: float, violation: float) -> None:
             if iteration % every and not math.isnan(cost):  # phase changes always go
                 return
-            try:
-                goal_handle.publish_feedback(PlanGaitAction.Feedback(
-                    phase=phase, iteration=iteration, cost=cost,
-                    constraint_violation=violation, elapsed=time.monotonic() - started))
-            except _rclpy.RCLError:  # shutting down (SIGINT, SIGTERM): the solve stops next
-                pass
+            with order:
+                publish(PlanGaitAction.Feedback(phase=phase, iteration=iteration, cost=cost,
+                                                constraint_violation=violation))
+
+        def heartbeat() -> None:  # the waiting executor thread; `feedback` is the plan's
+            with order:
+                message = last["message"]
+                if message is not None and time.monotonic() - last["at"] >= FEEDBACK_HEARTBEAT:
+                    publish(PlanGaitAction.Feedback(  # a phase message: cost NaN
+                        phase=message.phase, iteration=message.iteration, cost=math.nan,
+                        constraint_violation=math.nan))
 
         result = PlanGaitAction.Result()
         try:
             self._worker.run(self._tickets[id(goal_handle.request)],
-                             lambda: self._plan(goal_handle.request, result), feedback)
+                             lambda: self._plan(goal_handle.request, result), feedback,
+                             tick=heartbeat)
         except (Closed, Lapsed) as err:
             result.success, result.message = False, str(err)
         self._tickets.pop(id(goal_handle.request), None)

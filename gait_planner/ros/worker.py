@@ -26,6 +26,7 @@ Listener = Callable[[str, int, float, float], None]
 # s from a reservation to its plan's start (`run`) after which the next request takes it over;
 # a goal's plan starts milliseconds after its acceptance was sent
 RESERVATION_TIMEOUT = 2.0
+POLL = 0.1  # s, how often a caller waiting in `run` looks at the node's closing and ticks
 
 
 class Stopped(Exception):
@@ -115,9 +116,11 @@ class PlanWorker:
         if listener is not None:
             listener(self.phase, iteration, cost, violation)
 
-    def run(self, ticket: int, work: Callable[[], T], listener: Listener | None = None) -> T:
+    def run(self, ticket: int, work: Callable[[], T], listener: Listener | None = None,
+            tick: Callable[[], None] | None = None) -> T:
         """Run `work` in the plan thread of the reservation `ticket` (`try_reserve`) and return
-        its value (or raise its error); `listener` hears phases and iterations meanwhile.
+        its value (or raise its error); `listener` hears phases and iterations meanwhile, and
+        `tick` is called in the caller's thread every `POLL` s while it waits.
         Raises `Lapsed` if another request took the reservation over, `Closed` if the node
         closes first. The reservation ends with the plan thread."""
         with self._guard:
@@ -139,9 +142,11 @@ class PlanWorker:
                 self._busy.release()
 
         threading.Thread(target=target, name="gait_planner_plan", daemon=True).start()
-        while not done.wait(0.1):
+        while not done.wait(POLL):
             if self._closed.is_set():
                 raise Closed("the node is shutting down")
+            if tick is not None:
+                tick()
         if "error" in outcome:
             raise outcome["error"]
         return outcome["value"]

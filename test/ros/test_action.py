@@ -4,6 +4,7 @@ service alike."""
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 
@@ -12,7 +13,7 @@ from action_msgs.msg import GoalStatus
 from rclpy.action import ActionClient
 from trajectory_msgs.msg import JointTrajectory
 
-from gait_planner.ros.action_server import ACTION
+from gait_planner.ros.action_server import ACTION, FEEDBACK_HEARTBEAT
 from gait_planner.ros.client import send_goal
 from gait_planner.ros.node import SERVICE, TOPIC_TRAJECTORY
 from gait_planner_msgs.action import PlanGait as PlanGaitAction
@@ -60,8 +61,10 @@ def test_feedback_arrives_in_phase_order_and_the_goal_succeeds(planner_node, cli
     assert answer.status == GoalStatus.STATUS_SUCCEEDED, answer.result.message
     assert answer.result.success and answer.result.mcap_path == str(tmp_path / "fed.mcap")
     assert spin_until(lambda: len(feedback) > answer.result.iterations), "feedback missing"
-    phases = [f.phase for f in feedback if math.isnan(f.cost)]
+    phase_messages = [f for f in feedback if math.isnan(f.cost)]
+    phases = [phase for phase, _ in itertools.groupby(f.phase for f in phase_messages)]
     assert phases == ["building", "initial guess", "cold stage 1", "cold stage 2", "recording"]
+    assert {f.iteration for f in phase_messages if f.phase == "building"} == {0}
     iterations = [f for f in feedback if not math.isnan(f.cost)]
     # one per IPOPT callback: every iteration, and each stage's starting point
     assert [f.iteration for f in iterations] == list(range(len(iterations)))
@@ -72,6 +75,27 @@ def test_feedback_arrives_in_phase_order_and_the_goal_succeeds(planner_node, cli
     elapsed = [f.elapsed for f in feedback]
     assert elapsed == sorted(elapsed) and elapsed[-1] < 60
     assert spin_until(lambda: trajectories)
+
+
+def test_a_long_build_repeats_its_phase_every_heartbeat(planner_node, client, spin_until,
+                                                       wait_for_feedback):
+    """While nothing new happens (here the build of walker2d with CasADi's derivatives, several
+    seconds) the phase is sent again every FEEDBACK_HEARTBEAT s, never sooner: a client that
+    lost the first "building" still learns it, and sees that the node is alive."""
+    planner_node(default_scene="walker2d", compile_derivatives=False)
+    action, _, _ = client
+    feedback: list = []
+    handle = _send(action, spin_until, feedback, cold_start=True, output_name="beat")
+    assert handle.accepted
+    wait_for_feedback(feedback, lambda f: f.phase == "building" and f.elapsed > 1.0)
+    building = [f for f in feedback if f.phase == "building"]
+    assert all(math.isnan(f.cost) and f.iteration == 0 for f in building)
+    gaps = [b.elapsed - a.elapsed for a, b in itertools.pairwise(building)]
+    assert gaps and min(gaps) >= FEEDBACK_HEARTBEAT, gaps
+    cancel = handle.cancel_goal_async()
+    assert spin_until(cancel.done, FAST) and cancel.result().goals_canceling
+    assert _result(handle, spin_until).status == GoalStatus.STATUS_CANCELED
+    print(f"building messages {len(building)}, gaps {min(gaps):.3f}-{max(gaps):.3f} s")
 
 
 def test_cancel_stops_the_solver_within_an_iteration_and_records_nothing(

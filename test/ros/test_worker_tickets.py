@@ -1,5 +1,6 @@
 """PlanWorker's stop requests name the reservation they are meant for; a reservation that
-never starts its plan lapses, one that did never does."""
+never starts its plan lapses, one that did never does; a caller waiting for its plan ticks
+(the action's feedback heartbeat) in its own thread."""
 
 import threading
 import time
@@ -49,3 +50,17 @@ def test_a_running_plan_never_lapses(monkeypatch):
     release.set()
     runner.join(5)
     assert worker.try_reserve() == ticket + 1
+
+
+def test_the_waiting_caller_ticks_in_its_own_thread_until_the_plan_ends():
+    worker, release, ticks = PlanWorker(), threading.Event(), []
+    ticket = worker.try_reserve()
+    caller = threading.get_ident()
+
+    def tick() -> None:
+        ticks.append(threading.get_ident())
+        if len(ticks) == 3:
+            release.set()
+
+    assert worker.run(ticket, lambda: release.wait(5) and "planned", tick=tick) == "planned"
+    assert len(ticks) == 3 and set(ticks) == {caller}
