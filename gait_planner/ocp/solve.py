@@ -79,6 +79,13 @@ VARIANTS = {
 COLD_ATTEMPTS = ([("cold", True, True), ("cold", False, False)],
                  [("cold_inertia", True, True), ("cold_inertia", False, False)])
 WARM_ATTEMPTS = ([("warm", False, False)],)
+# A refinement (a plan started from a coarser plan of the same request) gets no restart with
+# the inertia test: the coarse plan stands if the refined grid fails. Measured 2026-11-26
+# (walker3d, 1.0 m step, 600 s limit): the 40-interval plan missed the certificate (0.27 %),
+# its refinement's inertia-free attempt stopped at the cap after 24 s, and the restart with
+# the inertia test (regularisation 1e5-1e7, MUMPS reallocating) slowed from 0.1 s to over a
+# minute an iteration, so the request ended at 617 s, past its limit, with the coarse plan.
+REFINE_ATTEMPTS = COLD_ATTEMPTS[:1]
 
 
 @dataclasses.dataclass
@@ -258,7 +265,8 @@ class Planner:
         stepping motion, or (for robustness tests) the standing pose or a perturbed guess.
         refine_from: settings whose grid `settings` refines (`ocp.refine`); without a
         stored plan of its own to warm-start from, the plan then starts from this planner's
-        plan of the same request on that coarser grid (ValueError if there is none).
+        plan of the same request on that coarser grid (ValueError if there is none), and a
+        failed inertia-free attempt is not restarted with the inertia test (`REFINE_ATTEMPTS`).
 
         The time limit (settings.max_solve_time) covers the guess and the solve; building a
         problem the planner has not seen before comes on top (stats.build_time).
@@ -270,7 +278,8 @@ class Planner:
         try:
             built = self._build(scene, settings)
             warm_start = warm_start and bool(built.stored)
-            attempts = WARM_ATTEMPTS if warm_start else COLD_ATTEMPTS
+            attempts = (WARM_ATTEMPTS if warm_start
+                        else REFINE_ATTEMPTS if refine_from is not None else COLD_ATTEMPTS)
             for variant, *_ in attempts[0]:  # a fallback's solver is built if it is needed
                 self._solver(built, settings, variant)
         except (ValueError, RuntimeError) as err:

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from gait_planner.model.loader import load_scene
+from gait_planner.ocp import solve
 from gait_planner.ocp.refine import refined_settings, refined_start
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
@@ -86,6 +87,24 @@ def test_a_plan_that_misses_the_certificate_is_refined_until_it_passes(coarse_wa
     assert "torque error (of peak) away from switches" in result.settings["refinement"]
     assert result.stats.iterations > coarse.stats.iterations  # both plans counted
     assert verify_result(result).continuous.ok
+
+
+def test_a_failed_refinement_is_not_restarted_and_the_coarse_plan_stands(coarse_walker2d,
+                                                                         monkeypatch):
+    """With the inertia-free attempt capped at 3 iterations, the coarse plan converges only
+    through the restart with the inertia test, and its refinement fails: that one is not
+    restarted (`solve.REFINE_ATTEMPTS`; walker3d's 1.0 m step spent 590 s in such a
+    restart), and the coarse plan is returned with the reason."""
+    scene, settings, _, _ = coarse_walker2d
+    monkeypatch.setitem(solve.VARIANTS, "cold", {**solve.VARIANTS["cold"], "ipopt.max_iter": 3})
+    result, cert = plan_certified(Planner(), scene, dataclasses.replace(settings, refinements=1),
+                                  warm_start=False)
+    assert result.success, result.message
+    assert "restarted with IPOPT's inertia test" in result.settings["initial_guess"]
+    assert result.n_nodes - 1 == sum(settings.intervals) and not cert.ok
+    note = result.settings["refinement"]
+    refined = note.split(f"refined to {2 * sum(settings.intervals)}: ")[1]
+    assert refined.startswith("IPOPT: iteration limit reached") and "after 3 iterations" in refined
 
 
 def test_without_refinements_the_plan_is_returned_as_planned(coarse_walker2d):
