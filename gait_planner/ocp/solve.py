@@ -327,7 +327,7 @@ class Planner:
                 break
             origin += (f"; the inertia-free attempt stopped ({STATUS_WORDS.get(status, status)})"
                        f" after {totals[0]} iterations")
-            if number == 0 and step != scene.gait.step_length and refine_from is None:
+            if number == 0 and step != scene.gait.step_length:
                 qref_c = GUESSES[guess](tr, scene.gait.step_length)[: tr.N - 1]
                 found = self._continuation(built, settings, x_start, duals_start, qref_c,
                                            scene.gait.step_length, step, totals)
