@@ -11,11 +11,14 @@
 * ``plots/angular_momentum/{x,y,z}`` (kg m^2/s): `angular_momentum`, about the whole-body
   centre of mass.
 
-`plot_groups` says which series share a plot: joint angles and joint torques per leg
-(right, left; angles of no side, e.g. compass's hip, in a group of their own), ground forces
-per foot (heel and forefoot), roll moments, energies, angular momentum components. Each
-plot also draws the phase boundaries (`phase_boundaries`) as grey vertical lines, the
-series ``plots/phase_boundaries/<group key>``.
+`plot_groups` says which series share a plot: the angles, and the torques, of one joint of
+one leg (hip, knee, ankle; right, left; a joint of no side, e.g. compass's hip, alone), ground
+forces per foot (heel and forefoot), roll moments, energies, angular momentum components.
+The plots show no legend (`gait_planner.io.rerun_blueprint`): a title names its series and
+their colours where there is room (a joint plot's title is short, for narrow plots: joint,
+leg R or L and unit, deg for angles and N m for torques), `COLOUR_KEY` says them for all
+plots. Each plot also draws the phase boundaries (`phase_boundaries`) as grey vertical
+lines, the series ``plots/phase_boundaries/<group key>``.
 """
 
 from __future__ import annotations
@@ -28,18 +31,26 @@ import numpy as np
 from gait_planner.io.messages import node_efforts
 from gait_planner.result import PlanResult
 
-__all__ = ["BOUNDARY_COLOR", "PlotGroup", "angular_momentum", "phase_boundaries", "plot_groups",
-           "poses", "series_color", "series_name", "series_values", "side_of",
-           "whole_body_com"]
+__all__ = ["BOUNDARY_COLOR", "COLOUR_KEY", "PlotGroup", "angular_momentum", "axis_of",
+           "joint_of", "phase_boundaries", "plot_groups", "poses", "series_color",
+           "series_name", "series_values", "side_of", "whole_body_com"]
 
-# Colours of the series: joints by their place in the leg (the same for right and left);
-# x, y, z components red, green, blue (forefoot forces lighter than heel forces).
+# Colours of the series: joint angles by their axis (pitch, roll, yaw; a revolute joint's
+# angle as a pitch), the same in every joint plot; x, y, z components red, green, blue
+# (forefoot forces lighter than heel forces).
 _JOINT_PALETTE = ((31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40),
                   (148, 103, 189), (140, 86, 75), (227, 119, 194), (127, 127, 127))
 _AXIS_COLORS = ((214, 39, 40), (44, 160, 44), (31, 119, 180))
 _LIGHT_AXIS_COLORS = ((250, 140, 130), (140, 220, 120), (120, 180, 240))
 _ENERGY_COLORS = {"kinetic": (214, 39, 40), "potential": (31, 119, 180), "total": (40, 40, 40)}
 BOUNDARY_COLOR = (150, 150, 150)
+_PALETTE_NAMES = ("blue", "orange", "green", "red", "purple", "brown", "pink", "grey")
+_AXES = ("pitch", "roll", "yaw")
+COLOUR_KEY = ("joint angles and torques: pitch blue, roll orange, yaw green (a revolute joint "
+              "blue); ground forces and angular momentum: x red, y green, z blue (forefoot "
+              "lighter than heel); energy: kinetic red, potential blue, total black (potential "
+              "and total less V at t = 0); grey vertical lines: phase boundaries. Hover a line "
+              "for its name and value.")
 
 
 @dataclass(frozen=True)
@@ -64,6 +75,17 @@ def side_of(name: str) -> str:
     return "joints"
 
 
+def axis_of(name: str) -> str:
+    """"pitch", "roll", "yaw" of a spherical joint's angle name (hip_r_roll), else ""."""
+    return next((a for a in _AXES if name.endswith(f"_{a}")), "")
+
+
+def joint_of(name: str) -> str:
+    """The joint of a joint-angle name without side and axis: hip_r_roll -> hip."""
+    axis = axis_of(name)
+    return re.sub(r"_[rl](?=_|$)", "", name[: -len(axis) - 1] if axis else name)
+
+
 def _feet(result: PlanResult) -> dict[str, list[str]]:
     feet: dict[str, list[str]] = {}
     for contact in result.scene.contacts:
@@ -73,28 +95,29 @@ def _feet(result: PlanResult) -> dict[str, list[str]]:
 
 def plot_groups(result: PlanResult) -> list[PlotGroup]:
     """The plots of `result`'s time series, in the order of the layout."""
-    sides: dict[str, list[str]] = {}
+    joints: dict[tuple[str, str], list[str]] = {}
     for name in result.joint_angle_names:
-        sides.setdefault(side_of(name), []).append(name)
-    order = [s for s in ("right", "left", "joints") if s in sides]
-    groups = [PlotGroup(f"joint_angle_{s}", f"joint angles, {s} (deg)" if s != "joints"
-                        else "joint angles (deg)",
-                        tuple(f"plots/joint_angle/{a}" for a in sides[s])) for s in order]
-    groups += [PlotGroup(f"joint_torque_{s}", f"joint torques, {s} (N m)" if s != "joints"
-                         else "joint torques (N m)",
-                         tuple(f"plots/joint_torque/{a}" for a in sides[s])) for s in order]
+        joints.setdefault((joint_of(name), side_of(name)), []).append(name)
+    order = [(j, s) for j in dict.fromkeys(j for j, _ in joints)
+             for s in ("right", "left", "joints") if (j, s) in joints]
+    groups = [PlotGroup(f"joint_{kind}_{j}_{s}",
+                        f"{j}{'' if s == 'joints' else ' ' + s[0].upper()} ({unit})",
+                        tuple(f"plots/joint_{kind}/{a}" for a in joints[j, s]))
+              for kind, unit in (("angle", "deg"), ("torque", "N m")) for j, s in order]
     feet = _feet(result)
-    groups += [PlotGroup(f"contact_force_{body}", f"ground force on {body} (N)",
-                         tuple(f"plots/contact_force/{c}/{axis}" for c in contacts
-                               for axis in "xyz"))
+    groups += [PlotGroup(f"contact_force_{body}", f"ground force on {body} (N): x red, y green, "
+                         "z blue", tuple(f"plots/contact_force/{c}/{axis}" for c in contacts
+                                         for axis in "xyz"))
                for body, contacts in feet.items()]
-    groups.append(PlotGroup("energy", "energy (J; potential and total - V(0))",
+    groups.append(PlotGroup("energy", "energy (J): kinetic red, potential blue, total black",
                             tuple(f"plots/energy/{e}" for e in ("kinetic", "potential", "total"))))
     groups.append(PlotGroup("angular_momentum",
-                            "angular momentum about the COM (kg m^2/s)",
+                            "angular momentum (kg m^2/s): x red, y green, z blue",
                             tuple(f"plots/angular_momentum/{axis}" for axis in "xyz")))
     if not result.scene.planar:
-        groups.append(PlotGroup("roll_moment", "roll moment of a full contact (N m)",
+        colours = ", ".join(f"{body} {_PALETTE_NAMES[i % len(_PALETTE_NAMES)]}"
+                            for i, body in enumerate(feet))
+        groups.append(PlotGroup("roll_moment", f"roll moment (N m): {colours}",
                                 tuple(f"plots/roll_moment/{body}" for body in feet)))
     return groups
 
@@ -104,8 +127,8 @@ def series_color(result: PlanResult, path: str) -> tuple[int, int, int]:
     parts = path.split("/")
     kind, name = parts[1], parts[2]
     if kind in ("joint_angle", "joint_torque"):
-        same_side = [a for a in result.joint_angle_names if side_of(a) == side_of(name)]
-        return _JOINT_PALETTE[same_side.index(name) % len(_JOINT_PALETTE)]
+        axis = axis_of(name)
+        return _JOINT_PALETTE[_AXES.index(axis) if axis else 0]
     if kind == "contact_force":
         axis = "xyz".index(parts[3])
         body = result.scene.contact(name).body

@@ -39,9 +39,9 @@ import rerun as rr
 from gait_planner.io.atomic import atomic_target
 from gait_planner.io.messages import contact_points, foot_wrenches, quaternion_msg
 from gait_planner.io.rerun_blueprint import blueprint
-from gait_planner.io.rerun_series import (BOUNDARY_COLOR, phase_boundaries, plot_groups, poses,
-                                          series_color, series_name, series_values, side_of,
-                                          whole_body_com)
+from gait_planner.io.rerun_series import (BOUNDARY_COLOR, COLOUR_KEY, phase_boundaries,
+                                          plot_groups, poses, series_color, series_name,
+                                          series_values, side_of, whole_body_com)
 from gait_planner.io.urdf import body_shapes
 from gait_planner.result import PlanResult
 
@@ -84,6 +84,7 @@ def _log_static(result: PlanResult, rec: rr.RecordingStream) -> None:
     summary = (
         f"# {result.scene.name}: {'success' if result.success else 'FAILED'}\n\n"
         f"{result.message}\n\n"
+        f"Plot colours: {COLOUR_KEY}\n\n"
         f"| | |\n|---|---|\n| cost ({result.cost_name}) | {result.cost_value:.6g} |\n"
         f"| step length | {result.step_length:.4f} m |\n| duration | {result.duration:.4f} s |\n"
         f"| phase scaling | {sigma} |\n| friction coefficient | {result.friction_coefficient} |\n"

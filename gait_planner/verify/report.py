@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 from gait_planner.verify.continuous import ContinuousCertificate
@@ -83,26 +82,12 @@ class VerificationReport:
         return not self.failures
 
     def summary(self) -> str:
-        lines = [f"{self.path}: scene {self.scene}, cost {self.cost_name}, {self.n_nodes} nodes: "
-                 + ("all checks passed" if self.ok else f"{len(self.failures)} check(s) FAILED")]
-        for f in dataclasses.fields(self):
-            if f.name in ("path", "scene", "cost_name", "n_nodes", "failures", "notes",
-                          "physical", "continuous"):
-                continue
-            lines.append(_line(f.name, getattr(self, f.name)))
-        if self.physical is not None:
-            lines += [_line(f.name, getattr(self.physical, f.name))
-                      for f in dataclasses.fields(self.physical)
-                      if f.name not in ("failures", "scuffs", "zigzags")]
-        if self.continuous is not None:
-            lines.append(f"  {self.continuous.summary()}")
-        lines += [f"  note: {n}" for n in self.notes]
-        lines += [f"  FAILED: {f}" for f in self.failures]
-        return "\n".join(lines)
+        """The report a person reads: the checks grouped by what they test, one line each
+        with its value, unit, limit and mark (ok / FAILED / noted / blank: measured, not
+        judged), then notes, the failures' sentences and a last verdict line (the
+        verifier's: `failures`)."""
+        from gait_planner.verify.report_text import report_lines  # the text, kept apart
+
+        return "\n".join(report_lines(self))
 
     __str__ = summary
-
-
-def _line(name: str, value) -> str:
-    text = f"{value:.6g}" if isinstance(value, float) else str(value)
-    return f"  {name:32s} {text}"

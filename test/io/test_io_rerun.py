@@ -50,7 +50,7 @@ def test_rrd_verify_and_entities(rrd, result):
                    "/world/trails/com", "/world/trails/foot_l_forefoot", "/world/com_total",
                    "/world/contacts/wrenches", "/world/contacts/centers_of_pressure",
                    "/plots/angular_momentum/y", "/plots/roll_moment/foot_l",
-                   "/plots/phase_boundaries/energy", "/plots/phase_boundaries/joint_angle_left",
+                   "/plots/phase_boundaries/energy", "/plots/phase_boundaries/joint_angle_hip_left",
                    "/phase"):
         assert entity in stats.stdout, entity
 
@@ -131,9 +131,12 @@ def test_show_without_display_says_what_to_do(result, monkeypatch):
 
 # ---------------------------------------------------------------- what the view adds (#11)
 
+import rerun.blueprint as rrb  # noqa: E402
+
 from gait_planner.io.rerun_blueprint import blueprint  # noqa: E402
-from gait_planner.io.rerun_series import (BOUNDARY_COLOR, angular_momentum,  # noqa: E402
-                                          phase_boundaries, plot_groups, series_values)
+from gait_planner.io.rerun_series import (BOUNDARY_COLOR, COLOUR_KEY,  # noqa: E402
+                                          angular_momentum, phase_boundaries, plot_groups,
+                                          series_color, series_values)
 
 
 def _rigid_motion(result, omega: float, velocity) -> np.ndarray:
@@ -218,20 +221,51 @@ def test_plot_groups_hold_every_series_once(make_result, scene):
     assert len(set(keys)) == len(keys)
     names = result.joint_angle_names
     if scene == "compass":
-        assert keys[:2] == ["joint_angle_joints", "joint_torque_joints"]
-    else:
-        right = next(g for g in groups if g.key == "joint_angle_right")
-        left = next(g for g in groups if g.key == "joint_angle_left")
-        assert right.paths == tuple(f"plots/joint_angle/{a}" for a in names
-                                    if re.search("_r(_|$)", a))  # hip_r_roll, knee_r
-        assert left.paths == tuple(f"plots/joint_angle/{a}" for a in names
-                                   if re.search("_l(_|$)", a))
-        assert len(right.paths) == (7 if scene == "walker3d" else 3)
+        assert keys[:2] == ["joint_angle_hip_joints", "joint_torque_hip_joints"]
+    else:  # one joint of one leg per plot: hip_r_pitch, hip_r_roll, hip_r_yaw; knee_r
+        hip = next(g for g in groups if g.key == "joint_angle_hip_right")
+        knee = next(g for g in groups if g.key == "joint_torque_knee_left")
+        assert hip.paths == tuple(f"plots/joint_angle/{a}" for a in names
+                                  if re.fullmatch("hip_r(_(pitch|roll|yaw))?", a))
+        assert len(hip.paths) == (3 if scene == "walker3d" else 1)
+        assert knee.paths == ("plots/joint_torque/knee_l",)
+        assert (hip.title, knee.title) == ("hip R (deg)", "knee L (N m)")
     bodies = {c.body for c in result.scene.contacts}
     assert {k for k in keys if k.startswith("contact_force_")} == {
         f"contact_force_{b}" for b in bodies}
     assert ("roll_moment" in keys) == (scene == "walker3d")
     blueprint(result)  # builds for every scene
+
+
+def _views(container):
+    for item in getattr(container, "contents", []):
+        if isinstance(item, rrb.TimeSeriesView):
+            yield item
+        else:
+            yield from _views(item)
+
+
+def test_no_plot_legend_covers_the_lines(make_result):
+    """rerun 0.41 draws a legend inside its plot: every plot hides it; a plot's series are
+    told apart by colours said in its title or in the colour key of the solve summary, and
+    the joint plots share pitch, roll, yaw colours."""
+    result = make_result("walker3d")
+    views = list(_views(blueprint(result).root_container))
+    assert len(views) == len(plot_groups(result))
+    for view in views:
+        legend = view.properties["PlotLegend"]
+        assert legend.visible.as_arrow_array().to_pylist() == [False], view.name
+    colour = {p.split("/")[-1]: series_color(result, p) for g in plot_groups(result)
+              for p in g.paths if p.startswith("plots/joint_angle/")}
+    for axis in ("pitch", "roll", "yaw"):
+        assert colour[f"hip_r_{axis}"] == colour[f"ankle_l_{axis}"], axis
+    assert len({colour["hip_r_pitch"], colour["hip_r_roll"], colour["hip_r_yaw"]}) == 3
+    for group in plot_groups(result):
+        if len(group.paths) > 1 and not group.key.startswith("joint_"):
+            colours = group.title.partition(": ")[2]  # the colours of its series
+            assert " red" in colours or " blue" in colours, group.title
+    for words in ("pitch blue", "roll orange", "yaw green", "x red", "phase boundaries"):
+        assert words in COLOUR_KEY
 
 
 def test_phase_boundaries_are_the_phase_starts_and_the_half_cycle_end(result):
@@ -300,7 +334,7 @@ def test_screenshot_of_the_web_viewer(rrd, tmp_path):
     def bluish(x):
         return int((x[..., 2] - np.maximum(x[..., 0], x[..., 1]) > 40).sum())
 
-    view3d = a[50:500, :680]  # the 3D view: left 44 % of the width, top half
+    view3d = a[50:500, :620]  # the 3D view: left 40 % of the width, top half
     assert reddish(view3d) > 1000 and bluish(view3d) > 1000, where
     plots = a[40:950, 740:]  # the time series: right half
     grey = np.abs(plots - np.array(BOUNDARY_COLOR)).max(axis=2) <= 12

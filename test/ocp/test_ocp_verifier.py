@@ -134,7 +134,7 @@ def test_command_line(solved, capsys, tmp_path):
     path = solved("compass").path
     assert main([str(path)]) == 0
     out = capsys.readouterr().out
-    assert "all checks passed" in out and "max_dynamics_residual" in out
+    assert "verdict: all checks passed" in out and "residual, relative" in out
     assert main([str(tmp_path / "missing.mcap")]) == 2
 
 
