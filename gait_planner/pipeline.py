@@ -8,7 +8,6 @@ converge is a `PlanResult` with success False (nothing is recorded for it).
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 import time
 from dataclasses import dataclass
@@ -24,31 +23,10 @@ from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings, SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.walk_on import walk_on
+from gait_planner.request import PlanRequest, RequestError, checked
 from gait_planner.result import PlanResult
 
-MAX_STEPS = 100  # half cycles one request may join (60 s of walking for walker3d)
 _OUTPUT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,127}")
-
-
-class RequestError(ValueError):
-    """A request that cannot be planned as asked; the message says why."""
-
-
-@dataclass(frozen=True)
-class PlanRequest:
-    """A plan request; None (or empty) fields take the scene's values."""
-
-    scene: str
-    step_length: float | None = None
-    cost: str | None = None
-    friction_coefficient: float | None = None
-    intervals_per_phase: int | None = None
-    max_solve_time: float | None = None
-    output_name: str = ""
-    cold_start: bool = False
-    compiled: bool = False  # compile the derivative elements (GaitSettings.compiled)
-    steps: int = 1  # half cycles in the result, joined by the mirror (`ocp.walk_on`)
-    posture: str = ""  # "paper" or "human" (`model.posture`); empty = the scene's
 
 
 @dataclass(frozen=True)
@@ -56,11 +34,6 @@ class Outcome:
     result: PlanResult
     mcap_path: Path | None
     rrd_path: Path | None
-
-
-def _finite(name: str, value: float | None) -> None:
-    if value is not None and not math.isfinite(value):
-        raise RequestError(f"{name} must be a finite number, got {value}")
 
 
 def output_stem(request: PlanRequest, scene_name: str) -> str:
@@ -88,12 +61,10 @@ def unused_stem(folder: Path, stem: str) -> str:
 
 
 def request_settings(request: PlanRequest) -> tuple[Scene, GaitSettings]:
-    """The scene and settings of `request`; RequestError says what cannot be planned."""
-    for name in ("step_length", "friction_coefficient", "max_solve_time"):
-        _finite(name, getattr(request, name))
-    if not 1 <= request.steps <= MAX_STEPS:
-        raise RequestError(f"steps must be a whole number of half cycles from 1 to {MAX_STEPS}, "
-                           f"got {request.steps}")
+    """The scene and settings of `request`; RequestError says what cannot be planned (the
+    rule of every field: `gait_planner.request.checked`; the scene's ranges:
+    `gait_planner.ocp.request_ranges`)."""
+    request = checked(request)
     try:
         try:
             scene = load_scene(request.scene)
@@ -139,6 +110,7 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
 
     stage: called with "recording" once the plan is found, before anything is written (an
     exception it raises ends the request with nothing recorded)."""
+    request = checked(request)  # 0 = the default, as for the node's requests
     scene, settings = request_settings(request)
     stem = output_stem(request, scene.name)
     folder = Path(output_dir)

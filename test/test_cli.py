@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from gait_planner.cli import main
 
 
@@ -71,3 +73,62 @@ def test_node_takes_the_ros_arguments_in_order(monkeypatch):
     assert main(["node", "--ros-args", "-p", "output_dir:=runs", "-p", "max_solve_time:=30.0"]) == 0
     assert seen[0][1:] == ["--ros-args", "-p", "output_dir:=runs", "-p", "max_solve_time:=30.0"]
     assert main(["plan", "--scene", "compass", "--out", "x.mcap", "--bogus"]) == 2
+
+
+def test_plan_refuses_a_negative_step_length_as_the_node_does(tmp_path, capsys):
+    out = tmp_path / "back.mcap"
+    assert main(["plan", "--scene", "compass", "--step-length", "-0.5", "--out", str(out),
+                 "--no-rrd"]) == 2
+    assert capsys.readouterr().err.endswith("gait-planner: error: step_length must be > 0 m, "
+                                            "or 0 for the scene's default, got -0.5\n")
+    assert not out.exists()
+
+
+def test_call_refuses_a_bad_field_before_sending(capsys, monkeypatch):
+    import gait_planner.ros.client as client
+
+    monkeypatch.setattr(client.rclpy, "init", lambda **_: pytest.fail("rclpy started"))
+    assert main(["call", "--step-length", "-0.5"]) == 2
+    assert capsys.readouterr().err == ("gait-planner: error: step_length must be > 0 m, or 0 "
+                                       "for the scene's default, got -0.5\n")
+    assert main(["call", "--action", "--friction-coefficient", "nan"]) == 2
+    assert "friction_coefficient must be > 0, or 0 for the scene's default, got nan" in (
+        capsys.readouterr().err)
+    assert main(["call", "--timeout", "-1"]) == 2
+    assert "--timeout must be > 0 s, got -1.0" in capsys.readouterr().err
+
+
+def test_call_options_are_the_request_fields_with_the_node_defaults(capsys):
+    from gait_planner.request import FIELDS
+    from gait_planner.ros.parameters import DECLARATIONS
+
+    assert main(["call", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    for name in FIELDS:
+        assert f"--{name.replace('_', '-')}" in text
+    assert "--compile" not in text and "--no-rrd" not in text and "--mu" not in text
+    assert f"default_scene, {DECLARATIONS['default_scene'][0]} unless set" in text
+    assert f"max_solve_time, {DECLARATIONS['max_solve_time'][0]:g} s unless set" in text
+
+
+@pytest.mark.parametrize("answer, line", [
+    ({"status": "canceled", "success": False, "message": "stopped on request", "cost": 0.0},
+     "canceled: stopped on request"),
+    ({"status": "rejected", "success": False, "message": "busy: another plan is running"},
+     "rejected: busy: another plan is running"),
+    ({"status": "failed", "success": False, "message": "IPOPT: time limit", "iterations": 0},
+     "failed: IPOPT: time limit"),
+])
+def test_call_prints_a_plan_that_was_not_made_as_its_status_and_reason(
+        answer, line, capsys, monkeypatch):
+    import gait_planner.ros.client as client
+
+    sent = []
+    monkeypatch.setattr(client, "call_plan_gait_action",
+                        lambda fields, timeout: sent.append(fields) or answer)
+    assert main(["call", "--action", "--steps", "2", "--cold-start"]) == 1
+    assert capsys.readouterr().out == line + "\n"
+    assert sent[0]["steps"] == 2 and sent[0]["cold_start"] is True
+    assert main(["call", "--action", "--json"]) == 1
+    assert json.loads(capsys.readouterr().out) == {
+        key: answer[key] for key in ("status", "success", "message")}

@@ -174,10 +174,12 @@ def _run(args: argparse.Namespace) -> int:
 def _add_report(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "report", help="draw a recorded plan (PNG) and check it independently",
-        description="Read RUN.mcap, draw walker, joint angles, torques, ground forces, "
-        "energies and the continuous-dynamics certificate into a PNG, run the independent "
-        "verifier (gait_planner.verify) on it and print the certificate's summary line (the "
-        "exit status is the verifier's).")
+        description="Read RUN.mcap, draw the walker, its phase schedule, ground forces, "
+        "joint angles and torques per joint and leg, energies and the continuous-dynamics "
+        "certificate into a PNG, run the independent "
+        "verifier (gait_planner.verify) on it and print its report: every check grouped, with "
+        "its value, unit, limit and mark, then a verdict line (exit status 0: all checks "
+        "passed, 1: a check failed).")
     parser.add_argument("mcap", help="a recording written by plan/run/node")
     parser.add_argument("--png", help="the figure (default: RUN.png beside the recording)")
     parser.set_defaults(handler=_report)
@@ -186,24 +188,17 @@ def _add_report(commands: argparse._SubParsersAction) -> None:
 def _report(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from gait_planner.io.mcap_reader import read_plan_mcap
     from gait_planner.io.plots import plot_recording
     from gait_planner.verify import verify_recording
-    from gait_planner.verify.continuous import certificate_of_recording
 
     source = Path(args.mcap)
     if source.suffix != ".mcap" or not source.is_file():
         raise CliError(f"{args.mcap!r} is not an existing .mcap file")
-    try:  # informative: the exit status stays the verifier's
-        certificate = certificate_of_recording(read_plan_mcap(source))
-        line = certificate.summary()
-    except (ValueError, KeyError) as error:
-        certificate = line = f"continuous dynamics: cannot be computed: {error}"
-    png = plot_recording(source, args.png or source.with_suffix(".png"), certificate)
-    report = verify_recording(source)
-    print(report.summary())
-    print(line)
+    # the figure first: it is drawn even from a recording the verifier cannot read
+    png = plot_recording(source, args.png or source.with_suffix(".png"))
     print(f"figure: {png}")
+    report = verify_recording(source)
+    print(report.summary())  # grouped, with units and limits; its last line is the verdict
     return 0 if report.ok else 1
 
 
@@ -252,31 +247,93 @@ def _node(args: argparse.Namespace) -> int:
         raise CliError(f"a node parameter was refused: {error}") from None
 
 
+class _NodeDefault:
+    """The default of a node parameter (`gait_planner.ros.parameters`), looked up when a help
+    text shows it (``%(node_default)s`` in `call`'s options): that module loads rclpy, which
+    the other commands do not need."""
+
+    def __init__(self, name: str):
+        self.name = name
+
+    def __str__(self) -> str:
+        from gait_planner.ros.parameters import DECLARATIONS
+
+        value = DECLARATIONS[self.name][0]
+        return f"{value:g}" if isinstance(value, float) else str(value)
+
+
 def _add_call(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "call", help="ask a running node for a plan (ros2cli is not on PyPI)",
-        description="Call /gait_planner/plan_gait and print the response. With --action, "
-        "send it as a goal of the action: feedback lines (phase, iteration, cost, constraint "
-        "violation) go to stderr as they arrive, Ctrl-C cancels the goal.")
-    _add_plan_options(parser, "")
-    parser.add_argument("--output-name", default="", help="recording file stem")
-    parser.add_argument("--cold", action="store_true", help="do not warm start")
+        description="Send one request to a running node (the service /gait_planner/plan_gait, "
+        "or with --action a goal of its action) and print the answer. The options are the "
+        "request's fields (PlanGait.srv); 0 or empty means the default (the node's or the "
+        "scene's), a negative, NaN or infinite number is refused before anything is sent, "
+        "with the node's message. A request that gives no plan prints one line STATUS: REASON "
+        "(refused, failed, rejected, aborted or canceled) and exits with 1. With --action, "
+        "feedback lines (phase, iteration, cost, constraint violation) go to stderr as they "
+        "arrive and Ctrl-C cancels the goal. A node that stops or dies before it answers ends "
+        "the call with an error within a few seconds.")
+    scene = parser.add_argument(
+        "--scene", default="", metavar="NAME", help="scene name (default: the node's parameter "
+        "default_scene, %(node_default)s unless set)")
+    scene.node_default = _NodeDefault("default_scene")
+    parser.add_argument("--step-length", type=float, default=0.0, metavar="M",
+                        help="m, > 0 (default 0: the scene's)")
+    parser.add_argument("--cost", default="",
+                        help="kinetic_energy | torque_squared (default: the scene's)")
+    parser.add_argument("--friction-coefficient", type=float, default=0.0, metavar="MU",
+                        help="Coulomb friction mu0, > 0 (default 0: the scene's)")
+    parser.add_argument("--intervals-per-phase", type=int, default=0, metavar="N",
+                        help="time intervals per gait phase, > 0 (default 0: the scene's); the "
+                        "half cycle keeps its length")
+    limit = parser.add_argument(
+        "--max-solve-time", type=float, default=0.0, metavar="S",
+        help="solver time limit in s, > 0 (default 0: the node's parameter max_solve_time, "
+        "%(node_default)s s unless set)")
+    limit.node_default = _NodeDefault("max_solve_time")
+    parser.add_argument("--output-name", default="", metavar="STEM",
+                        help="file stem of the recording (default: scene and time)")
+    parser.add_argument("--cold-start", action="store_true",
+                        help="start from the scene's initial guess, ignore stored plans")
+    parser.add_argument("--steps", type=int, default=0, metavar="N",
+                        help="half cycles in the answer, joined by the mirror, 1 to 100 "
+                        "(default 0: 1)")
+    parser.add_argument("--posture", default="", choices=("", "paper", "human"),
+                        help="paper: the scene's ranges; human: also a stance knee of at most "
+                        "20 deg in single support (default: the scene's)")
     parser.add_argument("--action", action="store_true",
                         help="use the action: print feedback, Ctrl-C cancels")
-    parser.add_argument("--timeout", type=float, default=900.0, help="s to wait for an answer")
+    parser.add_argument("--timeout", type=float, default=900.0, metavar="S",
+                        help="s to wait for the answer (default 900)")
+    parser.add_argument("--json", action="store_true", help="print the answer as JSON")
     parser.set_defaults(handler=_call)
 
 
 def _call(args: argparse.Namespace) -> int:
     import json
+    import math
 
-    from gait_planner.ros.client import call_plan_gait, call_plan_gait_action
+    from gait_planner.request import FIELDS, RequestError
+    from gait_planner.ros.client import CallError, call_plan_gait, call_plan_gait_action
 
-    response = (call_plan_gait_action if args.action else call_plan_gait)(
-        args, timeout=args.timeout)
-    print(json.dumps(response, indent=2) if args.json else
-          "\n".join(f"{k}: {v}" for k, v in response.items()))
-    return 0 if response.get("success") else 1
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        raise CliError(f"--timeout must be > 0 s, got {args.timeout}")
+    fields = {name: getattr(args, name) for name in FIELDS}
+    try:
+        answer = (call_plan_gait_action if args.action else call_plan_gait)(
+            fields, timeout=args.timeout)
+    except (RequestError, CallError) as err:
+        raise CliError(str(err)) from None
+    if not answer["success"]:  # no plan: its status and reason, no record of zeros
+        answer = {key: answer[key] for key in ("status", "success", "message")}
+    if args.json:
+        print(json.dumps(answer, indent=2))
+    elif answer["success"]:
+        print("\n".join(f"{k}: {v}" for k, v in answer.items()))
+    else:
+        print(f"{answer['status']}: {answer['message']}")
+    return 0 if answer["success"] else 1
 
 
 def _add_urdf(commands: argparse._SubParsersAction) -> None:

@@ -1,10 +1,12 @@
 """The ROS 2 node ``gait_planner``: service and action ``/gait_planner/plan_gait`` -> plan
 -> topics.
 
-Thin adapter: a request is converted to a `PlanRequest`, planned and recorded by
-`gait_planner.pipeline`, and the plain result is converted to messages by
-`gait_planner.io.messages` (the one module that owns message layouts). Bad requests and
-failed plans are answered with success = False and a message; the node keeps serving.
+Thin adapter: a request is converted to a `PlanRequest` (`gait_planner.request.plan_request`:
+0 or empty fields take the node's or the scene's defaults, a negative, NaN or infinite number
+is refused naming the field), planned and recorded by `gait_planner.pipeline`, and the plain
+result is converted to messages by `gait_planner.io.messages` (the one module that owns
+message layouts). Bad requests and failed plans are answered with success = False and a
+message; the node keeps serving.
 
 One plan at a time (`gait_planner.ros.worker`): a service request that arrives while a plan
 runs is answered at once with success = False and a message starting "busy"; a goal of the
@@ -15,8 +17,9 @@ Topics (reliable; volatile so a restarting controller never re-runs an old plan)
 ``/gait_planner/contact_forces`` (one message per node). A plan is answered once its MCAP
 recording is written and its topics are published; its rerun recording (.rrd, same stem)
 follows from a helper process (`gait_planner.io.rrd_recorder`; "wrote the rerun
-recording" in the log). SIGINT and SIGTERM stop a running
-solve within one iteration and end the node (`main`). At start the node removes temporary
+recording" in the log). SIGINT and SIGTERM stop a running solve within one iteration and
+end the node (`main`); a killed node leaves the ROS graph within 3 s (its DDS lease:
+`DDS_PROFILE`), so its clients stop waiting for it. At start the node removes temporary
 recording files that killed processes left in its output folder.
 """
 
@@ -25,6 +28,7 @@ from __future__ import annotations
 import os
 import sys
 import time
+from pathlib import Path
 from typing import Callable
 
 import rclpy
@@ -39,7 +43,8 @@ from gait_planner.io.atomic import remove_stale_temporaries
 from gait_planner.io.rrd_recorder import RrdRecorder
 from gait_planner.ocp.library import PlanLibrary
 from gait_planner.ocp.solve import STOPPED, Planner
-from gait_planner.pipeline import PlanRequest, RequestError, plan_and_record, prepare
+from gait_planner.pipeline import plan_and_record, prepare
+from gait_planner.request import PlanRequest, RequestError, plan_request
 from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
 from gait_planner.ros.worker import Closed, Lapsed, PlanWorker, Stopped
@@ -56,30 +61,9 @@ EXECUTOR_THREADS = 4  # a waiting plan request holds one; busy answers and cance
 EXIT_GRACE = 0.5  # s a stopped plan gets to end at shutdown before the process leaves anyway
 RECORDING_GRACE = 10.0  # s the .rrd files still being written get at shutdown
 SHUTDOWN_POLL = 0.1  # s between checks that the context is still up (see main)
-
-
-def _given(value: float) -> float | None:
-    """None for "not given" (<= 0); NaN and infinities pass on to be refused."""
-    return None if value <= 0 else value
-
-
-def request_from_msg(req, default_scene: str, default_time: float,
-                     compiled: bool = False) -> PlanRequest:
-    """PlanGait.Request (or the action's Goal) -> PlanRequest (<= 0 or empty fields: the
-    scene's values)."""
-    return PlanRequest(
-        scene=req.scene or default_scene,
-        step_length=_given(req.step_length),
-        cost=req.cost or None,
-        friction_coefficient=_given(req.friction_coefficient),
-        intervals_per_phase=req.intervals_per_phase if req.intervals_per_phase > 0 else None,
-        max_solve_time=_given(req.max_solve_time) or default_time,
-        output_name=req.output_name,
-        cold_start=req.cold_start,
-        compiled=compiled,
-        steps=req.steps if req.steps > 0 else 1,
-        posture=req.posture,
-    )
+# Fast DDS profile of the node's participant: a 3 s lease, so that a killed node leaves the
+# ROS graph (and its clients give up: gait_planner.ros.client) within seconds, not 20 s
+DDS_PROFILE = Path(__file__).with_name("fastdds_profile.xml")
 
 
 class GaitPlannerNode(Node):
@@ -173,10 +157,11 @@ class GaitPlannerNode(Node):
         and fill `answer` (service response or action result: the same fields). Runs in
         the worker's plan thread."""
         try:
-            plan_request = request_from_msg(
-                request, self._param("default_scene"), self._param("max_solve_time"),
-                self._param("compile_derivatives"))
-            outcome = plan_and_record(self._planner, plan_request, self._param("output_dir"),
+            planned = plan_request(  # 0 or empty fields: the node's or the scene's defaults
+                request, default_scene=self._param("default_scene"),
+                default_max_solve_time=self._param("max_solve_time"),
+                compiled=self._param("compile_derivatives"))
+            outcome = plan_and_record(self._planner, planned, self._param("output_dir"),
                                       rrd=False, stage=self._worker.enter)
         except Stopped:
             answer.success, answer.message = False, STOPPED
@@ -242,6 +227,16 @@ def serve(node: GaitPlannerNode, executor: MultiThreadedExecutor,
             node.get_logger().warning(f"an answer could not be sent: {err}")
 
 
+def _announce_short_lease() -> None:
+    """Use `DDS_PROFILE` for the node's participant, unless another RMW than Fast DDS is
+    chosen or the user gives Fast DDS a profile of their own (then a killed node leaves the
+    graph when their lease ends)."""
+    rmw = os.environ.get("RMW_IMPLEMENTATION") or "rmw_fastrtps_cpp"
+    own = ("FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE")
+    if rmw.startswith("rmw_fastrtps") and not any(os.environ.get(name) for name in own):
+        os.environ["FASTDDS_DEFAULT_PROFILES_FILE"] = str(DDS_PROFILE)
+
+
 def main(args=None) -> int:
     """Run the node until SIGINT or SIGTERM (``gait-planner node``). rclpy's signal
     handlers shut the context down, which ends the spin (within `SHUTDOWN_POLL` s); a
@@ -250,6 +245,7 @@ def main(args=None) -> int:
     if the plan thread has not ended `EXIT_GRACE` s after the ROS shutdown, the process
     ends at once (`os._exit`; nothing is being written then, or only a temporary file,
     which the next start removes)."""
+    _announce_short_lease()
     rclpy.init(args=args)
     try:
         node = GaitPlannerNode()

@@ -75,6 +75,13 @@ def test_feedback_arrives_in_phase_order_and_the_goal_succeeds(planner_node, cli
     elapsed = [f.elapsed for f in feedback]
     assert elapsed == sorted(elapsed) and elapsed[-1] < 60
     assert spin_until(lambda: trajectories)
+    # a negative field is not "the default": the goal is aborted with the field's rule
+    refused = _send(action, spin_until, [], step_length=-0.5, output_name="back")
+    answer = _result(refused, spin_until)
+    assert answer.status == GoalStatus.STATUS_ABORTED
+    assert answer.result.message == ("step_length must be > 0 m, or 0 for the scene's default, "
+                                     "got -0.5")
+    assert not (tmp_path / "back.mcap").exists()
 
 
 def test_a_long_build_repeats_its_phase_every_heartbeat(planner_node, client, spin_until,

@@ -98,7 +98,7 @@ def _rerun_entities(path: Path) -> set[str]:
     ({"scene": "no_such_scene"}, "available"),
     ({"output_name": "../outside"}, "output_name"),
     ({"cost": "speed"}, "unknown cost"),
-    ({"step_length": float("nan")}, "finite"),
+    ({"step_length": -0.5}, "step_length must be > 0 m, or 0 for the scene's default, got -0.5"),
 ])
 def test_bad_requests_are_refused_and_the_node_keeps_serving(setup, spin_until, fields, words):
     client, _, folder = setup

@@ -1,0 +1,84 @@
+"""The one rule of a plan request's fields (`gait_planner.request`): 0 or empty is the
+default, a negative, NaN or infinite number is refused with the field, the value and what
+is allowed; the same message from `plan_request` (node, action, `call`) and from
+`pipeline.request_settings` (`plan`)."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import pytest
+
+from gait_planner.pipeline import request_settings
+from gait_planner.request import FIELDS, MAX_STEPS, PlanRequest, RequestError, plan_request
+
+SCENE_DEFAULT = "the scene's default"
+REFUSED = [
+    ("step_length", -0.5, f"step_length must be > 0 m, or 0 for {SCENE_DEFAULT}, got -0.5"),
+    ("step_length", math.nan, f"step_length must be > 0 m, or 0 for {SCENE_DEFAULT}, got nan"),
+    ("step_length", math.inf, f"step_length must be > 0 m, or 0 for {SCENE_DEFAULT}, got inf"),
+    ("friction_coefficient", -1e-9,
+     f"friction_coefficient must be > 0, or 0 for {SCENE_DEFAULT}, got -1e-09"),
+    ("friction_coefficient", -math.inf,
+     f"friction_coefficient must be > 0, or 0 for {SCENE_DEFAULT}, got -inf"),
+    ("intervals_per_phase", -3,
+     f"intervals_per_phase must be a whole number > 0, or 0 for {SCENE_DEFAULT}, got -3"),
+    ("intervals_per_phase", 2.5,
+     f"intervals_per_phase must be a whole number > 0, or 0 for {SCENE_DEFAULT}, got 2.5"),
+    ("max_solve_time", -1.0, "max_solve_time must be > 0 s, or 0 for the default limit, "
+     "got -1.0"),
+    ("max_solve_time", math.nan, "max_solve_time must be > 0 s, or 0 for the default limit, "
+     "got nan"),
+    ("steps", -2, f"steps must be a whole number of half cycles from 1 to {MAX_STEPS}, or 0 "
+     "for 1, got -2"),
+    ("steps", MAX_STEPS + 1, f"steps must be a whole number of half cycles from 1 to "
+     f"{MAX_STEPS}, or 0 for 1, got {MAX_STEPS + 1}"),
+    ("step_length", "0.5", f"step_length must be > 0 m, or 0 for {SCENE_DEFAULT}, got '0.5'"),
+]
+
+
+@pytest.mark.parametrize("name, value, message", REFUSED)
+def test_a_bad_number_is_refused_the_same_way_everywhere(name, value, message):
+    with pytest.raises(RequestError) as from_fields:
+        plan_request(scene="compass", **{name: value})
+    assert str(from_fields.value) == message
+    with pytest.raises(RequestError) as from_pipeline:  # the path of `gait-planner plan`
+        request_settings(PlanRequest(scene="compass", **{name: value}))
+    assert str(from_pipeline.value) == message
+
+
+def test_zero_and_empty_fields_are_the_defaults():
+    message = SimpleNamespace(scene="", step_length=0.0, cost="", friction_coefficient=0.0,
+                              intervals_per_phase=0, max_solve_time=0.0, output_name="",
+                              cold_start=False, steps=0, posture="")
+    assert set(vars(message)) == set(FIELDS)
+    request = plan_request(message, default_scene="walker2d", default_max_solve_time=60.0,
+                           compiled=True)
+    assert request == PlanRequest(scene="walker2d", max_solve_time=60.0, compiled=True)
+    # `plan` (no node): 0 is the scene's value and GaitSettings' time limit
+    scene, settings = request_settings(PlanRequest(scene="compass", step_length=0.0,
+                                                   friction_coefficient=0,
+                                                   intervals_per_phase=0, max_solve_time=0.0,
+                                                   steps=0))
+    default_scene, default = request_settings(PlanRequest(scene="compass"))
+    assert settings == default and scene == default_scene
+
+
+def test_given_values_pass_unchanged_and_unknown_fields_are_named():
+    request = plan_request(scene="compass", step_length=0.31, friction_coefficient=0.7,
+                           intervals_per_phase=4, max_solve_time=5.0, steps=3,
+                           cost="kinetic_energy", output_name="x", cold_start=True,
+                           posture="paper",
+                           default_max_solve_time=60.0)
+    assert (request.step_length, request.friction_coefficient, request.intervals_per_phase,
+            request.max_solve_time, request.steps) == (0.31, 0.7, 4, 5.0, 3)
+    assert (request.cost, request.output_name, request.cold_start, request.posture) == (
+        "kinetic_energy", "x", True, "paper")
+    with pytest.raises(TypeError, match="not fields of a plan request: mu"):
+        plan_request(scene="compass", mu=0.5)
+
+
+def test_the_scene_ranges_still_apply_after_the_sign_rule():
+    with pytest.raises(RequestError, match=r"step_length = 3.0 is outside the range"):
+        request_settings(plan_request(scene="compass", step_length=3.0))
