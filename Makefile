@@ -1,4 +1,6 @@
-# gait_planner: `make run` plans and records a gait, `make test` runs the tests.
+# gait_planner: `make run` plans and records a gait, `make test` runs the tests that answer
+# in minutes (every test but those marked slow); `make test-slow` runs the slow end-to-end
+# ones (long solves, refinements, the web viewer's screenshot); `make test-all` runs both.
 # `make fuzz` sends FUZZ_EXAMPLES (1000) hypothesis-drawn requests to a live node
 # (test/ros/test_fuzz.py; `make test` runs a seeded 40 of them).
 # All set up .venv/ first (tools/setup.sh; quick when nothing changed).
@@ -8,13 +10,18 @@ PYTHON := $(VENV)/bin/python
 PYTEST_ARGS ?=
 FUZZ_EXAMPLES ?= 1000
 
-.PHONY: setup test fuzz run bench bench-quick clean distclean
+.PHONY: setup test test-slow test-all fuzz run bench bench-quick clean distclean
 
 setup:
 	@tools/setup.sh $(VENV)
 
 test: setup
-	$(PYTHON) -m pytest test $(PYTEST_ARGS)
+	$(PYTHON) -m pytest test -m "not slow" $(PYTEST_ARGS)
+
+test-slow: setup
+	$(PYTHON) -m pytest test -m slow $(PYTEST_ARGS)
+
+test-all: test test-slow
 
 fuzz: setup
 	GAIT_PLANNER_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PYTHON) -m pytest test/ros/test_fuzz.py -m fuzz -s --hypothesis-show-statistics $(PYTEST_ARGS)

@@ -3,8 +3,10 @@
 * Floating-point trouble raises: every test runs under ``numpy.errstate(all="raise")``
   (division by zero, overflow and invalid operations become FloatingPointError; underflow,
   which is harmless round-off to zero, is ignored).
-* ``@pytest.mark.slow`` marks tests that take more than a few seconds; they still run by
-  default (and in CI); ``-m "not slow"`` skips them for a quick check.
+* ``@pytest.mark.slow`` marks the end-to-end tests that take ten seconds or more (long
+  solves, refinements, walker3d's physical checks, the web viewer's screenshot): `make test`
+  runs every other test (``-m "not slow"``, a few minutes on 2 cores), `make test-slow` runs
+  these, and CI (`.ci/run`) runs both.
 * The `model` fixture returns a cached factory ``model(name) -> Model`` (scene, Multibody,
   DiscreteMechanics), so each scene's CasADi Functions are built once per session.
 """
@@ -29,7 +31,7 @@ SCENES = ("compass", "walker2d", "walker3d")
 
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
-        "markers", "slow: takes more than a few seconds (still part of the default run)"
+        "markers", "slow: an end-to-end test of ten seconds or more (make test-slow; CI runs it)"
     )
 
 

@@ -20,6 +20,7 @@ def walker2d():
     return load_scene("walker2d")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("overrides, replace, guess", [
     ({"step_length": 0.3}, {}, "kinematic"),
     ({}, {"scaling_bounds": (0.9, 1.1)}, "kinematic"),
@@ -38,6 +39,7 @@ def test_a_hard_request_converges_to_a_plan_that_passes_every_check(walker2d, ov
     assert report.ok, report.failures
 
 
+@pytest.mark.slow
 def test_a_long_step_the_guess_cannot_reach_is_planned_by_continuation(monkeypatch):
     """A cold plan whose inertia-free attempt fails at a step length other than the
     scene's is continued from the scene's: the scene's step cold, then the request warm.
@@ -62,6 +64,7 @@ def test_a_long_step_the_guess_cannot_reach_is_planned_by_continuation(monkeypat
     assert all(f.startswith("continuous dynamics") for f in report.failures), report.failures
 
 
+@pytest.mark.slow
 def test_intervals_per_phase_refines_the_grid_of_the_same_half_cycle(walker2d):
     """Another number of intervals keeps the half cycle's nominal length (the base time step
     scales), so the planned gait stays the same motion: J 21.153 at 6 and 20.770 at 12 per

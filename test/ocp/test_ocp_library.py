@@ -16,6 +16,7 @@ def walker2d():
     return load_scene("walker2d")
 
 
+@pytest.mark.slow
 def test_a_fresh_planner_replans_warm_from_the_library_to_the_same_optimum(walker2d, tmp_path):
     settings = settings_for(walker2d)
     cold = Planner(library=PlanLibrary(tmp_path)).plan(walker2d, settings, warm_start=False)
@@ -34,6 +35,7 @@ def test_a_fresh_planner_replans_warm_from_the_library_to_the_same_optimum(walke
     assert again.settings["initial_guess"].startswith("kinematic guess")
 
 
+@pytest.mark.slow
 def test_a_request_with_other_settings_does_not_read_the_file(walker2d, tmp_path):
     Planner(library=PlanLibrary(tmp_path)).plan(walker2d, settings_for(walker2d), warm_start=False)
     other = Planner(library=PlanLibrary(tmp_path)).plan(
@@ -42,6 +44,7 @@ def test_a_request_with_other_settings_does_not_read_the_file(walker2d, tmp_path
     assert len(list((tmp_path / "plans").glob("*.npz"))) == 2
 
 
+@pytest.mark.slow
 def test_a_damaged_file_is_ignored(walker2d, tmp_path):
     library = PlanLibrary(tmp_path)
     Planner(library=library).plan(walker2d, settings_for(walker2d), warm_start=False)

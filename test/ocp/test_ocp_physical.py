@@ -21,7 +21,7 @@ def walker2d(solved):
     return rec, parse_scene(rec.scene_text), float(rec.metadata["friction_coefficient"])
 
 
-@pytest.mark.parametrize("name", ["compass", "walker2d",
+@pytest.mark.parametrize("name", ["compass", pytest.param("walker2d", marks=pytest.mark.slow),
                                   pytest.param("walker3d", marks=pytest.mark.slow)])
 def test_default_plans_are_physical(solved, name):
     report = solved(name).report

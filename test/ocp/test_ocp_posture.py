@@ -246,7 +246,8 @@ def test_walker2d_plan_is_upright(solved):
         assert lo - 1e-6 <= angles[name].min() and angles[name].max() <= hi + 1e-6, name
 
 
-@pytest.mark.parametrize("name", ["walker2d", pytest.param("walker3d", marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["walker2d", "walker3d"])
 def test_human_posture_straightens_the_stance_knee(name):
     """posture: human bounds the stance knee to 0..20 deg in single support; the paper's
     problem (the default) bends it to 30 deg and more."""

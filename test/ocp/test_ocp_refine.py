@@ -74,6 +74,7 @@ def test_refinements_must_be_a_small_whole_number():
             settings_for(scene, refinements=bad)
 
 
+@pytest.mark.slow
 def test_a_plan_that_misses_the_certificate_is_refined_until_it_passes(coarse_walker2d):
     scene, settings, _, coarse = coarse_walker2d
     assert not continuous_certificate(coarse).ok
@@ -89,6 +90,7 @@ def test_a_plan_that_misses_the_certificate_is_refined_until_it_passes(coarse_wa
     assert verify_result(result).continuous.ok
 
 
+@pytest.mark.slow
 def test_a_failed_refinement_is_not_restarted_and_the_coarse_plan_stands(coarse_walker2d,
                                                                          monkeypatch):
     """With the inertia-free attempt capped at 3 iterations, the coarse plan converges only
@@ -107,6 +109,7 @@ def test_a_failed_refinement_is_not_restarted_and_the_coarse_plan_stands(coarse_
     assert refined.startswith("IPOPT: iteration limit reached") and "after 3 iterations" in refined
 
 
+@pytest.mark.slow
 def test_without_refinements_the_plan_is_returned_as_planned(coarse_walker2d):
     scene, settings, _, coarse = coarse_walker2d
     result, cert = plan_certified(Planner(), scene, settings, warm_start=False)
@@ -114,6 +117,7 @@ def test_without_refinements_the_plan_is_returned_as_planned(coarse_walker2d):
     assert "refinement" not in result.settings
 
 
+@pytest.mark.slow
 def test_a_plan_whose_efforts_zigzag_is_refined():
     """walker2d on 6 intervals per phase passes the certificate, but the swing knee's effort
     wobbles as it reaches its 75 deg limit (-7.9, -5.0, -9.6, -5.1 N m at nodes 26-29); on

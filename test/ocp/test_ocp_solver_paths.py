@@ -30,7 +30,8 @@ def _passes(result) -> None:
     assert report.ok, "\n".join(report.failures)
 
 
-@pytest.mark.parametrize("compiled", [False, True], ids=["casadi_derivatives", "compiled"])
+@pytest.mark.parametrize("compiled", [pytest.param(False, marks=pytest.mark.slow), True],
+                         ids=["casadi_derivatives", "compiled"])
 def test_cold_and_warm_plans_pass_the_checker(walker2d, compiled):
     planner, settings = Planner(), settings_for(walker2d, compiled=compiled)
     cold = planner.plan(walker2d, settings, warm_start=False)
@@ -52,6 +53,7 @@ def test_a_warm_start_from_the_plan_library_passes_the_checker(walker2d, tmp_pat
     _passes(fresh)
 
 
+@pytest.mark.slow
 def test_the_inertia_test_restart_passes_the_checker(walker2d, monkeypatch):
     monkeypatch.setitem(solve.VARIANTS, "cold", {**solve.VARIANTS["cold"], "ipopt.max_iter": 3})
     result = Planner().plan(walker2d, settings_for(walker2d, compiled=True), warm_start=False)
