@@ -164,8 +164,8 @@ class GaitPlannerNode(Node):
             outcome = plan_and_record(self._planner, planned, self._param("output_dir"),
                                       rrd=False, stage=self._worker.enter)
         except Stopped:
-            answer.success, answer.message = False, STOPPED
-            self.get_logger().info("plan stopped on request: nothing recorded")
+            answer.success, answer.message = False, self._stopped_message()
+            self.get_logger().info(f"{answer.message}: nothing recorded")
             return
         except (RequestError, OSError) as err:
             answer.success, answer.message = False, str(err)
@@ -177,10 +177,12 @@ class GaitPlannerNode(Node):
             self.get_logger().error(f"plan request failed: {answer.message}")
             return
         result = outcome.result
+        stopped = not result.success and result.message == STOPPED
         stamp = self.get_clock().now().nanoseconds
         messages.fill_message(answer, messages.plan_response_fields(
             result, str(outcome.mcap_path or ""), stamp) if result.success else {
-                "success": False, "message": result.message,
+                "success": False,
+                "message": self._stopped_message() if stopped else result.message,
                 "solver_status": result.stats.status})
         if result.success:
             self._recorder.submit(result, outcome.mcap_path.with_suffix(".rrd"), self._recorded)
@@ -188,10 +190,15 @@ class GaitPlannerNode(Node):
             self.get_logger().info(
                 f"planned {result.scene.name}: cost {result.cost_value:.6g}, duration "
                 f"{result.duration:.4f} s, recorded {outcome.mcap_path}")
-        elif result.message == STOPPED:
-            self.get_logger().info("plan stopped on request: nothing recorded")
+        elif stopped:
+            self.get_logger().info(f"{answer.message}: nothing recorded")
         else:
             self.get_logger().warning(f"plan failed: {result.message}")
+
+    def _stopped_message(self) -> str:
+        """Why a plan stopped: a cancel (`STOPPED`), or the node's shutdown."""
+        return ("stopped: the node is shutting down (SIGINT or SIGTERM)"
+                if self._worker.closing() else STOPPED)
 
     def _recorded(self, path, error) -> None:
         """The helper's report on a plan's .rrd (`RrdRecorder.submit`)."""
