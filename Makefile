@@ -27,7 +27,7 @@ fuzz: setup
 	GAIT_PLANNER_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PYTHON) -m pytest test/ros/test_fuzz.py -m fuzz -s --hypothesis-show-statistics $(PYTEST_ARGS)
 
 run: setup
-	$(VENV)/bin/gait-planner run --compile
+	$(VENV)/bin/gait-planner run
 
 # Benchmarks (benchmarks/README.md): `bench` rewrites benchmarks/REPORT.md and
 # benchmarks/results/*.json (~30 min on 2 cores); `bench-quick` is a smoke run (~3 min)

@@ -35,7 +35,8 @@ def main() -> None:
     parser.add_argument("--scene", default="walker3d")
     parser.add_argument("--intervals", type=int, nargs="+", default=[6, 8, 10])
     parser.add_argument("--dt", type=float, nargs="+", default=[0.01])
-    parser.add_argument("--compile", action="store_true", help="compiled derivatives")
+    parser.add_argument("--compile", action=argparse.BooleanOptionalAction, default=True,
+                        help="compiled derivatives (default; --no-compile: CasADi's)")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                         help="override a gait option (VALUE in JSON)")
     parser.add_argument("--half-cycle", type=float,

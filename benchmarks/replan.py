@@ -1,6 +1,6 @@
 """Warm re-plans from a stored plan against cold starts, for requests far from it.
 
-Usage: .venv/bin/python benchmarks/replan.py [--scene walker2d] [--compile]
+Usage: .venv/bin/python benchmarks/replan.py [--scene walker2d] [--no-compile]
 
 One Planner plans the scene's default gait (cold), then each request (a step length or a
 friction coefficient) twice: warm, from that stored plan only (the planner's store is
@@ -26,7 +26,8 @@ REQUESTS = [("step_length", 0.45), ("step_length", 0.85), ("friction_coefficient
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scene", default="walker2d")
-    parser.add_argument("--compile", action="store_true", help="compiled derivatives")
+    parser.add_argument("--compile", action=argparse.BooleanOptionalAction, default=True,
+                        help="compiled derivatives (default; --no-compile: CasADi's)")
     args = parser.parse_args()
     print(f"# {platform.node()} {platform.processor() or platform.machine()} "
           f"{time.strftime('%Y-%m-%d %H:%M')}, {args.scene}")

@@ -26,6 +26,7 @@ from gait_planner.ocp.walk_on import walk_on
 from gait_planner.request import PlanRequest, RequestError, checked
 from gait_planner.result import PlanResult
 
+SceneLookup = Callable[[str], Scene]  # a request's scene field -> the scene
 _OUTPUT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,127}")
 
 
@@ -60,14 +61,17 @@ def unused_stem(folder: Path, stem: str) -> str:
     return candidate
 
 
-def request_settings(request: PlanRequest) -> tuple[Scene, GaitSettings]:
+def request_settings(request: PlanRequest, scenes: SceneLookup = load_scene,
+                     ) -> tuple[Scene, GaitSettings]:
     """The scene and settings of `request`; RequestError says what cannot be planned (the
     rule of every field: `gait_planner.request.checked`; the scene's ranges:
-    `gait_planner.ocp.request_ranges`)."""
+    `gait_planner.ocp.request_ranges`). scenes: finds the scene of request.scene
+    (`load_scene`: bare names only; the command line's `find_scene` also takes paths, the
+    node's looks in its scene_dirs too)."""
     request = checked(request)
     try:
         try:
-            scene = load_scene(request.scene)
+            scene = scenes(request.scene)
         except OSError as err:  # a name the file system refuses, e.g. one too long
             raise SceneError(f"scene {request.scene!r} cannot be looked up ({err.strerror}); "
                              f"available scenes: {', '.join(available_scenes())}") from None
@@ -87,13 +91,15 @@ def request_settings(request: PlanRequest) -> tuple[Scene, GaitSettings]:
     return scene, settings
 
 
-def prepare(planner: Planner, request: PlanRequest, rrd: bool = True) -> str:
+def prepare(planner: Planner, request: PlanRequest, rrd: bool = True,
+            scenes: SceneLookup = load_scene) -> str:
     """Build the problem of `request` in `planner` now (`Planner.prepare`), so that a
     request like it pays no build, and load what certifies and records a plan, which
-    `plan_and_record` would load on first use: Pinocchio, the MCAP writer and its message
+    `plan_and_record` would load on first use (scenes: as in `request_settings`):
+    Pinocchio, the MCAP writer and its message
     encoder (~0.4 s) and, with rrd, rerun (~0.45 s; the node leaves it to its .rrd helper,
     `io.rrd_recorder`). Returns how the problem's derivatives are evaluated."""
-    how = planner.prepare(*request_settings(request))
+    how = planner.prepare(*request_settings(request, scenes))
     from gait_planner.io.mcap_writer import recording_encoder
 
     recording_encoder()
@@ -105,13 +111,15 @@ def prepare(planner: Planner, request: PlanRequest, rrd: bool = True) -> str:
 
 
 def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Path, *,
-                    rrd: bool = True, stage: Callable[[str], None] | None = None) -> Outcome:
+                    rrd: bool = True, stage: Callable[[str], None] | None = None,
+                    scenes: SceneLookup = load_scene) -> Outcome:
     """Plan `request`; on success write <output_dir>/<stem>.mcap (and .rrd).
 
     stage: called with "recording" once the plan is found, before anything is written (an
-    exception it raises ends the request with nothing recorded)."""
+    exception it raises ends the request with nothing recorded); scenes: as in
+    `request_settings`."""
     request = checked(request)  # 0 = the default, as for the node's requests
-    scene, settings = request_settings(request)
+    scene, settings = request_settings(request, scenes)
     stem = output_stem(request, scene.name)
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
@@ -246,6 +254,7 @@ def summary(outcome: Outcome) -> dict:
         "step_length": r.step_length, "friction_coefficient": r.friction_coefficient,
         "phase_scaling": [float(x) for x in r.phase_scaling], "iterations": s.iterations,
         "solve_time_s": s.solve_time, "build_time_s": s.build_time,
+        "derivatives": r.settings.get("derivatives", ""),
         "max_constraint_violation": s.max_constraint_violation,
         "max_dynamics_residual": s.max_dynamics_residual,
         "max_friction_violation": s.max_friction_violation,

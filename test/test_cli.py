@@ -132,3 +132,89 @@ def test_call_prints_a_plan_that_was_not_made_as_its_status_and_reason(
     assert main(["call", "--action", "--json"]) == 1
     assert json.loads(capsys.readouterr().out) == {
         key: answer[key] for key in ("status", "success", "message")}
+
+
+# --- defaults and scenes from anywhere (helper "defaults") -------------------------------
+
+
+def _compass_copy(folder, name: str = "my_compass", **changes):
+    """A copy of the shipped compass under another file name, with `changes` applied."""
+    import yaml
+
+    from gait_planner.model.loader import load_scene
+
+    data = yaml.safe_load(load_scene("compass").source)
+    data.update(changes)
+    path = folder / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def test_plan_takes_a_scene_file_from_anywhere(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    path = _compass_copy(tmp_path, "my copy", description="copied")
+    out = tmp_path / "copy.mcap"
+    assert main(["plan", "--scene", str(path), "--out", str(out), "--json", "--no-rrd"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["success"] and data["scene"] == "compass" and out.is_file()  # its own name
+    assert main(["urdf", "my copy.yaml", "--out", "robot.urdf"]) == 0  # relative path
+    assert (tmp_path / "robot.urdf").read_text().count("<link ") >= 2
+    capsys.readouterr()
+    assert main(["simulate", "--scene", "my copy.yaml", "--steps", "2", "--dt", "0.01",
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["scene"] == "compass"
+
+
+@pytest.mark.parametrize("scene, words", [
+    ("missing.yaml", "gait-planner: error: missing.yaml: no such scene file (not found at "),
+    ("../compass", "or paths to a scene file ending in .yaml or .yml, got '../compass'"),
+    ("bad.yaml", "gait-planner: error: bad.yaml: gravity: must be a number >= 0.0"),
+])
+def test_a_scene_that_cannot_be_used_is_named_with_the_rule(tmp_path, capsys, monkeypatch,
+                                                            scene, words):
+    monkeypatch.chdir(tmp_path)
+    _compass_copy(tmp_path, "bad", gravity=-1.0)
+    for command in (["plan", "--scene", scene, "--out", "x.mcap"], ["urdf", scene],
+                    ["simulate", "--scene", scene, "--steps", "1", "--dt", "0.01"],
+                    ["prepare", scene]):
+        assert main(command) == 2, command
+        err = capsys.readouterr().err
+        assert words in err and err.count("error") == 1, (command, err)
+    assert not (tmp_path / "x.mcap").exists()
+
+
+@pytest.mark.slow  # compiles the compass into an empty cache: about 16 s on 2 cores
+def test_plan_compiles_by_default_and_says_so_only_when_it_builds(tmp_path, capsys,
+                                                                  monkeypatch):
+    """A compile cache miss is announced with what is built and the last build's time; a
+    hit prints no such line; --no-compile uses CasADi's derivatives."""
+    monkeypatch.setenv("GAIT_PLANNER_CACHE", str(tmp_path / "cache"))
+    runs = []
+    for options in ([], [], ["--no-compile"]):
+        out = tmp_path / f"c{len(runs)}.mcap"
+        assert main(["plan", "--scene", "compass", "--out", str(out), "--json", "--no-rrd",
+                     *options]) == 0
+        captured = capsys.readouterr()
+        runs.append((json.loads(captured.out), captured.err))
+    (first, first_err), (second, second_err), (casadi, casadi_err) = runs
+    assert "first time" not in first_err + second_err + casadi_err
+    announced = [line for line in first_err.splitlines() if line.startswith("-- compiling")]
+    assert len(announced) == 1 and "derivative elements to C into" in announced[0]
+    assert "roughly a minute for walker2d" in announced[0]  # no earlier build in this cache
+    assert (tmp_path / "cache" / "last_build.txt").is_file()
+    assert "-- compiling" not in second_err and "-- compiling" not in casadi_err
+    assert first["derivatives"] == second["derivatives"] == "per-node elements compiled to C"
+    assert casadi["derivatives"].startswith("CasADi")
+
+
+def test_without_a_compiler_or_a_cache_the_plan_uses_casadi_and_says_why(tmp_path, capsys,
+                                                                        monkeypatch):
+    monkeypatch.setenv("GAIT_PLANNER_CACHE", str(tmp_path / "empty"))
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
+    out = tmp_path / "c.mcap"
+    assert main(["plan", "--scene", "compass", "--out", str(out), "--json", "--no-rrd"]) == 0
+    captured = capsys.readouterr()
+    notes = [line for line in captured.err.splitlines() if "not compiled" in line]
+    assert len(notes) == 1 and notes[0].startswith(
+        "-- building with CasADi's derivatives (not compiled: no C compiler found")
+    assert json.loads(captured.out)["success"]

@@ -49,10 +49,13 @@ def _version() -> str:
 
 # --- commands ----------------------------------------------------------------------------
 
+SCENE_HELP = ("a scene: a name (the file NAME.yaml in config/scenes or in a folder of "
+              "GAIT_PLANNER_SCENE_PATH) or the path to a scene file ending in .yaml or .yml")
+
 
 def _add_plan_options(parser: argparse.ArgumentParser, scene_default: str | None) -> None:
     parser.add_argument("--scene", default=scene_default, required=scene_default is None,
-                        help="scene name (config/scenes/NAME.yaml or GAIT_PLANNER_SCENE_PATH)")
+                        metavar="NAME|FILE.yaml", help=SCENE_HELP)
     parser.add_argument("--step-length", type=float, help="m (default: the scene's)")
     parser.add_argument("--cost", help="kinetic_energy | torque_squared (default: the scene's)")
     parser.add_argument("--intervals", type=int, help="intervals per phase (default: the scene's); the half cycle keeps its length")
@@ -65,9 +68,13 @@ def _add_plan_options(parser: argparse.ArgumentParser, scene_default: str | None
     parser.add_argument("--max-time", type=float, help="solver time limit, s (default 600)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--no-rrd", action="store_true", help="do not write the rerun .rrd")
-    parser.add_argument("--compile", action="store_true",
-                        help="compile the derivatives to C (cached in ~/.cache/gait_planner; "
-                        "the first time takes about a minute, later solves are faster)")
+    parser.add_argument("--compile", action=argparse.BooleanOptionalAction, default=True,
+                        help="compile the derivatives to C, cached in ~/.cache/gait_planner "
+                        "or $GAIT_PLANNER_CACHE (default; `make setup` compiles the shipped "
+                        "scenes, another scene's first plan compiles for up to a minute); "
+                        "without a C compiler and the scene's cache: CasADi's derivatives, "
+                        "with a note. --no-compile: CasADi's derivatives (slower to build "
+                        "and to solve)")
 
 
 def _add_plan(commands: argparse._SubParsersAction) -> None:
@@ -97,6 +104,7 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     import json
     from pathlib import Path
 
+    from gait_planner.model.loader import find_scene
     from gait_planner.ocp.solve import Planner
     from gait_planner.pipeline import PlanRequest, RequestError, plan_and_record, summary
 
@@ -107,12 +115,11 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
                           friction_coefficient=args.mu, intervals_per_phase=args.intervals,
                           max_solve_time=args.max_time, output_name=target.stem,
                           compiled=args.compile, steps=args.steps, posture=args.posture)
-    print(f"planning {args.scene} (building the problem takes up to a minute the first "
-          "time) ...", file=sys.stderr, flush=True)
-    try:
+    print(f"planning {args.scene} ...", file=sys.stderr, flush=True)
+    try:  # a compile cache miss is announced by the stage "compiling (...)"
         outcome = plan_and_record(Planner(progress=_progress, stage=_stage), request,
                                   target.parent if str(target.parent) else ".",
-                                  rrd=not args.no_rrd)
+                                  rrd=not args.no_rrd, scenes=find_scene)
     except RequestError as err:
         raise CliError(str(err)) from None
     data = summary(outcome)
@@ -343,8 +350,7 @@ def _add_urdf(commands: argparse._SubParsersAction) -> None:
         "of mass and inertias; a non-realisable inertia is replaced by the nearest realisable "
         "one, with a comment), joints named after the joint angles; it loads in MuJoCo and "
         "Pinocchio. To stdout unless --out is given.")
-    parser.add_argument("scene", help="scene name (config/scenes/NAME.yaml or "
-                        "GAIT_PLANNER_SCENE_PATH)")
+    parser.add_argument("scene", metavar="NAME|FILE.yaml", help=SCENE_HELP)
     parser.add_argument("--out", help="the file to write (default: stdout)")
     parser.set_defaults(handler=_urdf)
 
@@ -353,10 +359,10 @@ def _urdf(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from gait_planner.io.urdf import realisable_inertia, scene_to_urdf
-    from gait_planner.model.loader import SceneError, load_scene
+    from gait_planner.model.loader import SceneError, find_scene
 
     try:
-        scene = load_scene(args.scene)
+        scene = find_scene(args.scene)
     except SceneError as error:
         raise CliError(str(error)) from None
     text = scene_to_urdf(scene)
@@ -386,12 +392,19 @@ def _add_prepare(commands: argparse._SubParsersAction) -> None:
         "no first request compiles, and plan its default request into the plan library "
         "(gait_planner/ocp/library.py), from which the node's first request re-plans warm. "
         "Takes about a minute for walker3d the first time, a few seconds when cached.")
-    parser.add_argument("scenes", nargs="+", help="scene names")
+    parser.add_argument("scenes", nargs="+", metavar="NAME|FILE.yaml",
+                        help="scenes: names or paths to scene files (see plan --help)")
     parser.set_defaults(handler=_prepare)
 
 
+def _compile_note(stage: str) -> None:
+    """`prepare`'s stage callback: only a compilation, or why there is none, is news."""
+    if stage.startswith(("compiling", "building with")):
+        _stage(stage)
+
+
 def _prepare(args: argparse.Namespace) -> int:
-    from gait_planner.model.loader import SceneError, load_scene
+    from gait_planner.model.loader import SceneError, find_scene
     from gait_planner.ocp.library import PlanLibrary
     from gait_planner.ocp.settings import SettingsError, settings_for
     from gait_planner.ocp.solve import Planner
@@ -399,9 +412,9 @@ def _prepare(args: argparse.Namespace) -> int:
     for name in args.scenes:
         start = time.perf_counter()
         try:
-            scene = load_scene(name)
+            scene = find_scene(name)
             settings = settings_for(scene, compiled=True)
-            planner = Planner(library=PlanLibrary())
+            planner = Planner(library=PlanLibrary(), stage=_compile_note)
             used = planner.prepare(scene, settings)
             result = planner.plan(scene, settings, warm_start=False)
         except (SceneError, SettingsError) as error:

@@ -1,6 +1,7 @@
 """``gait-planner simulate``: free motion of a scene and its structure-preservation report.
 
-`simulate` runs `gait_planner.dynamics.free_motion.run_free_motion` on a named scene and
+`simulate` runs `gait_planner.dynamics.free_motion.run_free_motion` on a scene (a name or a
+scene file's path, `gait_planner.model.loader.find_scene`) and
 returns plain JSON-ready data; `add_simulate_parser` registers the command line::
 
     gait-planner simulate --scene NAME --steps N --dt H [--gravity | --no-gravity]
@@ -50,9 +51,9 @@ def simulate(scene_name: str, steps: int, dt: float, gravity: bool = True,
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
     from gait_planner.dynamics.free_motion import run_free_motion
-    from gait_planner.model.loader import load_scene
+    from gait_planner.model.loader import find_scene
 
-    scene = load_scene(scene_name)
+    scene = find_scene(scene_name)
     _, report = run_free_motion(scene, steps=steps, dt=float(dt), gravity=bool(gravity),
                                 torques=torques, seed=seed, pin=pin)
     return {"scene": scene.name, **dataclasses.asdict(report), "pinned": pin}
@@ -119,7 +120,9 @@ def add_simulate_parser(subparsers: argparse._SubParsersAction) -> argparse.Argu
         "(free-floating, or with one contact point pinned) using the variational "
         "integrator, and report the structure-preservation errors.",
     )
-    parser.add_argument("--scene", required=True, metavar="NAME", help="scene name")
+    parser.add_argument("--scene", required=True, metavar="NAME|FILE.yaml",
+                        help="a scene: a name (config/scenes/NAME.yaml or a folder of "
+                        "GAIT_PLANNER_SCENE_PATH) or the path to a scene file (.yaml, .yml)")
     parser.add_argument("--steps", required=True, type=_positive_int, metavar="N",
                         help="number of time steps (>= 1)")
     parser.add_argument("--dt", required=True, type=_positive_seconds, metavar="H",

@@ -1,13 +1,16 @@
 """Scene files: find them, read them, validate them, return frozen `Scene`s.
 
-Configuration enters here once: `load_scene(name)` or `load_scene_file(path)` returns a
-`gait_planner.model.scene.Scene` whose every field has been checked, or raises `SceneError`
-naming the file, the key path and the reason, e.g.
-``walker3d.yaml: bodies[2].mass: must be a positive number, got -1.0``.
+Configuration enters here once: `load_scene(name)` (a bare name, looked up in
+`scene_dirs()`), `find_scene(name_or_path)` (also a path to a .yaml file: the command
+line's --scene) or `load_scene_file(path)` returns a `gait_planner.model.scene.Scene` whose
+every field has been checked, or raises `SceneError` naming the file, the key path and the
+reason, e.g. ``walker3d.yaml: bodies[2].mass: must be a positive number, got -1.0``.
+A scene's warnings (e.g. a non-physical inertia it allows) are logged once per process.
 
 YAML layout (exactly these keys; unknown keys are errors)::
 
-    name: walker3d                    # must equal the file stem
+    name: walker3d                    # the scene's name in recordings and messages; the
+                                      # file name is what a bare name looks up
     description: "..."                # optional
     gravity: 9.81                     # optional, >= 0
     allow_nonphysical_inertia: false  # optional; true accepts E_i < 0 with a warning
@@ -50,7 +53,7 @@ import os
 import re
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Sequence
 
 from gait_planner.model._validate import Checker, SceneError, check_gait, join, parse_yaml
 from gait_planner.model.posture import PostureError, check_posture
@@ -65,7 +68,8 @@ from gait_planner.model.scene import (
     Scene,
 )
 
-__all__ = ["SceneError", "available_scenes", "load_scene", "load_scene_file", "scene_dirs"]
+__all__ = ["SceneError", "available_scenes", "find_scene", "load_scene", "load_scene_file",
+           "scene_dirs"]
 
 _log = logging.getLogger("gait_planner.model")
 
@@ -75,20 +79,24 @@ _SPHERICAL_ANGLES = ("pitch", "roll", "yaw")  # the order of gait_planner.model.
 _MIN_AXIS_NORM = 1e-9
 _PLANAR_AXIS = (0.0, 1.0, 0.0)
 _INERTIA_TOLERANCE = 1e-12  # relative round-off allowed in E_i >= 0
+SCENE_SUFFIXES = (".yaml", ".yml")  # a --scene ending so is a path, anything else a name
+_warned: set[str] = set()  # the scene warnings logged so far (each once per process)
 
 
 # ---------------------------------------------------------------------------- finding files
 
 
-def scene_dirs() -> tuple[Path, ...]:
+def scene_dirs(extra: Sequence[str | os.PathLike] = ()) -> tuple[Path, ...]:
     """The folders scenes are loaded from, first match wins.
 
-    The directories in $GAIT_PLANNER_SCENE_PATH (os.pathsep separated) first, then the
-    repository's `config/scenes` (next to this package, for source and editable installs),
-    then `<share>/gait_planner/config/scenes` if ament_index finds the installed package.
+    The `extra` folders (the node's parameter scene_dirs) first, then the directories in
+    $GAIT_PLANNER_SCENE_PATH (os.pathsep separated), then the repository's `config/scenes`
+    (next to this package, for source and editable installs), then
+    `<share>/gait_planner/config/scenes` if ament_index finds the installed package.
     Only existing directories are listed, each once.
     """
-    candidates = [Path(p) for p in os.environ.get(SCENE_PATH_ENV, "").split(os.pathsep) if p]
+    candidates = [Path(p) for p in extra]
+    candidates += [Path(p) for p in os.environ.get(SCENE_PATH_ENV, "").split(os.pathsep) if p]
     candidates.append(Path(__file__).resolve().parents[2] / "config" / "scenes")
     try:
         from ament_index_python.packages import get_package_share_directory
@@ -104,11 +112,11 @@ def scene_dirs() -> tuple[Path, ...]:
     return tuple(dirs)
 
 
-def available_scenes() -> list[str]:
-    """Sorted names of the scenes in `scene_dirs()` (files `<name>.yaml`)."""
+def available_scenes(extra: Sequence[str | os.PathLike] = ()) -> list[str]:
+    """Sorted names of the scenes in `scene_dirs(extra)` (files `<name>.yaml`)."""
     names = {
         p.stem
-        for d in scene_dirs()
+        for d in scene_dirs(extra)
         for p in d.glob("*.yaml")
         if p.is_file() and SCENE_NAME_PATTERN.fullmatch(p.stem)
     }
@@ -118,28 +126,57 @@ def available_scenes() -> list[str]:
 _cache: dict[Path, tuple[tuple[int, int], Scene]] = {}
 
 
-def load_scene(name: str) -> Scene:
-    """The scene `name` (a bare name such as "walker3d") from the first folder holding it.
+def load_scene(name: str, extra: Sequence[str | os.PathLike] = ()) -> Scene:
+    """The scene `name` (a bare name such as "walker3d": the file `<name>.yaml`) from the
+    first of `scene_dirs(extra)` holding it.
 
     Parsed scenes are cached per file and reloaded when the file's mtime or size changes.
     """
     if not isinstance(name, str) or not SCENE_NAME_PATTERN.fullmatch(name):
         raise SceneError(
             f"scene names are bare names (letters, digits, '_' and '-', no path), got {name!r}; "
-            f"available scenes: {_listing(available_scenes())}"
+            f"for a scene file in another folder, add the folder to {SCENE_PATH_ENV} (or to "
+            f"the node's parameter scene_dirs) and give the file's name without .yaml; "
+            f"available scenes: {_listing(available_scenes(extra))}"
         )
-    for directory in scene_dirs():
+    for directory in scene_dirs(extra):
         path = directory / f"{name}.yaml"
         if path.is_file():
-            stat = path.stat()
-            stamp = (stat.st_mtime_ns, stat.st_size)
-            cached = _cache.get(path)
-            if cached is not None and cached[0] == stamp:
-                return cached[1]
-            scene = load_scene_file(path)
-            _cache[path] = (stamp, scene)
-            return scene
-    raise SceneError(f"unknown scene {name!r}; available scenes: {_listing(available_scenes())}")
+            return _cached(path)
+    raise SceneError(f"unknown scene {name!r}; available scenes: "
+                     f"{_listing(available_scenes(extra))} (the files NAME.yaml in "
+                     f"{', '.join(map(str, scene_dirs(extra))) or 'no scene folder'})")
+
+
+def find_scene(name_or_path: str) -> Scene:
+    """The scene of a command line's --scene: a path to a scene file if it ends in .yaml
+    or .yml (relative to the working folder), else a bare name (`load_scene`)."""
+    if not str(name_or_path).endswith(SCENE_SUFFIXES):
+        if not SCENE_NAME_PATTERN.fullmatch(str(name_or_path)):
+            raise SceneError(
+                f"scenes are bare names (letters, digits, '_' and '-', no path) or paths to "
+                f"a scene file ending in .yaml or .yml, got {name_or_path!r}; "
+                f"available scenes: {_listing(available_scenes())}")
+        return load_scene(name_or_path)
+    path = Path(name_or_path).expanduser()
+    if not path.is_file():
+        raise SceneError(f"no such scene file ({'a folder' if path.is_dir() else 'not found'}"
+                         f" at {path.resolve()})", file=str(name_or_path))
+    try:
+        return _cached(path.resolve())
+    except SceneError as error:  # name the file as it was given, not only its name
+        raise SceneError(error.reason, file=str(name_or_path), key=error.key) from None
+
+
+def _cached(path: Path) -> Scene:
+    stat = path.stat()
+    stamp = (stat.st_mtime_ns, stat.st_size)
+    cached = _cache.get(path)
+    if cached is not None and cached[0] == stamp:
+        return cached[1]
+    scene = load_scene_file(path)
+    _cache[path] = (stamp, scene)
+    return scene
 
 
 def _listing(names: list[str]) -> str:
@@ -153,13 +190,13 @@ def load_scene_file(path: str | os.PathLike) -> Scene:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as error:
         raise SceneError(f"cannot be read: {error}", file=str(path)) from None
-    return _build_scene(parse_yaml(text, path.name), path.name, path.stem, text)
+    return _build_scene(parse_yaml(text, path.name), path.name, text)
 
 
 # ---------------------------------------------------------------------------- the schema
 
 
-def _build_scene(data: Any, file: str, stem: str, source: str) -> Scene:
+def _build_scene(data: Any, file: str, source: str) -> Scene:
     c = Checker(file)
     top = c.mapping(
         data,
@@ -168,8 +205,8 @@ def _build_scene(data: Any, file: str, stem: str, source: str) -> Scene:
         optional=("description", "gravity", "allow_nonphysical_inertia", "gait"),
     )
     name = c.string(top["name"], "name")
-    if name != stem:
-        c.fail("name", f"must equal the file name stem {stem!r}, got {name!r}")
+    if not SCENE_NAME_PATTERN.fullmatch(name):  # it starts the file names of recordings
+        c.fail("name", f"must be letters, digits, '_' and '-' (it names recordings), got {name!r}")
     description = c.string(top.get("description", ""), "description")
     gravity = c.number(top.get("gravity", 9.81), "gravity", minimum=0.0)
     allow = c.boolean(top.get("allow_nonphysical_inertia", False), "allow_nonphysical_inertia")
@@ -201,7 +238,9 @@ def _build_scene(data: Any, file: str, stem: str, source: str) -> Scene:
         except PostureError as err:
             c.fail(join("gait.options", err.option), err.reason)
     for warning in c.warnings:
-        _log.warning("%s", warning)
+        if warning not in _warned:  # once per process: a scene is loaded by several parts
+            _warned.add(warning)
+            _log.warning("%s", warning)
     return scene
 
 

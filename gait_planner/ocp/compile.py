@@ -9,6 +9,10 @@ Functions (walker3d's element derivatives take 2 s to form and generate), so a p
 compiled once per machine; the libraries missing are built in parallel, one compiler
 process per core. A library is written under a temporary name
 and renamed when complete, so an interrupted build never leaves a half-written one.
+The compiler is needed only for libraries not yet in the cache: a cache filled elsewhere
+(`make setup`) serves a machine without one. Before building, `compile_sources` tells its
+`notify` callback what it builds and how long the last build in this cache folder took
+(`LAST_BUILD`).
 -O1: walker3d's dynamics Hessian element (5 MB of C) builds in about 30 s and evaluates
 six times faster than in CasADi's virtual machine; -O0 builds in 9 s but gains only 2x.
 (-Os and -O2 evaluate it in the same time, 2026-11-23.)
@@ -28,6 +32,7 @@ import re
 import shutil
 import subprocess
 import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -37,6 +42,7 @@ import casadi as ca
 from gait_planner.ocp import vectorize
 
 FLAGS = ("-O1", "-shared", "-fPIC")
+LAST_BUILD = "last_build.txt"  # in the cache folder: "<libraries> <seconds>" of the last build
 
 
 class CompileError(RuntimeError):
@@ -100,35 +106,58 @@ def _identity(src: Source) -> bytes:
     return "\n".join(parts).encode()
 
 
+def compiler() -> str | None:
+    """The C compiler's path ($CC or cc), or None if there is none."""
+    return shutil.which(os.environ.get("CC", "cc"))
+
+
 def compile_functions(functions: list[ca.Function], folder: Path | None = None) -> list[ca.Function]:
     """The compiled (external) equivalents of `functions`, in order, each identified by its
     serialisation. Raises CompileError (see `compile_sources`)."""
     return compile_sources([Source.formed(fn) for fn in functions], folder)
 
 
-def compile_sources(sources: list[Source], folder: Path | None = None) -> list[ca.Function]:
+def compile_sources(sources: list[Source], folder: Path | None = None,
+                    notify: Callable[[str], None] | None = None) -> list[ca.Function]:
     """The compiled (external) Functions of `sources`, in order, or, for a Source whose
     Function has more operations than its `interpret_above`, that Function as formed (no
     library is built for it, so it is formed at every call). A Source whose library is
-    cached is not formed. Raises CompileError (no compiler, a failed build, a cache folder
-    that cannot be written)."""
-    compiler = shutil.which(os.environ.get("CC", "cc"))
-    if compiler is None:
-        raise CompileError("no C compiler found (set CC, or install gcc)")
+    cached is not formed. notify: called once, before a build (not when all is cached),
+    with what is built and how long the last build took. Raises CompileError (no compiler
+    for a library not in the cache, a failed build, a cache folder that cannot be
+    written)."""
     folder = cache_folder() if folder is None else folder
     try:
-        return _compile(sources, compiler, folder)
+        return _compile(sources, folder, notify or (lambda text: None))
     except OSError as err:
         raise CompileError(f"cannot build in {folder}: {err}") from None
 
 
-def _compile(sources: list[Source], compiler: str, folder: Path) -> list[ca.Function]:
+def last_build(folder: Path | None = None) -> tuple[int, float] | None:
+    """(libraries, seconds) of the last build in the cache folder, None if unknown."""
+    try:
+        count, seconds = (Path(folder or cache_folder()) / LAST_BUILD).read_text().split()
+        return int(count), float(seconds)
+    except (OSError, ValueError):
+        return None
+
+
+def _announce(count: int, folder: Path) -> str:
+    last = last_build(folder)
+    before = (f"the last build here took {last[1]:.0f} s for {last[0]} libraries" if last
+              else "roughly a minute for walker2d or walker3d on 2 cores")
+    return (f"compiling up to {count} derivative element{'s' if count > 1 else ''} to C into "
+            f"{folder} (once per machine and problem; {before})")
+
+
+def _compile(sources: list[Source], folder: Path,
+             notify: Callable[[str], None]) -> list[ca.Function]:
     folder.mkdir(parents=True, exist_ok=True)
     libraries: list[Path | ca.Function] = []
     jobs: list[tuple[Path, Path, tuple[str, ...]]] = []
     with tempfile.TemporaryDirectory(dir=folder) as work:
         for src in sources:
-            library = folder / f"{src.name}_{hashlib.sha256(_identity(src)).hexdigest()[:16]}.so"
+            library = _library(src, folder)
             if library.exists() or library in (job[0] for job in jobs):
                 libraries.append(library)
                 continue
@@ -137,6 +166,16 @@ def _compile(sources: list[Source], compiler: str, folder: Path) -> list[ca.Func
                 libraries.append(function)
                 continue
             libraries.append(library)
+            if not jobs:  # the first library to build
+                if compiler() is None:
+                    raise CompileError(
+                        f"no C compiler found ({os.environ.get('CC', 'cc')!r}: set CC, or "
+                        f"install gcc) to build what the cache {folder} lacks "
+                        f"({library.name}, ...)")
+                missing = {_library(s, folder) for s in sources} - {
+                    lib for lib in libraries if isinstance(lib, Path) and lib.exists()}
+                notify(_announce(len(missing), folder))
+                start = time.perf_counter()
             source = Path(work) / f"{src.name}.c"
             generator = ca.CodeGenerator(source.name, {"with_header": False})
             generator.add(function)
@@ -147,9 +186,15 @@ def _compile(sources: list[Source], compiler: str, folder: Path) -> list[ca.Func
                 except vectorize.Unsupported:
                     pass  # CasADi's loop, as generated
             jobs.append((library, source, _flags(src)))
-        _build_all(compiler, jobs, work)
+        if jobs:
+            _build_all(compiler(), jobs, work)
+            (folder / LAST_BUILD).write_text(f"{len(jobs)} {time.perf_counter() - start:.1f}\n")
     return [lib if isinstance(lib, ca.Function) else ca.external(src.name, str(lib))
             for src, lib in zip(sources, libraries)]
+
+
+def _library(src: Source, folder: Path) -> Path:
+    return folder / f"{src.name}_{hashlib.sha256(_identity(src)).hexdigest()[:16]}.so"
 
 
 def _build_all(compiler: str, jobs: list[tuple[Path, Path, tuple[str, ...]]], work: str) -> None:

@@ -58,7 +58,9 @@ class GaitSettings:
     (`gait_planner.pipeline.plan_certified`, `gait_planner.ocp.refine`; 0 = never);
     max_iterations, max_solve_time s (IPOPT; with refinements, the time of all plans); tolerance (IPOPT tol);
     constraint_tolerance (IPOPT constr_viol_tol); compiled: build the per-node derivative
-    elements as C (`gait_planner.ocp.compile`; a one-time cost per machine, cached).
+    elements as C (`gait_planner.ocp.compile`; a one-time cost per machine, cached; off
+    here, on by default in the command line, the node and the benchmarks' runs; without a
+    C compiler for what the cache lacks, the planner falls back to CasADi's derivatives).
     """
 
     step_length: float

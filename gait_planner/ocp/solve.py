@@ -154,12 +154,14 @@ class Planner:
             expanded = expand_nlp(tr)
             nlp = {"x": expanded.x, "p": expanded.p, "f": expanded.f, "g": expanded.g}
             derivatives, used = None, "CasADi, whole SX graph"
-            if s.compiled:
+            if s.compiled:  # a cache miss is announced as a stage: "compiling ... (how long)"
                 try:
-                    derivatives = nlp_derivatives(tr, compile_sources, expanded)
+                    derivatives = nlp_derivatives(
+                        tr, lambda sources: compile_sources(sources, notify=self.stage), expanded)
                     used = "per-node elements compiled to C"
                 except CompileError as err:
                     used += f" (not compiled: {err})"
+                    self.stage(f"building with CasADi's derivatives (not compiled: {err})")
             if derivatives is None:
                 # CasADi differentiates the whole SX graph: in its virtual machine this beats
                 # per-node elements (walker3d Hessian 26 ms against 49 ms), as each node's

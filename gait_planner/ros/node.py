@@ -25,6 +25,7 @@ recording files that killed processes left in its output folder.
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
 import time
@@ -41,6 +42,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from gait_planner.io import messages
 from gait_planner.io.atomic import remove_stale_temporaries
 from gait_planner.io.rrd_recorder import RrdRecorder
+from gait_planner.model.loader import load_scene, scene_dirs
 from gait_planner.ocp.library import PlanLibrary
 from gait_planner.ocp.solve import STOPPED, Planner
 from gait_planner.pipeline import plan_and_record, prepare
@@ -77,6 +79,12 @@ class GaitPlannerNode(Node):
         super().__init__("gait_planner", **kwargs)
         self._worker.on_lapse = self._on_lapse
         parameters.declare(self)
+        folders = list(self._param("scene_dirs"))  # read-only: fixed for the node's life
+        self._scenes = functools.partial(load_scene, extra=folders)
+        missing = [f for f in folders if not Path(f).expanduser().is_dir()]
+        if missing:
+            self.get_logger().info(f"scene_dirs: no folder {missing} (skipped); scenes from "
+                                   f"{[str(d) for d in scene_dirs(folders)]}")
         for path in remove_stale_temporaries(self._param("output_dir")):
             self.get_logger().info(f"removed the stale temporary file {path}")
         self._recorder = RrdRecorder()  # its helper imports rerun while the problem is built
@@ -100,7 +108,7 @@ class GaitPlannerNode(Node):
         request = PlanRequest(scene=self._param("default_scene"),
                               compiled=self._param("compile_derivatives"))
         try:
-            how = prepare(self._planner, request, rrd=False)
+            how = prepare(self._planner, request, rrd=False, scenes=self._scenes)
         except (RequestError, ValueError, RuntimeError) as err:
             self.get_logger().warning(f"could not prepare {request.scene}: {err}")
             return
@@ -162,7 +170,8 @@ class GaitPlannerNode(Node):
                 default_max_solve_time=self._param("max_solve_time"),
                 compiled=self._param("compile_derivatives"))
             outcome = plan_and_record(self._planner, planned, self._param("output_dir"),
-                                      rrd=False, stage=self._worker.enter)
+                                      rrd=False, stage=self._worker.enter,
+                                      scenes=self._scenes)
         except Stopped:
             answer.success, answer.message = False, self._stopped_message()
             self.get_logger().info(f"{answer.message}: nothing recorded")

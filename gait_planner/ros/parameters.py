@@ -27,7 +27,7 @@ def _descriptor(kind: int, description: str, **extra) -> ParameterDescriptor:
 
 
 # name -> (default, descriptor); declared in this order (allowed_output_dirs before
-# output_dir, whose check reads it)
+# output_dir and scene_dirs before default_scene, whose checks read them)
 DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
     "allowed_output_dirs": (["."], _descriptor(
         ParameterType.PARAMETER_STRING_ARRAY,
@@ -37,9 +37,16 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         ParameterType.PARAMETER_STRING,
         "Folder of the recordings (MCAP, .rrd), created if missing; must be writable and "
         "inside one of allowed_output_dirs")),
+    "scene_dirs": (["scenes"], _descriptor(
+        ParameterType.PARAMETER_STRING_ARRAY,
+        "Folders of scene files (<name>.yaml) searched before GAIT_PLANNER_SCENE_PATH and "
+        "config/scenes, first match wins; relative ones: to the node's working folder; a "
+        "missing folder is skipped (logged at start); requests name scenes by bare name; "
+        "fixed at start", read_only=True)),
     "default_scene": ("walker3d", _descriptor(
         ParameterType.PARAMETER_STRING,
-        "Scene planned when a request names none (a file config/scenes/<name>.yaml)")),
+        "Scene planned when a request names none (a file <name>.yaml in scene_dirs, "
+        "GAIT_PLANNER_SCENE_PATH or config/scenes)")),
     "max_solve_time": (60.0, _descriptor(
         ParameterType.PARAMETER_DOUBLE,
         "Time limit of a solve in s when a request gives <= 0; must be > 0",
@@ -86,10 +93,24 @@ def check_output_dir(value: str, allowed: list[str]) -> str | None:
     return None
 
 
-def _check_scene(value: str) -> str | None:
-    scenes = available_scenes()
+def _check_scene(value: str, folders: list[str]) -> str | None:
+    scenes = available_scenes(folders)
     return None if value in scenes else (
-        f"default_scene {value!r} is not a known scene; available: {', '.join(scenes)}")
+        f"default_scene {value!r} is not a known scene; available: {', '.join(scenes)} "
+        f"(files <name>.yaml in scene_dirs {folders}, GAIT_PLANNER_SCENE_PATH or "
+        "config/scenes)")
+
+
+def check_scene_dirs(value: list[str]) -> str | None:
+    """Why `value` cannot be the scene folders (None if it can): every entry names a path,
+    and an existing one is a folder (a missing one is skipped)."""
+    for entry in value:
+        if not entry.strip():
+            return f"scene_dirs entries must name folders, got {entry!r} in {list(value)}"
+        path = Path(entry).expanduser()
+        if path.exists() and not path.is_dir():
+            return f"scene_dirs entry {entry!r} ({path.resolve()}) is not a folder"
+    return None
 
 
 def _check_solve_time(value: float) -> str | None:
@@ -108,7 +129,9 @@ def declare(node: Node) -> None:
 def validator(node: Node) -> Callable[[list], SetParametersResult]:
     """The set-parameters callback of `node`: refuses a value with the reason."""
     checks: dict[str, Callable[[Any], str | None]] = {
-        "default_scene": _check_scene,
+        "default_scene": lambda value: _check_scene(
+            value, list(node.get_parameter("scene_dirs").value)),
+        "scene_dirs": check_scene_dirs,
         "max_solve_time": _check_solve_time,
         "output_dir": lambda value: check_output_dir(
             value, list(node.get_parameter("allowed_output_dirs").value)),

@@ -17,7 +17,8 @@ import yaml
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from gait_planner.model.loader import (SceneError, available_scenes, load_scene,
+from gait_planner.model import loader
+from gait_planner.model.loader import (SceneError, available_scenes, find_scene, load_scene,
                                        load_scene_file, scene_dirs)
 from gait_planner.model.scene import JointType, RootType
 
@@ -221,9 +222,14 @@ def test_non_realisable_torso_is_refused_without_opt_in(tmp_path):
     assert "non-realisable" in error_of(tmp_path, data)
 
 
-def test_non_realisable_torso_warns_with_opt_in(tmp_path, caplog):
+def test_non_realisable_torso_warns_with_opt_in_once_per_process(tmp_path, caplog,
+                                                                   monkeypatch):
+    monkeypatch.setattr(loader, "_warned", set())  # as in a new process
     with caplog.at_level(logging.WARNING, logger="gait_planner.model"):
         scene = load_scene_file(write(tmp_path, scene_data()))
+        load_scene_file(tmp_path / "walker3d.yaml")  # read again, e.g. by another part
+        monkeypatch.setenv("GAIT_PLANNER_SCENE_PATH", str(tmp_path))
+        load_scene("walker3d")
     assert scene.body("torso").euler_tensor[0] == pytest.approx(-0.07665)
     records = [r for r in caplog.records if r.name == "gait_planner.model"]
     assert len(records) == 1 and records[0].levelno == logging.WARNING
@@ -273,7 +279,9 @@ SET_CASES = [
     ("bodies[4].name", "thigh_r", "bodies[4].name: duplicate body name 'thigh_r'"),
     ("bodies", [], "bodies: must list at least one body"),
     ("gravity", -9.81, "gravity: must be a number >= 0.0"),
-    ("name", "walker", "name: must equal the file name stem 'walker3d', got 'walker'"),
+    ("name", 3, "name: must be a string"),
+    ("name", "../walker", "name: must be letters, digits, '_' and '-' (it names recordings), "
+                          "got '../walker'"),
     ("allow_nonphysical_inertia", "yes", "allow_nonphysical_inertia: must be true or false"),
     ("root.body", "pelvis", "root.body: unknown body 'pelvis' (known: torso"),
     ("root.type", "floating", "root.type: must be one of free, planar, got 'floating'"),
@@ -478,6 +486,8 @@ def test_scene_names_must_be_bare(name):
     with pytest.raises(SceneError, match="bare names") as info:
         load_scene(name)
     assert "walker3d" in str(info.value).split("available scenes:")[1]
+    # how to plan a scene file from elsewhere by name (the node's requests)
+    assert "GAIT_PLANNER_SCENE_PATH" in str(info.value) and "scene_dirs" in str(info.value)
 
 
 def test_unknown_scene_lists_the_available_ones():
@@ -494,3 +504,87 @@ def test_junk_scene_names_are_refused_unless_available(name):
     else:
         with pytest.raises(SceneError):
             load_scene(name)
+
+
+# ---------------------------------------------------------------------------- scenes from anywhere
+
+
+def test_a_copied_scene_loads_under_any_file_name_and_keeps_its_name(tmp_path):
+    """No name-stem rule: the file name finds a scene, `name` names it (in recordings)."""
+    data = scene_data("compass")
+    data["gravity"] = 9.0
+    scene = load_scene_file(write(tmp_path, data, "my copy"))
+    assert scene.name == "compass" and scene.gravity == 9.0
+
+
+def test_scenes_named_alike_never_share_a_problem_or_a_library_entry(tmp_path):
+    """The planner's problems and the plan library are keyed by the scene's text, so a copy
+    named like a shipped scene but changed gets its own (the compiled cache is keyed by the
+    Functions themselves, `ocp.compile`)."""
+    from gait_planner.ocp.library import PlanLibrary
+    from gait_planner.ocp.settings import settings_for
+    from gait_planner.ocp.solve import _key
+
+    data = scene_data("compass")
+    data["gravity"] = 9.0
+    copy_ = load_scene_file(write(tmp_path, data, "lighter"))
+    shipped = load_scene("compass")
+    assert copy_.name == shipped.name
+    settings = settings_for(shipped)
+    assert _key(copy_, settings) != _key(shipped, settings)
+    assert PlanLibrary.key(copy_.source, settings, 1, 1) != PlanLibrary.key(
+        shipped.source, settings, 1, 1)
+
+
+def test_find_scene_takes_a_path_or_a_name(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    data = scene_data("compass")
+    data["description"] = "from a path"
+    write(tmp_path, data, "elsewhere")
+    (tmp_path / "short.yml").write_text((tmp_path / "elsewhere.yaml").read_text())
+    assert find_scene(str(tmp_path / "elsewhere.yaml")).description == "from a path"
+    assert find_scene("elsewhere.yaml").description == "from a path"  # relative
+    assert find_scene("short.yml").description == "from a path"
+    assert find_scene("compass") is load_scene("compass")
+
+
+@pytest.mark.parametrize("given, words", [
+    ("missing.yaml", "missing.yaml: no such scene file (not found at "),
+    ("folder.yaml", "folder.yaml: no such scene file (a folder at "),
+    ("broken.yaml", "broken.yaml: gravity: must be a number >= 0.0"),
+    ("../compass", "scenes are bare names (letters, digits, '_' and '-', no path) or paths "
+                   "to a scene file ending in .yaml or .yml, got '../compass'"),
+    ("nope", "unknown scene 'nope'; available scenes: "),
+])
+def test_find_scene_errors_name_the_file_and_the_rule(tmp_path, monkeypatch, given, words):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "folder.yaml").mkdir()
+    data = scene_data("compass")
+    data["gravity"] = -1.0
+    write(tmp_path, data, "broken")
+    with pytest.raises(SceneError) as info:
+        find_scene(given)
+    assert str(info.value).startswith(words) or words in str(info.value), str(info.value)
+
+
+def test_extra_scene_folders_come_first(tmp_path, monkeypatch):
+    """The node's scene_dirs: searched before GAIT_PLANNER_SCENE_PATH and config/scenes;
+    missing folders are skipped."""
+    env = tmp_path / "env"
+    env.mkdir()
+    monkeypatch.setenv("GAIT_PLANNER_SCENE_PATH", str(env))
+    extra = tmp_path / "extra"
+    extra.mkdir()
+    data = scene_data("compass")
+    data["description"] = "extra"
+    write(extra, data, "compass")
+    write(extra, data, "only_extra")
+    data["description"] = "env"
+    write(env, data, "compass")
+    folders = [str(tmp_path / "missing"), str(extra)]
+    assert scene_dirs(folders)[:2] == (extra.resolve(), env.resolve())
+    assert load_scene("compass", folders).description == "extra"
+    assert load_scene("compass").description == "env"
+    assert "only_extra" in available_scenes(folders) and "only_extra" not in available_scenes()
+    with pytest.raises(SceneError, match="unknown scene 'only_extra'"):
+        load_scene("only_extra")

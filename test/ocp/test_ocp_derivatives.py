@@ -168,6 +168,25 @@ def test_missing_compiler_is_a_clear_error(tmp_path, monkeypatch):
         compile_functions([tr.elements[0].function], tmp_path)
 
 
+def test_a_cached_library_needs_no_compiler_and_only_a_build_is_announced(tmp_path,
+                                                                          monkeypatch):
+    """The compiler is needed for what the cache lacks only (a cache `make setup` filled
+    serves a machine without one); a build is announced once, with the last build's time."""
+    from gait_planner.ocp.compile import Source, compile_sources, last_build
+
+    tr, *_ = _problem("compass")
+    fn = tr.elements[0].function
+    told = []
+    compile_sources([Source.formed(fn)], tmp_path, notify=told.append)
+    assert len(told) == 1 and told[0].startswith("compiling up to 1 derivative element to C")
+    assert last_build(tmp_path)[0] == 1
+    monkeypatch.setenv("CC", "no-such-compiler")
+    again = compile_sources([Source.formed(fn)], tmp_path, notify=told.append)
+    assert len(told) == 1 and again[0].name() == fn.name()  # loaded, nothing announced
+    with pytest.raises(CompileError, match="no C compiler found .* to build what the cache .* lacks"):
+        compile_sources([Source.formed(tr.elements[1].function)], tmp_path)
+
+
 def test_compiled_plan_matches_uncompiled(tmp_path, monkeypatch):
     monkeypatch.setenv("GAIT_PLANNER_CACHE", str(tmp_path))
     scene = load_scene("compass")

@@ -67,7 +67,8 @@ def parameters_of_process(make_node, executor, spin_until):
 def test_parameters_are_declared_with_type_range_and_description(parameters):
     client, wait = parameters
     names = ["default_scene", "output_dir", "allowed_output_dirs", "max_solve_time",
-             "compile_derivatives", "feedback_every", "prepare_on_start", "plan_library"]
+             "compile_derivatives", "feedback_every", "prepare_on_start", "plan_library",
+             "scene_dirs"]
     described = {d.name: d for d in wait(client.describe_parameters(names)).descriptors}
     assert all(described[name].description for name in names)
     assert described["max_solve_time"].type == ParameterType.PARAMETER_DOUBLE
@@ -77,6 +78,8 @@ def test_parameters_are_declared_with_type_range_and_description(parameters):
     assert described["compile_derivatives"].type == ParameterType.PARAMETER_BOOL
     assert described["prepare_on_start"].read_only
     assert described["plan_library"].read_only
+    assert described["scene_dirs"].type == ParameterType.PARAMETER_STRING_ARRAY
+    assert described["scene_dirs"].read_only
 
 
 def test_the_default_scene_is_built_at_start_when_asked(planner_node):
@@ -95,6 +98,7 @@ def test_the_default_scene_is_built_at_start_when_asked(planner_node):
     ("output_dir", "/etc/gait_planner", "outside the allowed folders"),
     ("output_dir", "{tmp}/a_file/runs", "is not a folder"),
     ("allowed_output_dirs", ["/"], "read-only"),
+    ("scene_dirs", ["/"], "read-only"),
 ])
 def test_bad_values_are_refused_with_a_reason(parameters, tmp_path,
                                               name, value, words):
@@ -175,3 +179,31 @@ def test_the_command_line_puts_the_params_file_before_the_ros_arguments(monkeypa
     assert main(["node", *given, "--ros-args", "-p", "output_dir:=runs"]) == 0
     assert seen[0][1:] == ["--ros-args", "--params-file", str(SHIPPED), "--",
                            "--ros-args", "-p", "output_dir:=runs"]
+
+
+def test_scene_dirs_add_scene_folders_whose_scenes_requests_name_by_bare_name(
+        planner_node, tmp_path):
+    """A scene file in a folder of scene_dirs is planned by its bare name (also as the
+    default scene); a path in a request is refused, naming both ways to add a folder."""
+    from gait_planner.model.loader import load_scene
+    from gait_planner_msgs.srv import PlanGait
+
+    folder = tmp_path / "my_scenes"
+    folder.mkdir()
+    (folder / "my_compass.yaml").write_text(load_scene("compass").source)
+    node = planner_node(scene_dirs=[str(folder), str(tmp_path / "missing")],
+                        default_scene="my_compass")
+    answer = PlanGait.Response()
+    node._plan_into(PlanGait.Request(scene="", output_name="mine"), answer)  # the default
+    assert answer.success, answer.message
+    assert (tmp_path / "mine.mcap").is_file()
+    refused = PlanGait.Response()
+    node._plan_into(PlanGait.Request(scene=str(folder / "my_compass.yaml")), refused)
+    assert not refused.success and "bare names" in refused.message
+    assert "scene_dirs" in refused.message and "GAIT_PLANNER_SCENE_PATH" in refused.message
+
+
+def test_a_scene_dirs_entry_that_is_a_file_stops_the_node(planner_node, tmp_path):
+    (tmp_path / "a_file").write_text("not a folder")
+    with pytest.raises(Exception, match="scene_dirs entry .*a_file.* is not a folder"):
+        planner_node(scene_dirs=[str(tmp_path / "a_file")])
