@@ -48,10 +48,11 @@ def _dense(m) -> np.ndarray:
 HUMAN = {"posture": "human", "twist_regularisation": 0.5}
 
 
-@pytest.mark.parametrize("name, overrides", [("compass", {"cost": "kinetic_energy"}),
-                                             ("walker2d", {"cost": "kinetic_energy"}),
-                                             ("walker2d", {"cost": "torque_squared"}),
-                                             ("walker2d", HUMAN)])
+@pytest.mark.parametrize("name, overrides", [
+    ("compass", {"cost": "kinetic_energy"}),
+    pytest.param("walker2d", {"cost": "kinetic_energy"}, marks=pytest.mark.slow),
+    pytest.param("walker2d", {"cost": "torque_squared"}, marks=pytest.mark.slow),
+    pytest.param("walker2d", HUMAN, marks=pytest.mark.slow)])
 def test_element_derivatives_equal_casadi_whole_graph(name, overrides):
     tr, x, p, lam_g = _problem(name, **overrides)
     mine = nlp_derivatives(tr)
@@ -187,6 +188,7 @@ def test_a_cached_library_needs_no_compiler_and_only_a_build_is_announced(tmp_pa
         compile_sources([Source.formed(tr.elements[1].function)], tmp_path)
 
 
+@pytest.mark.slow
 def test_compiled_plan_matches_uncompiled(tmp_path, monkeypatch):
     monkeypatch.setenv("GAIT_PLANNER_CACHE", str(tmp_path))
     scene = load_scene("compass")
@@ -250,7 +252,8 @@ def test_a_large_source_is_interpreted_and_a_cached_one_is_not_formed(tmp_path):
     assert np.array_equal(np.array(again(*args)), np.array(fn(*args)))
 
 
-@pytest.mark.parametrize("interpreted_above", [derivatives.INTERPRETED_ABOVE, 1100])
+@pytest.mark.parametrize("interpreted_above", [
+    pytest.param(derivatives.INTERPRETED_ABOVE, marks=pytest.mark.slow), 1100])
 def test_compiled_vector_derivatives_equal_the_virtual_machine_bit_for_bit(
         tmp_path, monkeypatch, interpreted_above):
     """Groups of at least LANES nodes are compiled as vector passes (ocp.vectorize), with

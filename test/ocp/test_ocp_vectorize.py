@@ -104,7 +104,8 @@ def test_vector_flags_forbid_contraction():
     assert "-ffp-contract=off" in vector_flags()
 
 
-@pytest.mark.parametrize("name", ["compass", "walker2d", "walker3d"])
+@pytest.mark.parametrize("name", ["compass", "walker2d",
+                                  pytest.param("walker3d", marks=pytest.mark.slow)])
 def test_every_element_of_the_planner_is_rewritten(name):
     """No element derivative falls back to CasADi's loop (generating the code only)."""
     scene = load_scene(name)

@@ -160,6 +160,7 @@ def test_a_second_request_is_answered_busy_at_once_while_a_goal_runs(
     print(f"busy answer: {busy_after:.3f} s, goal rejected: {rejected_after:.3f} s")
 
 
+@pytest.mark.slow
 def test_a_goal_is_rejected_at_once_while_a_service_request_runs(
         planner_node, client, spin_until):
     node = planner_node(default_scene="walker2d", compile_derivatives=False)

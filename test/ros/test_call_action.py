@@ -61,6 +61,7 @@ def test_call_action_prints_feedback_and_the_result(planner_node, tmp_path):
     assert any(line.split()[2:3] == ["building"] for line in err)
 
 
+@pytest.mark.slow
 def test_a_busy_node_rejects_and_ctrl_c_cancels_the_goal(node_process, tmp_path):
     """Against a `gait-planner node` process, as a user runs it. With the node inside the
     test process (`planner_node`) the Ctrl-C's cancel did not stop the plan in three

@@ -40,7 +40,9 @@ def plan(name: str, intervals_per_phase: int | None = None, base_time_step: floa
     return result
 
 
-@pytest.mark.parametrize("grid", [("compass",), ("walker2d", 4, 0.02)], ids=lambda g: g[0])
+@pytest.mark.parametrize("grid", [("compass",), pytest.param(("walker2d", 4, 0.02),
+                                                          marks=pytest.mark.slow)],
+                         ids=lambda g: g[0])
 def test_a_simulated_motion_is_reproduced_to_integration_tolerance(grid):
     """A scene's own continuous motion under its plan's torques and schedule (impacts at
     the switches, open loop: the walker falls), published as a plan with the simulated
