@@ -24,6 +24,7 @@ from typing import Callable, NoReturn, Sequence
 from gait_planner.cli.errors import CliError
 from gait_planner.cli.ros_commands import add_call_parser, add_node_parser
 from gait_planner.cli.simulate import add_simulate_parser
+from gait_planner.cli.walk import add_walk_parser
 
 PROG = "gait-planner"
 EXIT_USAGE = 2
@@ -295,6 +296,7 @@ def _prepare(args: argparse.Namespace) -> int:
 
 COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
     _add_run, _add_plan, _add_report, add_node_parser, add_call_parser, add_simulate_parser,
+    add_walk_parser,
     _add_urdf, _add_prepare)
 
 

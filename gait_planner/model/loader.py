@@ -69,6 +69,7 @@ from gait_planner.model.scene import (
 )
 
 __all__ = ["SceneError", "available_scenes", "find_scene", "load_scene", "load_scene_file",
+           "scene_from_text",
            "scene_dirs"]
 
 _log = logging.getLogger("gait_planner.model")
@@ -190,7 +191,13 @@ def load_scene_file(path: str | os.PathLike) -> Scene:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as error:
         raise SceneError(f"cannot be read: {error}", file=str(path)) from None
-    return _build_scene(parse_yaml(text, path.name), path.name, text)
+    return scene_from_text(text, path.name)
+
+
+def scene_from_text(text: str, file: str) -> Scene:
+    """Validate and build the scene whose YAML is `text`; `file` names it in errors (e.g. a
+    recording's scene attachment)."""
+    return _build_scene(parse_yaml(text, file), file, text)
 
 
 # ---------------------------------------------------------------------------- the schema

@@ -1,0 +1,100 @@
+"""``gait-planner walk RUN.mcap [--steps K] [--self-test] [--json] [--out WALK.mcap]``: walk a
+recorded plan in MuJoCo with the reference controller (`gait_planner.walk.simulate`);
+--out records the walk (`gait_planner.walk.recording`). --self-test walks it
+again with the plan's torques scaled by config/walk.yaml's self_test_scales (0 and 0.5) and
+says whether each did measurably worse (fewer half cycles or a larger feedback share).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from gait_planner.cli.errors import CliError
+
+
+def _steps(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
+def self_test(path: str, steps: int, full: dict[str, Any]) -> list[dict[str, Any]]:
+    """The walks with the plan's torques scaled down; `worse` = fewer half cycles or more
+    feedback than the full-torque walk `full`."""
+    from gait_planner.walk.simulate import load_config, walk
+
+    rows = []
+    for scale in load_config()["self_test_scales"]:
+        r = walk(path, steps, scale=float(scale))
+        worse = (r["half_cycles_walked"] < full["half_cycles_walked"]
+                 or r["feedback_share"] > full["feedback_share"])
+        rows.append({"torque_scale": scale, "half_cycles_walked": r["half_cycles_walked"],
+                     "feedback_share": r["feedback_share"], "stopped": r["stopped"],
+                     "worse": worse})
+    return rows
+
+
+def format_summary(r: dict[str, Any]) -> str:
+    lines = [f"{r['scene']} ({r['recording']}): walked {r['half_cycles_walked']} of "
+             f"{r['steps']} half cycles in {r['time_walked_s']:.3f} s: {r['stopped']}",
+             f"  joint error vs plan   RMS {r['joint_rms_deg']:.2f} deg, max "
+             f"{r['joint_max_deg']:.2f} deg",
+             f"  feedback share        {100 * r['feedback_share']:.0f} % (RMS feedback "
+             f"{r['feedback_rms_nm']:.1f} N m / RMS plan torque {r['plan_rms_nm']:.1f} N m)",
+             "  torso drift per half cycle (m, x y z): "
+             + "; ".join(" ".join(f"{v:+.3f}" for v in d) for d in r["torso_drift_m"]),
+             "  foot placement error per half cycle (m): "
+             + " ".join(f"{v:.3f}" for v in r["foot_placement_error_m"])]
+    if "out" in r:
+        lines.append(f"  recorded in {r['out']}")
+    for row in r.get("self_test", []):
+        lines.append(f"  self-test, plan torques x{row['torque_scale']:g}: "
+                     f"{row['half_cycles_walked']} half cycles, feedback share "
+                     f"{100 * row['feedback_share']:.0f} %: "
+                     f"{'worse (the check can fail)' if row['worse'] else 'NOT worse'}")
+    return "\n".join(lines)
+
+
+def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    parser = subparsers.add_parser(
+        "walk", help="walk a recorded plan in MuJoCo with a reference controller",
+        description="Load the recording's /robot_description into MuJoCo (floating base, "
+        "feet with the plan's contact points), start from node 0 and walk K half cycles "
+        "joined by the mirror with the plan's torques, joint PD and torso feedback "
+        "(config/walk.yaml).")
+    parser.add_argument("recording", metavar="RUN.mcap", help="a plan's MCAP recording")
+    parser.add_argument("--steps", type=_steps, default=10, metavar="K",
+                        help="half cycles to walk (default 10)")
+    parser.add_argument("--self-test", action="store_true",
+                        help="also walk with the plan's torques x0 and x0.5 and check they do worse")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("--out", metavar="WALK.mcap", default=None,
+                        help="record the walk: simulated joint states, feed-forward and "
+                        "feedback torques, ground forces (200 Hz)")
+    parser.set_defaults(handler=_walk_command)
+    return parser
+
+
+def _walk_command(args: argparse.Namespace) -> int:
+    from gait_planner.walk.recording import write_walk_mcap
+    from gait_planner.walk.simulate import walk
+
+    try:
+        result = walk(args.recording, args.steps, series=args.out is not None)
+        if args.out is not None:
+            result["out"] = str(write_walk_mcap(result, args.out))
+            del result["series"]
+        if args.self_test:
+            result["self_test"] = self_test(args.recording, args.steps, result)
+    except ValueError as error:
+        raise CliError(str(error)) from error
+    except OSError as error:
+        raise CliError(f"cannot write {args.out}: {error}") from error
+    print(json.dumps(result, indent=2) if args.json else format_summary(result))
+    return 0

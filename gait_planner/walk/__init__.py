@@ -1,0 +1,8 @@
+"""A recorded plan walked in MuJoCo by a reference controller (issue #25).
+
+`reference` joins the recorded half cycle with its mirror images, `mujoco_model` builds the
+walker from the recording's /robot_description with the planned feet, `controller` is the
+reference stabilising controller, `simulate.walk` runs it and summarises the walk, and
+`recording` writes the walk's MCAP. `gait-planner walk` is the command
+(`gait_planner.cli.walk`); parameters are config/walk.yaml.
+"""

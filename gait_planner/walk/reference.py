@@ -1,0 +1,128 @@
+"""The plan a walk follows: a recorded half cycle joined with its mirror images.
+
+`Reference.from_recording(rec, steps)` rebuilds the recording's scene from its attached
+scene file and joins `steps` half cycles as `gait_planner.ocp.walk_on` does (half cycle k is
+the plan mirrored k times and shifted k step lengths): director coordinates through
+`configuration_mirror`, joint angles from them, and joint rates and efforts (conjugate to
+the angles, `gait_planner.io.messages`) through the signed permutation the mirror applies
+to the angles. `at(t)` interpolates linearly between nodes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gait_planner.io.mcap_reader import RecordedPlan
+from gait_planner.model.angles import joint_angles
+from gait_planner.model.loader import scene_from_text
+from gait_planner.model.multibody import Multibody
+from gait_planner.model.scene import Scene
+from gait_planner.ocp.mirror import configuration_mirror, contact_partners
+
+__all__ = ["Reference", "scene_of"]
+
+
+def scene_of(rec: RecordedPlan) -> Scene:
+    """The planner's scene from the recording's attached scene file."""
+    name = f"{rec.metadata.get('scene', '')}.yaml"
+    return scene_from_text(rec.scene_text, name)
+
+
+def _omega(D: np.ndarray, D_dot: np.ndarray) -> np.ndarray:
+    """Angular velocity (world) of a rotation D with rate D_dot: the axial vector of
+    D_dot D^T (antisymmetrised)."""
+    W = D_dot @ D.T
+    return 0.5 * np.array([W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1]])
+
+
+def _angle_mirror(angles: np.ndarray, mirrored: np.ndarray, names) -> np.ndarray:
+    """P (na, na), mirrored = angles @ P.T: each mirrored column is +- one plan column."""
+    na = angles.shape[1]
+    P = np.zeros((na, na))
+    for i in range(na):
+        errors = [(np.abs(mirrored[:, i] - s * angles[:, j]).max(), j, s)
+                  for j in range(na) for s in (1.0, -1.0)]
+        err, j, s = min(errors)
+        if err > 1e-6:
+            raise ValueError(f"the mirror image of joint angle {names[i]!r} is no joint angle "
+                             f"of the plan (closest {names[j]!r}, off by {err:.3g} rad)")
+        P[i, j] = s
+    return P
+
+
+@dataclass(frozen=True)
+class Reference:
+    """`steps` joined half cycles: times (M,), q (M, 12 nb), angles/rates/efforts (M, na),
+    active contacts per node, the half cycle's duration and node count."""
+
+    scene: Scene
+    steps: int
+    times: np.ndarray
+    q: np.ndarray
+    angles: np.ndarray
+    rates: np.ndarray
+    efforts: np.ndarray
+    active: tuple[tuple[str, ...], ...]
+    period: float
+    step_length: float
+    root_rate0: tuple[np.ndarray, np.ndarray]  # root COM velocity, angular velocity (world) at t=0
+
+    @classmethod
+    def from_recording(cls, rec: RecordedPlan, steps: int) -> "Reference":
+        scene = scene_of(rec)
+        N = rec.n_nodes - 1
+        s = float(rec.metadata["step_length"])
+        A, shift = configuration_mirror(Multibody(scene))
+        partner = contact_partners(scene)
+        angles0 = joint_angles(scene, rec.q)
+        if np.abs(angles0 - rec.positions).max() > 1e-6:
+            raise ValueError(f"{rec.path}: the recorded joint positions are not the angles of "
+                             f"the recorded configurations of scene {scene.name!r}")
+        P = _angle_mirror(angles0, joint_angles(scene, rec.q @ A.T + s * shift), rec.joint_names)
+        period = float(rec.times[N - 1] - rec.times[0])
+        parts = {k: [] for k in ("t", "q", "r", "e", "a")}
+        q_k, r_k, e_k, a_k = rec.q, rec.velocities, rec.effort, rec.active_contacts
+        for k in range(steps):
+            keep = slice(0, N - 1) if k < steps - 1 else slice(0, N + 1)
+            parts["t"].append(rec.times[keep] + k * period)
+            parts["q"].append(q_k[keep])
+            parts["r"].append(r_k[keep])
+            parts["e"].append(e_k[keep])
+            parts["a"].extend(a_k[keep])
+            q_k, r_k, e_k = q_k @ A.T + s * shift, r_k @ P.T, e_k @ P.T
+            a_k = tuple(tuple(partner[c] for c in a) for a in a_k)
+        q = np.vstack(parts["q"])
+        # the root's rates at node 0: the mirror of the central difference at node N-1
+        i = scene.body_index(scene.root.body)
+        dt = rec.times[N] - rec.times[N - 2]
+        v = (rec.q[N, 12 * i:12 * i + 3] - rec.q[N - 2, 12 * i:12 * i + 3]) / dt
+        D = rec.q[N - 1, 12 * i + 3:12 * i + 12].reshape(3, 3).T
+        Ddot = (rec.q[N, 12 * i + 3:12 * i + 12] - rec.q[N - 2, 12 * i + 3:12 * i + 12]) / dt
+        w = _omega(D, Ddot.reshape(3, 3).T)
+        flip = np.array([1.0, -1.0, 1.0])
+        return cls(scene, steps, np.concatenate(parts["t"]), q, joint_angles(scene, q),
+                   np.vstack(parts["r"]), np.vstack(parts["e"]), tuple(parts["a"]), period, s,
+                   (v * flip, -w * flip))
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...]]:
+        """Angles, rates, efforts interpolated at time t, and the contacts held there."""
+        n = int(np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2))
+        a = float(np.clip((t - self.times[n]) / (self.times[n + 1] - self.times[n]), 0.0, 1.0))
+        mix = lambda x: (1 - a) * x[n] + a * x[n + 1]  # noqa: E731
+        return mix(self.angles), mix(self.rates), mix(self.efforts), self.active[n]
+
+    def root_at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Root COM position and director matrix D (columns d1 d2 d3) interpolated at t."""
+        i = self.scene.body_index(self.scene.root.body)
+        n = int(np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2))
+        a = float(np.clip((t - self.times[n]) / (self.times[n + 1] - self.times[n]), 0.0, 1.0))
+        row = (1 - a) * self.q[n] + a * self.q[n + 1]
+        return row[12 * i:12 * i + 3], row[12 * i + 3:12 * i + 12].reshape(3, 3).T
+
+    def root_rate_at(self, t: float, h: float) -> np.ndarray:
+        """The root's angular velocity (world) at t: central difference over +-h."""
+        _, D_next = self.root_at(t + h)
+        _, D_prev = self.root_at(t - h)
+        return _omega(self.root_at(t)[1], (D_next - D_prev) / (2 * h))

@@ -1,0 +1,211 @@
+"""Walk a recorded plan in MuJoCo and summarise how it went.
+
+`walk(path, steps, scale=1.0)` reads the recording, joins `steps` half cycles
+(`walk.reference`), builds the MuJoCo walker (`walk.mujoco_model`), starts it at node 0
+(the plan's positions and velocities) and runs the reference controller (`walk.controller`)
+with the parameters of config/walk.yaml until the last half cycle ends or the walker falls
+(torso centre of mass `height_drop` below the plan's, or its d3 `tilt` from the plan's) or
+loses tracking (a joint `joint_error` from the plan). Returns a JSON-ready summary.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from gait_planner.walk.controller import Gains, hip_legs, torso_torque
+
+__all__ = ["CONFIG", "load_config", "walk"]
+
+CONFIG = Path(__file__).resolve().parents[2] / "config" / "walk.yaml"
+
+
+_KEYS = {"simulation": ("time_step", "foot_sphere_radius", "contact_time_constant"),
+         "joints": ("kp", "kd"), "torso": ("kp", "kd"),
+         "stop": ("height_drop", "tilt", "joint_error")}
+
+
+def load_config(path: str | Path = CONFIG) -> dict[str, Any]:
+    """The controller's parameters (config/walk.yaml); ValueError naming the file and the key
+    if one is missing or not a finite number >= 0 (time_step and radius > 0)."""
+    with open(path, encoding="utf-8") as stream:
+        cfg = yaml.safe_load(stream)
+    for section, keys in _KEYS.items():
+        for key in keys:
+            value = (cfg.get(section) or {}).get(key) if isinstance(cfg, dict) else None
+            positive = key in ("time_step", "foot_sphere_radius", "contact_time_constant")
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not math.isfinite(value) or value < 0 or (positive and value == 0):
+                raise ValueError(f"{path}: {section}.{key} must be a finite number "
+                                 f"{'> 0' if positive else '>= 0'}, got {value!r}")
+    scales = cfg.get("self_test_scales")
+    if not isinstance(scales, list) or not all(isinstance(x, (int, float)) and 0 <= x < 1
+                                               for x in scales):
+        raise ValueError(f"{path}: self_test_scales must be a list of numbers in [0, 1), "
+                         f"got {scales!r}")
+    return cfg
+
+
+def _read(path: str | Path):
+    from gait_planner.io.mcap_reader import read_plan_mcap
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{path}: no such recording")
+    try:
+        return read_plan_mcap(path)
+    except ValueError:
+        raise
+    except Exception as error:  # a broken file: mcap's own errors
+        raise ValueError(f"{path}: not a readable plan recording (MCAP): "
+                         f"{type(error).__name__}: {error}") from None
+
+
+def _rms(x) -> float:
+    x = np.asarray(x, dtype=float)
+    return float(np.sqrt(np.mean(x * x))) if x.size else 0.0
+
+
+def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
+         config: dict[str, Any] | None = None, series: bool = False) -> dict[str, Any]:
+    import mujoco
+
+    from gait_planner.walk.mujoco_model import build_model
+    from gait_planner.walk.reference import Reference
+
+    if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
+        raise ValueError(f"steps must be an integer >= 1, got {steps!r}")
+    cfg = config or load_config()
+    rec = _read(path)
+    ref = Reference.from_recording(rec, steps)
+    scene = ref.scene
+    if len(scene.contacts) < 2 or len({c.body for c in scene.contacts}) == len(scene.contacts):
+        raise ValueError(f"{rec.path}: scene {scene.name!r} has no foot with two contact "
+                         f"points (heel and forefoot); walk needs feet")
+    half_width = float(rec.metadata.get("foot_half_width", 0.04575))
+    sim = cfg["simulation"]
+    wm = build_model(rec, scene, half_width, sim["foot_sphere_radius"], sim["time_step"],
+                     sim["contact_time_constant"], cfg["joints"]["kd"])
+    model, data = wm.model, mujoco.MjData(wm.model)
+    gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], cfg["torso"]["kp"], cfg["torso"]["kd"])
+    legs = hip_legs(scene, rec.joint_names)
+    root_id = model.body(wm.root).id
+    jnt_ids = np.array([model.joint(n).id for n in rec.joint_names])
+
+    phi, D = ref.root_at(0.0)
+    v0, w0 = ref.root_rate0
+    if wm.planar:
+        data.qpos[:3] = phi[0], phi[2], math.atan2(D[0, 2], D[2, 2])
+        data.qvel[:3] = v0[0], v0[2], w0[1]
+    else:
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, D.reshape(-1))
+        data.qpos[:7] = np.r_[phi, quat]
+        data.qvel[:6] = np.r_[v0, D.T @ w0]
+    data.qpos[wm.qpos] = ref.angles[0]
+    data.qvel[wm.dof] = ref.rates[0]
+    mujoco.mj_forward(model, data)
+
+    stop = cfg["stop"]
+    h = model.opt.timestep
+    t_end = steps * ref.period
+    errs, ffs, fbs, plans = [], [], [], []
+    trace: dict[str, list] = {k: [] for k in ("time", "position", "velocity", "torso",
+                                              "torso_ref", "ground_force",
+                                              "contact_position")}
+    force = np.zeros(6)
+    contact_ids = [model.body(c.name).id for c in scene.contacts]
+    ground = model.geom("ground").id
+    drift, placement, boundaries = [], [], 1
+    reason, vel = "completed", np.zeros(6)
+    ci = {c.name: (scene.body_index(c.body), np.asarray(scene.body(c.body).points[c.point]))
+          for c in scene.contacts}
+    while data.time < t_end - 0.5 * h:
+        t = data.time
+        a_ref, r_ref, e_ref, active = ref.at(t)
+        phi_ref, D_ref = ref.root_at(t)
+        w_ref = ref.root_rate_at(t, h)
+        qj, vj = data.qpos[wm.qpos], data.qvel[wm.dof]
+        D_sim = data.xmat[root_id].reshape(3, 3)
+        mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_BODY, root_id, vel, 0)
+        fb = gains.kp * (a_ref - qj) + gains.kd * (r_ref - vj)
+        stance = [idx for idx, contacts in legs if contacts & set(active)]
+        for idx in stance:
+            axes = data.xaxis[jnt_ids[idx]]
+            fb[idx] += torso_torque(gains, D_sim, D_ref, vel[:3], w_ref, axes) / len(stance)
+        data.qfrc_applied[:] = 0.0
+        # -kd vj is MuJoCo's (implicit) joint damping (walk.mujoco_model)
+        data.qfrc_applied[wm.dof] = scale * e_ref + fb + gains.kd * vj
+        errs.append(a_ref - qj)
+        ffs.append(scale * e_ref)
+        fbs.append(fb)
+        plans.append(e_ref)
+        mujoco.mj_step(model, data)
+        if series:
+            trace["time"].append(data.time)
+            trace["position"].append(data.qpos[wm.qpos].copy())
+            trace["velocity"].append(data.qvel[wm.dof].copy())
+            trace["torso"].append(np.r_[data.xpos[root_id], data.xmat[root_id]])
+            trace["torso_ref"].append(np.r_[phi_ref, D_ref.reshape(-1)])
+            per_point = np.zeros((len(contact_ids), 3))
+            for c in range(data.ncon):
+                geoms = (data.contact[c].geom1, data.contact[c].geom2)
+                body = model.geom_bodyid[geoms[1] if geoms[0] == ground else geoms[0]]
+                mujoco.mj_contactForce(model, data, c, force)
+                # the ground's force on the foot, world: the contact frame's rows are its axes,
+                # the first the normal, pointing from geom1 to geom2
+                f = data.contact[c].frame.reshape(3, 3).T @ force[:3]
+                per_point[contact_ids.index(body)] += f if geoms[0] == ground else -f
+            trace["ground_force"].append(per_point)
+            trace["contact_position"].append(data.xpos[contact_ids].copy())
+        # the checks, after the step
+        com = data.xpos[root_id]
+        tilt = math.degrees(math.acos(np.clip(data.xmat[root_id].reshape(3, 3)[:, 2] @ D_ref[:, 2],
+                                              -1, 1)))
+        worst = int(np.argmax(np.abs(errs[-1])))
+        if com[2] < phi_ref[2] - stop["height_drop"]:
+            reason = (f"fall: torso centre of mass {com[2]:.3f} m high, "
+                      f"{phi_ref[2] - com[2]:.3f} m below the plan at t = {data.time:.3f} s")
+        elif tilt > stop["tilt"]:
+            reason = f"fall: torso tilted {tilt:.1f} deg from the plan at t = {data.time:.3f} s"
+        elif abs(math.degrees(errs[-1][worst])) > stop["joint_error"]:
+            reason = (f"lost tracking: {rec.joint_names[worst]} "
+                      f"{math.degrees(errs[-1][worst]):+.1f} deg from the plan at t = "
+                      f"{data.time:.3f} s")
+        if reason != "completed":
+            break
+        if data.time >= boundaries * ref.period - 0.5 * h:
+            phi_b, _ = ref.root_at(data.time)
+            drift.append((com - phi_b).tolist())
+            n = int(np.argmin(np.abs(ref.times - data.time)))
+            q_n = ref.q[n]
+            worst_foot = 0.0
+            for c in ref.active[n]:
+                i, p = ci[c]
+                planned = q_n[12 * i:12 * i + 3] + q_n[12 * i + 3:12 * i + 12].reshape(3, 3).T @ p
+                worst_foot = max(worst_foot, float(np.linalg.norm(
+                    data.xpos[model.body(c).id] - planned)))
+            placement.append(worst_foot)
+            boundaries += 1
+    if series:
+        extra = {"joint_names": list(rec.joint_names),
+                 "contact_names": [c.name for c in scene.contacts], "feedforward": np.array(ffs),
+                 "feedback": np.array(fbs), **{k: np.array(v) for k, v in trace.items()}}
+    errs_deg = np.degrees(np.array(errs)) if errs else np.zeros((0, len(rec.joint_names)))
+    return {
+        "recording": str(rec.path), "scene": scene.name, "steps": steps,
+        "torque_scale": scale,
+        "half_cycles_walked": len(drift), "time_walked_s": round(float(data.time), 4),
+        "stopped": reason,
+        "joint_rms_deg": _rms(errs_deg), "joint_max_deg": float(np.abs(errs_deg).max(initial=0)),
+        "feedback_share": _rms(fbs) / max(_rms(plans), 1e-12),
+        "feedforward_rms_nm": _rms(ffs), "feedback_rms_nm": _rms(fbs), "plan_rms_nm": _rms(plans),
+        "torso_drift_m": drift, "foot_placement_error_m": placement,
+        "controller": {"joints": cfg["joints"], "torso": cfg["torso"],
+                       "simulation": sim, "foot_half_width": half_width},
+        **({"series": extra} if series else {}),
+    }

@@ -1,0 +1,100 @@
+"""gait-planner walk: a recorded plan walked in MuJoCo by the reference controller.
+
+Measured with config/walk.yaml as committed: walker2d's default plan walks 10 of 10 half
+cycles (feedback share 0.71, joint RMS 2.0 deg, the torso 0.37 m behind the plan at the
+end); with the plan's torques x0 it walks 1 (share 2.6), x0.5 2 (2.2). walker3d's walks 1
+(not tested here; the issue's target of 10 with a share <= 0.4 is not reached yet).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from gait_planner.cli import main
+
+pytest.importorskip("mujoco")
+
+
+@pytest.fixture(scope="module")
+def walker2d_plan(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("walk") / "w2.mcap"
+    exe = Path(sys.executable).with_name("gait-planner")
+    subprocess.run([str(exe), "plan", "--scene", "walker2d", "--out", str(out)], check=True,
+                   capture_output=True)
+    return out
+
+
+@pytest.mark.slow
+def test_walker2d_default_plan_walks_and_the_self_test_does_worse(walker2d_plan):
+    from gait_planner.cli.walk import self_test
+    from gait_planner.walk.simulate import walk
+
+    full = walk(walker2d_plan, 10)
+    assert full["half_cycles_walked"] == 10 and full["stopped"] == "completed", full["stopped"]
+    assert full["feedback_share"] < 0.8 and full["joint_rms_deg"] < 3.0
+    assert len(full["torso_drift_m"]) == full["half_cycles_walked"]
+    rows = self_test(str(walker2d_plan), 10, full)
+    zero = next(r for r in rows if r["torque_scale"] == 0)
+    assert zero["half_cycles_walked"] < full["half_cycles_walked"]
+    assert all(r["worse"] for r in rows)
+
+
+def test_one_half_cycle_of_walker2d_is_walked_and_recorded(walker2d_plan, tmp_path, capsys):
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    out = tmp_path / "walk.mcap"
+    assert main(["walk", str(walker2d_plan), "--steps", "1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "walked 1 of 1 half cycles" in text and "completed" in text
+    with out.open("rb") as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        decoded = [(c.topic, m) for _, c, _, m in reader.iter_decoded_messages()]
+        meta = {r.name: r.metadata for r in reader.iter_metadata()}
+    topics = {t for t, _ in decoded}
+    assert topics == {"/walk/joint_states", "/walk/feedforward", "/walk/feedback",
+                      "/walk/contact_forces"}
+    states = [m for t, m in decoded if t == "/walk/joint_states"]
+    assert len(states) == 117 and list(states[0].name)[0] == "hip_r"  # 0.585 s at 200 Hz
+    ff = [m for t, m in decoded if t == "/walk/feedforward"]
+    fb = [m for t, m in decoded if t == "/walk/feedback"]
+    k = 50  # the recorded torque is the sum of its parts
+    assert max(abs(a - b - c) for a, b, c in zip(states[k].effort, ff[k].effort,
+                                                 fb[k].effort)) < 1e-9
+    weight = sum(sum(f.z for f in m.forces) for t, m in decoded if t == "/walk/contact_forces")
+    assert weight / len(states) > 300  # the ground carries the walker (about 530 N)
+    assert meta["gait_planner.walk"]["half_cycles_walked"] == "1"
+
+
+def test_a_broken_recording_gets_a_clear_error(tmp_path, walker2d_plan, capsys):
+    broken = tmp_path / "broken.mcap"
+    broken.write_bytes(walker2d_plan.read_bytes()[:2000])
+    assert main(["walk", str(broken)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("gait-planner: error: ") and str(broken) in err
+    assert main(["walk", str(tmp_path / "missing.mcap")]) == 2
+    assert "no such recording" in capsys.readouterr().err
+
+
+def test_a_scene_without_feet_is_refused(tmp_path, capsys):
+    out = tmp_path / "compass.mcap"
+    exe = Path(sys.executable).with_name("gait-planner")
+    subprocess.run([str(exe), "plan", "--scene", "compass", "--out", str(out)], check=True,
+                   capture_output=True)
+    assert main(["walk", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "scene 'compass'" in err and "heel and forefoot" in err
+
+
+def test_a_bad_controller_config_names_the_key(tmp_path):
+    from gait_planner.walk.simulate import CONFIG, load_config
+
+    assert load_config()["joints"]["kp"] > 0
+    bad = tmp_path / "walk.yaml"
+    bad.write_text(CONFIG.read_text().replace("kd: 300.0", "kd: -1"))
+    with pytest.raises(ValueError, match=r"walk.yaml: torso.kd must be a finite number >= 0"):
+        load_config(bad)
