@@ -105,6 +105,7 @@ class Checker:
     def __init__(self, file: str):
         self.file = file
         self.warnings: list[str] = []  # logged by the loader once the whole scene is valid
+        self.notes: list[str] = []  # what the file acknowledged (logged at INFO level)
 
     def fail(self, key: str, reason: str) -> NoReturn:
         raise SceneError(reason, file=self.file, key=key or "(top level)")

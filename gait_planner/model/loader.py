@@ -5,7 +5,9 @@ Configuration enters here once: `load_scene(name)` (a bare name, looked up in
 line's --scene) or `load_scene_file(path)` returns a `gait_planner.model.scene.Scene` whose
 every field has been checked, or raises `SceneError` naming the file, the key path and the
 reason, e.g. ``walker3d.yaml: bodies[2].mass: must be a positive number, got -1.0``.
-A scene's warnings (e.g. a non-physical inertia it allows) are logged once per process.
+A scene's warnings are logged once per process; what the file itself acknowledges (a
+non-physical inertia under ``allow_nonphysical_inertia: true``) is logged at INFO level only,
+so that commands do not repeat it to a user who chose it.
 
 YAML layout (exactly these keys; unknown keys are errors)::
 
@@ -13,7 +15,7 @@ YAML layout (exactly these keys; unknown keys are errors)::
                                       # file name is what a bare name looks up
     description: "..."                # optional
     gravity: 9.81                     # optional, >= 0
-    allow_nonphysical_inertia: false  # optional; true accepts E_i < 0 with a warning
+    allow_nonphysical_inertia: false  # optional; true accepts E_i < 0 (noted at INFO level)
     root: {body: torso, type: free}   # free | planar
     bodies:                           # order kept
       - {name: torso, mass: 33.99, inertia: [J1, J2, J3], length: 0.66,  # length optional
@@ -244,10 +246,11 @@ def _build_scene(data: Any, file: str, source: str) -> Scene:
             check_posture(scene, gait.options)
         except PostureError as err:
             c.fail(join("gait.options", err.option), err.reason)
-    for warning in c.warnings:
-        if warning not in _warned:  # once per process: a scene is loaded by several parts
-            _warned.add(warning)
-            _log.warning("%s", warning)
+    for level, messages in ((logging.WARNING, c.warnings), (logging.INFO, c.notes)):
+        for message in messages:
+            if message not in _warned:  # once per process: a scene is loaded by several parts
+                _warned.add(message)
+                _log.log(level, "%s", message)
     return scene
 
 
@@ -294,7 +297,7 @@ def _check_inertia(c: Checker, body: Body, key: str, allow_nonphysical: bool) ->
     )
     if not allow_nonphysical:
         c.fail(key, reason + "; fix the inertia or set allow_nonphysical_inertia: true")
-    c.warnings.append(f"{c.file}: {key}: {reason}; loading it because "
+    c.notes.append(f"{c.file}: {key}: {reason}; loading it because "
                       f"allow_nonphysical_inertia is true")
 
 
