@@ -3,7 +3,7 @@
 `gait_planner.ocp.plan` returns a `PlanResult`; MCAP, rerun and ROS messages only consume
 it (`gait_planner.io.messages` owns the conversion to message layouts).
 
-Node and interval conventions (DESIGN.md section 7): nodes n = 0 .. N, intervals
+Node and interval conventions (docs/design.md section 7): nodes n = 0 .. N, intervals
 n = 0 .. N-1 between t_n and t_{n+1}. Joint torques are node values tau[n], linear in
 time between nodes; node n's discrete equation applies (h_{n-1} + h_n)/2 B^T(q_n) tau[n]
 (`gait_planner.ocp.transcription`). Nodes N-1 and N

@@ -11,7 +11,7 @@ Coordinates theta (n = Multibody.ndof), in this order:
 
 q(theta) builds every triad from these rotations and every child's centre of mass from
 its joint condition (as `angles.configuration`), so it satisfies every internal and joint
-constraint identically and J = dq/dtheta (k, n) is a null space matrix of G (DESIGN.md
+constraint identically and J = dq/dtheta (k, n) is a null space matrix of G (docs/design.md
 section 4). With the constant director mass matrix M = diag(`Multibody.mass_diagonal`)
 the Lagrangian is L(theta, w) = 1/2 (J w)^T M (J w) - V(q(theta)), and its Euler-Lagrange
 equations with the generalised forces J^T (B^T(q) tau + f) (actuation as
@@ -43,7 +43,7 @@ E_X, E_Y, E_Z = (ca.DM(np.eye(3)[i]) for i in range(3))
 
 def _chart_limits(mb: Multibody) -> np.ndarray:
     """(n,) bound on |theta_i| (inf: none) keeping the Cardan charts away from their gimbal
-    lock (DESIGN.md section 5: an unbounded chart gave wrong answers that looked
+    lock (docs/design.md section 5: an unbounded chart gave wrong answers that looked
     converged): the free root's pitch and every spherical joint's roll, 80 deg."""
     limit = np.full(mb.ndof, np.inf)
     if mb.scene.root.type is RootType.FREE:

@@ -18,7 +18,7 @@ product (paper eqs. 7-9), and the half cycle lasts t_K. What each field holds:
   product's node force carries it, so that the central differences of the verifier see
   the velocity jump and the force that makes it. Node 0 is the image of node K, node K+1
   of node 1 (`ocp.solution._mirror_forces`);
-* generalized_force: w_n B^T(q_n) tau_n (N s), the product's definition (DESIGN.md section
+* generalized_force: w_n B^T(q_n) tau_n (N s), the product's definition (docs/design.md section
   7), so the actuation checks read the torques the same way; it is not a quantity of the
   collocation's equations, which apply tau continuously;
 * kinetic_energy: 1/2 w^T M(theta) w at the knots (after impacts), not interval averages;

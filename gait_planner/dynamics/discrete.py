@@ -1,6 +1,6 @@
 """Discrete mechanics of a `Multibody`: the variational integrator's named Functions.
 
-Paper section 3 (Koch & Leyendecker 2015, eqs. 1-2), DESIGN.md section 3. Shapes: k = 12 nb
+Paper section 3 (Koch & Leyendecker 2015, eqs. 1-2), docs/design.md section 3. Shapes: k = 12 nb
 configuration entries, nt joint torque components, ndof generalised velocities; h in s.
 
 * ``discrete_lagrangian``  L_d(q0, q1, h) = h/2 v^T M v - h/2 (V(q0) + V(q1)),

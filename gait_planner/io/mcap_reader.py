@@ -3,7 +3,7 @@
 `read_plan_mcap(path)` decodes the recording with mcap + mcap_ros2 (the schemas stored in
 the file) and returns a `RecordedPlan`. It is what independent checks of recorded plans
 use, so it deliberately shares no code with the writer (`gait_planner.io.mcap_writer`,
-`messages`, `ros_definitions`, `urdf`): the topic names below restate DESIGN.md section 7.
+`messages`, `ros_definitions`, `urdf`): the topic names below restate docs/design.md section 7.
 """
 
 from __future__ import annotations

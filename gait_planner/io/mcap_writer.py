@@ -1,4 +1,4 @@
-"""One MCAP recording per plan, ROS 2 profile, as rosbag2 would write it (DESIGN.md sec. 7).
+"""One MCAP recording per plan, ROS 2 profile, as rosbag2 would write it (docs/design.md sec. 7).
 
 `write_plan_mcap(result, path)` writes
 
@@ -105,7 +105,7 @@ def _number(x: float) -> str:
 def plan_metadata(result: PlanResult) -> dict[str, str]:
     """The string key-value pairs of the ``gait_planner.plan`` metadata record.
 
-    Keys of DESIGN.md section 7 (scene, cost, cost_value, step_length, duration,
+    Keys of docs/design.md section 7 (scene, cost, cost_value, step_length, duration,
     friction_coefficient, phase_scaling (comma-separated), solve_time_s, iterations, nodes),
     periodicity (result.settings["periodicity"] if given, else `DEFAULT_PERIODICITY`),
     success, message, solver_status, max_constraint_violation, max_dynamics_residual,

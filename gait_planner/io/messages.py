@@ -3,7 +3,7 @@
 The one place that converts a plan into messages. The MCAP writer serialises these dicts
 (`gait_planner.io.mcap_writer.CdrEncoder`, which refuses a dict whose keys differ from the
 type's fields), and the ROS node copies them into rclpy messages with `fill_message`.
-Field names are exactly those of the .msg/.srv definitions (DESIGN.md section 7);
+Field names are exactly those of the .msg/.srv definitions (docs/design.md section 7);
 builtin_interfaces/Time and Duration are ``{"sec": int, "nanosec": int}``; arrays are
 lists of Python floats/ints/strs.
 

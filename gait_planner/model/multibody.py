@@ -16,7 +16,7 @@ Named CasADi Functions (one definition each, used by simulation, optimisation an
   r (k,) onto the generalised velocities, by reverse-mode differentiation of the velocity
   map (subtree wrenches accumulated leaves to root) instead of forming P
 * ``reparametrise``  F_d(u, q) -> q_next: nodal reparametrisation, g(F_d(u, q)) = 0 for
-  every u (paper section 3; DESIGN.md section 4)
+  every u (paper section 3; docs/design.md section 4)
 * ``actuation``    B^T(q) -> (k, nt): director forces of the joint torques (paper section 2)
 * ``actuation_force``  (q, tau) -> B^T(q) tau (k,), without forming B^T (half the operations)
 """
@@ -270,6 +270,6 @@ class Multibody:
 
     @cached_property
     def mass_matrix(self) -> np.ndarray:
-        """The constant (k, k) mass matrix of DESIGN.md section 1 (not positive definite
+        """The constant (k, k) mass matrix of docs/design.md section 1 (not positive definite
         when a body's inertia violates the triangle inequality)."""
         return np.diag(self.mass_diagonal)

@@ -54,7 +54,7 @@ class Body:
 
     @property
     def euler_tensor(self) -> Vec3:
-        """Euler-tensor values E_i = (J1 + J2 + J3)/2 - J_i (DESIGN.md section 1)."""
+        """Euler-tensor values E_i = (J1 + J2 + J3)/2 - J_i (docs/design.md section 1)."""
         half = 0.5 * sum(self.inertia)
         return tuple(half - j for j in self.inertia)  # type: ignore[return-value]
 

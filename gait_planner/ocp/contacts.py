@@ -4,7 +4,7 @@ A phase holds a set of contact points. Points on different bodies are independen
 points of one body held together form a full contact (the body's pose is fixed: 6
 independent rows in 3D, 3 in planar scenes). All contact rows are linear in q (a point's
 world position is x = C q; the foot's roll is the z component of its director d2), so a
-held contact is the chain condition C (q_{n+1} - q_n) = 0 over an interval (DESIGN.md
+held contact is the chain condition C (q_{n+1} - q_n) = 0 over an interval (docs/design.md
 section 5: no redundant rows), and the contact force of node n enters its discrete
 Euler-Lagrange equation as +(h_{n-1} + h_n)/2 C^T lambda_n: lambda is the force the ground
 exerts on the body (the multiplier of the paper's eq. 1 is its negative).

@@ -1,7 +1,7 @@
 """Joint-range path constraints: every joint angle of `gait_planner.model.angles` kept in
 a declared interval, written as one row with two bounds per angle of the relative rotation.
 
-Minimal kinetic energy alone leaves light bodies free to turn far (DESIGN.md section 5: a
+Minimal kinetic energy alone leaves light bodies free to turn far (docs/design.md section 5: a
 foot spun 143 deg about the shank when nothing held it), so a scene declares ranges,
 e.g. ``joint_limits: {ankle_r_yaw: [-20, 20], knee_r: [0, 70]}`` (degrees) in its gait
 options, checked (and converted to radians) by `gait_planner.model.posture` when the scene

@@ -5,7 +5,7 @@ h_n = sigma_{phase(n)} * base_time_step). Phase k owns a run of intervals; the c
 holds are held on each of its intervals (chain condition) and their forces act in the
 equation of every node that starts one of its intervals, so a contact's force is zero at
 the node where it is released and carries the plastic impact at the node where it is
-established (DESIGN.md section 7).
+established (docs/design.md section 7).
 
 Unknowns (scaled to O(1)):
 * u_n (ndof,) for the free nodes n = 0..N-2: the configuration q_n = F_d(u_n, qref_n) is

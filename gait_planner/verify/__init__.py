@@ -5,13 +5,13 @@ no code with the writer), rebuilds the mechanics from the scene file attached to
 YAML, parsed here) and re-derives everything in numpy. It deliberately imports nothing of
 `gait_planner.model.multibody`, `gait_planner.dynamics` or `gait_planner.ocp`: constraints,
 their Jacobian, the mass matrix, gravity, the discrete Euler-Lagrange equations and the
-mirror map are written again from DESIGN.md sections 1-3 and 5-7, so an error in the
+mirror map are written again from docs/design.md sections 1-3 and 5-7, so an error in the
 transcription cannot hide itself. `verify_result(result)` records a `PlanResult` with the
 real writer into a temporary file and verifies that file (tests always go through the
 recording). ``python -m gait_planner.verify RUN.mcap`` prints the report (exit status 0 if
 every check passed, 1 if one failed, 2 if the file cannot be read).
 
-Conventions (DESIGN.md section 7, the planner's documented conventions):
+Conventions (docs/design.md section 7, the planner's documented conventions):
 nodes 0..N, interval n from t_n to t_{n+1}, h_n = t_{n+1} - t_n. ``active_contacts[n]``
 (n < N) are the points held on interval n: they do not move from q_n to q_{n+1}, sit at
 z = 0, and their published forces (ground on foot, N, world) act in the equation of node n.

@@ -9,7 +9,7 @@ the tree `verify.continuous.build_model`'s).
 * Held contacts are holonomic constraints p_c(q) = p_c0 anchored where the point is when
   the constraint starts: a body holding a single point is held at that point (3 rows); a
   body holding two or more points (full contact) is fixed entirely (6 rows, the frame of its
-  first held point: DESIGN.md section 2, two points would leave the roll about the heel-toe
+  first held point: docs/design.md section 2, two points would leave the roll about the heel-toe
   line free). Planar scenes (free-flyer root, every joint about the lateral axis y) keep the
   in-plane rows only (point: x, z; full contact: x, z, rotation about y) and add the
   planar-root rows (root COM y = the scene's y, no rotation about x or z): with them the

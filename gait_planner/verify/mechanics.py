@@ -1,4 +1,4 @@
-"""The scene and mechanics of the independent verifier, written from DESIGN.md sections 1-3 and 5-6 in numpy; nothing here comes from gait_planner.model, .dynamics or .ocp."""
+"""The scene and mechanics of the independent verifier, written from docs/design.md sections 1-3 and 5-6 in numpy; nothing here comes from gait_planner.model, .dynamics or .ocp."""
 
 from __future__ import annotations
 
@@ -115,7 +115,7 @@ def _perpendicular(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 class Mechanics:
-    """Director-coordinate mechanics of a `SceneData`, in numpy (DESIGN.md sections 1-3).
+    """Director-coordinate mechanics of a `SceneData`, in numpy (docs/design.md sections 1-3).
 
     q (k,) = per body (phi, d1, d2, d3), bodies in scene order. Every function accepts
     real or complex q (complex-step differentiation of `constraint_values`)."""

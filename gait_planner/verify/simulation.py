@@ -5,7 +5,7 @@ integrated with scipy's DOP853, and how far the simulated motion drifts from the
 Works on any `PlanResult` (DMOCC or collocation) of any scene; `physics_error(result,
 reset=...)` is the API.
 
-* Schedule: interval n (t_n .. t_{n+1}) holds active_contacts[n] (DESIGN.md section 7); a
+* Schedule: interval n (t_n .. t_{n+1}) holds active_contacts[n] (docs/design.md section 7); a
   segment is a maximal run of intervals holding the same contacts, simulated from its first
   node to its last (nodes 0 .. N, the last interval being the periodic continuation).
 * Torques: the node torques tau[n], linear in time between nodes (`result.py`), converted

@@ -1,4 +1,4 @@
-"""Structure preservation of the variational integrator (DESIGN.md section 3).
+"""Structure preservation of the variational integrator (docs/design.md section 3).
 
 * Without gravity and with random internal joint torques, 10^4 steps: the conserved
   components of linear and angular momentum (all for a free root; L_x, L_z, J_y for a

@@ -1,4 +1,4 @@
-"""The variational integrator's Functions against the closed forms of DESIGN.md section 3,
+"""The variational integrator's Functions against the closed forms of docs/design.md section 3,
 and simulated trajectories against the full (redundant, 12 nb-dimensional) equations.
 
 * L_d, D1 L_d = -M v - h/2 grad V(q0), D2 L_d = +M v - h/2 grad V(q1) at random q0, q1, h,

@@ -34,7 +34,7 @@ RERUN = Path(sys.executable).with_name("rerun")
 
 
 def expected_messages(result, start_ns: int) -> dict[str, list[dict[str, Any]]]:
-    """topic -> the message dicts the recording must hold (DESIGN.md section 7)."""
+    """topic -> the message dicts the recording must hold (docs/design.md section 7)."""
     tree = kinematic_tree(result.scene)
     return {
         "/robot_description": [messages.robot_description(result)],

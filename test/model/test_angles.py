@@ -159,6 +159,6 @@ def test_initial_poses_stand_on_the_ground(any_model):
     for contact in scene.contacts:
         assert point(mb, q, contact.body, contact.point)[2] == pytest.approx(0.0, abs=1e-12)
     if scene.name.startswith("walker"):
-        # the torso's centre of mass at the height DESIGN.md section 6 implies
+        # the torso's centre of mass at the height docs/design.md section 6 implies
         assert q[2] == pytest.approx(0.0133 + 0.0502 + 0.1810 + 0.1943 + 0.2803 + 0.1779
                                      + 0.2398, abs=1e-12)

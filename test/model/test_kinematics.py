@@ -1,6 +1,6 @@
 """Director kinematics of every scene: constraints, null space, reparametrisation, actuation.
 
-Properties of DESIGN.md sections 1-4 at random configurations q = F_d(u0, q_initial) with
+Properties of docs/design.md sections 1-4 at random configurations q = F_d(u0, q_initial) with
 hypothesis-drawn increments (rotations up to 3 rad per joint, so far from the upright pose):
 
 * F_d keeps every internal and joint constraint: g(F_d(u, q)) = 0 to round-off for any u;
@@ -24,7 +24,7 @@ from gait_planner.model.angles import configuration
 
 ROUND_OFF = 1e-12
 SCENES = ("compass", "walker2d", "walker3d")
-EXPECTED_SIZES = {  # (k, m, ndof): DESIGN.md section 2 for walker3d
+EXPECTED_SIZES = {  # (k, m, ndof): docs/design.md section 2 for walker3d
     "compass": (24, 20, 4),
     "walker2d": (84, 75, 9),
     "walker3d": (84, 64, 20),

@@ -1,4 +1,4 @@
-"""gait_planner_msgs: the generated types follow the interface contract (DESIGN.md section 7)
+"""gait_planner_msgs: the generated types follow the interface contract (docs/design.md section 7)
 and survive CDR serialisation with non-trivial values."""
 
 from __future__ import annotations
