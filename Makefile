@@ -10,7 +10,7 @@ PYTHON := $(VENV)/bin/python
 PYTEST_ARGS ?=
 FUZZ_EXAMPLES ?= 1000
 
-.PHONY: setup test test-slow test-all fuzz run bench bench-quick clean distclean
+.PHONY: setup test test-slow test-all fuzz run docs bench bench-quick clean distclean
 
 setup:
 	@tools/setup.sh $(VENV)
@@ -28,6 +28,13 @@ fuzz: setup
 
 run: setup
 	$(VENV)/bin/gait-planner run
+
+# `docs` plans the default requests again, takes the README's screenshot with Debian's
+# chromium (`SCREENSHOT=` keeps the old one) and rewrites every generated number in README.md
+# and docs/ from benchmarks/results/*.json (tools/docs.py; 1 to 3 min on 2 cores).
+SCREENSHOT ?= --screenshot
+docs: setup
+	$(PYTHON) tools/docs.py --plan $(SCREENSHOT)
 
 # Benchmarks (benchmarks/README.md): `bench` rewrites benchmarks/REPORT.md and
 # benchmarks/results/*.json (~30 min on 2 cores); `bench-quick` is a smoke run (~3 min)

@@ -41,6 +41,8 @@ def main() -> None:
                         help="override a gait option (VALUE in JSON)")
     parser.add_argument("--half-cycle", type=float,
                         help="s at sigma = 1; base time step = this / (intervals in all phases - 1)")
+    parser.add_argument("--json", metavar="NAME",
+                        help="also write the rows to benchmarks/results/NAME.json")
     args = parser.parse_args()
     overrides = {}
     for item in args.set:
@@ -74,6 +76,14 @@ def main() -> None:
         print(f"| {n} | {dt:.5g} | {r.success} | {r.cost_value:.4f} | {2 * r.cost_value:.4f} | "
               f"{r.duration:.4f} | {sigma} | {r.stats.iterations} | {r.stats.build_time:.1f} | "
               f"{r.stats.solve_time:.1f} | {error:.2e} | {order} |", flush=True)
+    if args.json:
+        from results_io import write_results
+
+        print(write_results(args.json, [
+            {"intervals": n, "base_time_step": dt, "success": r.success, "cost": r.cost_value,
+             "duration": r.duration, "phase_scaling": list(r.phase_scaling),
+             "iterations": r.stats.iterations} for n, dt, r in rows],
+            {"scene": args.scene, "overrides": overrides, "compiled": args.compile}))
 
 
 if __name__ == "__main__":

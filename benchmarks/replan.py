@@ -28,6 +28,8 @@ def main() -> None:
     parser.add_argument("--scene", default="walker2d")
     parser.add_argument("--compile", action=argparse.BooleanOptionalAction, default=True,
                         help="compiled derivatives (default; --no-compile: CasADi's)")
+    parser.add_argument("--json", metavar="NAME",
+                        help="also write the rows to benchmarks/results/NAME.json")
     args = parser.parse_args()
     print(f"# {platform.node()} {platform.processor() or platform.machine()} "
           f"{time.strftime('%Y-%m-%d %H:%M')}, {args.scene}")
@@ -38,6 +40,7 @@ def main() -> None:
           f"J {base.cost_value:.4f}")
     built = next(iter(planner._built.values()))
     stored = list(built.stored)
+    rows = []
     print("| request | start | success | iterations | solve s | J | how |")
     print("|---|---|---|---|---|---|---|")
     for name, value in REQUESTS:
@@ -48,6 +51,15 @@ def main() -> None:
             print(f"| {name} {value} | {'warm' if warm else 'cold'} | {r.success} | "
                   f"{r.stats.iterations} | {r.stats.solve_time:.2f} | {r.cost_value:.4f} | "
                   f"{r.settings.get('initial_guess', r.message)} |", flush=True)
+            rows.append({"field": name, "value": value, "start": "warm" if warm else "cold",
+                         "success": r.success, "iterations": r.stats.iterations,
+                         "solve_s": r.stats.solve_time, "cost": r.cost_value})
+    if args.json:
+        from results_io import write_results
+
+        print(write_results(args.json, rows, {
+            "scene": args.scene, "compiled": args.compile, "default_cost": base.cost_value,
+            "default_iterations": base.stats.iterations}))
 
 
 if __name__ == "__main__":

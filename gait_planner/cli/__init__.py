@@ -168,8 +168,8 @@ def _run(args: argparse.Namespace) -> int:
           f"half cycle {data['duration']:.4f} s, sigma = {sigma}")
     print("the paper (Koch & Leyendecker 2015): J = 41.2256 J s, half cycle 0.5988 s, "
           "sigma = 1.5000, 1.5000, 1.4889, 1.4724")
-    print("(README, 'Results': the paper's J is close to our 2 J; its grid, bounds and path "
-          "constraints are unknown)")
+    print("(docs/results.md, \"The paper's gait\": the paper's J is close to our 2 J; its "
+          "grid, bounds and path constraints are unknown)")
     viewer = shutil.which("rerun") or os.path.join(os.path.dirname(sys.executable), "rerun")
     shown = data["rrd"] or data["mcap"]
     if not args.no_viewer and os.environ.get("DISPLAY") and os.path.exists(viewer):
