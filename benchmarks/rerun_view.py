@@ -1,4 +1,4 @@
-"""The picture of the rerun view in the README: walker3d's plan in rerun's web viewer.
+"""The picture of the rerun view at the top of README.md (`make docs` retakes it): walker3d's plan in rerun's web viewer.
 
 Usage: .venv/bin/python benchmarks/rerun_view.py [--rrd FILE] [--out benchmarks/rerun_view.png]
                                                  [--time 0.4]

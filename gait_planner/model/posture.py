@@ -1,7 +1,7 @@
 """Posture options of a gait, checked: the one place that says what a valid posture is.
 
-A scene's ``gait.options`` may declare the posture a walker keeps (README, "Gait options a
-scene may declare"); both angle options are in degrees:
+A scene's ``gait.options`` may declare the posture a walker keeps (docs/user-guide.md,
+"Gait options"); both angle options are in degrees:
 
 * ``joint_limits: {angle name: [lower, upper]}``: any joint angle of the scene
   (`gait_planner.model.angles` convention, e.g. ``knee_r: [0, 75]``), each bound within

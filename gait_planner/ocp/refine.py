@@ -8,7 +8,7 @@ hard around toe-off (hip and knee at 110-130 rad/s^2, the light ankle at up to 6
 the default 15 ms intervals it misses the certificate (0.47 % of the peak torque against
 0.2 %). The same local minimum on intervals half as long (refined from that plan) passes
 it, 0.099 %, with J 1018.46 instead of 1021.28 J s; planned cold on the fine grid IPOPT finds
-another minimum (J 1336, 0.34 %). Measured 2026-11-23 (README, "Grid refinement").
+another minimum (J 1336, 0.34 %). Measured 2026-11-23 (benchmarks/HISTORY.md, "Grid refinement").
 
 The fine start keeps the coarse plan where the grids share nodes: fine node n sits at
 coarse node n / factor; its reference configuration (`Transcription.Qref`, which must

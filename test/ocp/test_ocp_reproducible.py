@@ -40,7 +40,7 @@ def test_numpy_kernels_are_pinned_in_a_fresh_process():
     """Whatever this CPU would pick, numpy's OpenBLAS runs the Haswell kernels once
     gait_planner is imported first: another x86-64 machine computes the kinematic guess
     with the same round-off. (Forcing other kernels still changes the cold start: Prescott
-    with compiled derivatives ends at J = 20.8088 instead of 20.7648, README.)"""
+    with compiled derivatives ends at J = 20.8088 instead of 20.7648, benchmarks/HISTORY.md.)"""
     env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
     out = subprocess.run([sys.executable, "-c", _CORE], env=env, capture_output=True,
                          text=True, timeout=120, check=True).stdout.strip()
