@@ -198,11 +198,12 @@ def test_plan_compiles_by_default_and_says_so_only_when_it_builds(tmp_path, caps
         runs.append((json.loads(captured.out), captured.err))
     (first, first_err), (second, second_err), (casadi, casadi_err) = runs
     assert "first time" not in first_err + second_err + casadi_err
-    announced = [line for line in first_err.splitlines() if line.startswith("-- compiling")]
+    announced = [line for line in first_err.splitlines()
+                 if line.startswith("-- building: compiling")]
     assert len(announced) == 1 and "derivative elements to C into" in announced[0]
     assert "roughly a minute for walker2d" in announced[0]  # no earlier build in this cache
     assert (tmp_path / "cache" / "last_build.txt").is_file()
-    assert "-- compiling" not in second_err and "-- compiling" not in casadi_err
+    assert "compiling" not in second_err and "compiling" not in casadi_err
     assert first["derivatives"] == second["derivatives"] == "per-node elements compiled to C"
     assert casadi["derivatives"].startswith("CasADi")
 

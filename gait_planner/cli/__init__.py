@@ -268,7 +268,7 @@ def _add_prepare(commands: argparse._SubParsersAction) -> None:
 
 def _compile_note(stage: str) -> None:
     """`prepare`'s stage callback: only a compilation, or why there is none, is news."""
-    if stage.startswith(("compiling", "building with")):
+    if stage.startswith(("building: compiling", "building with")):
         _stage(stage)
 
 

@@ -154,10 +154,14 @@ class Planner:
             expanded = expand_nlp(tr)
             nlp = {"x": expanded.x, "p": expanded.p, "f": expanded.f, "g": expanded.g}
             derivatives, used = None, "CasADi, whole SX graph"
-            if s.compiled:  # a cache miss is announced as a stage: "compiling ... (how long)"
+            if s.compiled:  # a cache miss is announced, still as the building stage:
+                # "building: compiling ... (how long)"
+                def announce(text: str) -> None:
+                    self.stage(f"building: {text}")
+
                 try:
                     derivatives = nlp_derivatives(
-                        tr, lambda sources: compile_sources(sources, notify=self.stage), expanded)
+                        tr, lambda sources: compile_sources(sources, notify=announce), expanded)
                     used = "per-node elements compiled to C"
                 except CompileError as err:
                     used += f" (not compiled: {err})"

@@ -560,7 +560,7 @@ def _check(live: Live, answer: Answer) -> str:
     if answer.feedback and answer.accepted_at is not None:
         # the solve alone (after building, before recording) keeps the limit + GRACE
         phases = answer.feedback
-        start = next((t for t, p in phases if p not in ("", "building")), None)
+        start = next((t for t, p in phases if p and not p.startswith("building")), None)
         end = next((t for t, p in phases if p == "recording"), answer.done)
         if start is not None:
             solve = end - start
@@ -583,7 +583,8 @@ def _check(live: Live, answer: Answer) -> str:
         assert answer.via == "action" and answer.cancel_sent is not None, what
         assert not response.mcap_path
         latency = answer.done - answer.cancel_sent
-        bound = FAST + (BUILD_ALLOWANCE if answer.cancel_phase in ("", "building") else 0)
+        building = answer.cancel_phase == "" or (answer.cancel_phase or "").startswith("building")
+        bound = FAST + (BUILD_ALLOWANCE if building else 0)
         assert latency <= bound, f"canceled {latency:.2f} s after the cancel: {what}"
         live.stats["canceled"] += 1
         return "canceled"
