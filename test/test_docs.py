@@ -55,7 +55,7 @@ def test_an_unmeasured_time_renders_as_a_todo(docs, monkeypatch):
     measured = json.loads((ROOT / "docs" / "measured.json").read_text())
     monkeypatch.setattr(docs, "load", lambda name: (
         {**measured, "make_test": None} if name == "measured" else original(name)))
-    assert "TODO-LEAD" in docs.render_measured()
+    assert "not measured yet (`time make test` once set-up is done)" in docs.render_measured()
     monkeypatch.setattr(docs, "load", lambda name: (
         {**measured, "make_test": "5 min"} if name == "measured" else original(name)))
     assert "`make test` (every test not marked slow): 5 min;" in docs.render_measured()

@@ -15,7 +15,7 @@ A page holds generated regions::
 
 Each JSON file has the command that writes it in `COMMANDS`; a table names it under itself.
 docs/measured.json holds what a person times by hand on a fresh clone (`time make run`,
-`time make test`); a null there renders as a TODO-LEAD mark.
+`time make test`); a missing one renders as "not measured yet" with the command to run.
 """
 
 from __future__ import annotations
@@ -80,11 +80,16 @@ def sigma(values: list[float]) -> str:
 # --- regions: render_NAME() -> the text between the markers ----------------------------
 
 
+HOW_TO_MEASURE = {"first_run": "`time make run` on a fresh clone with an empty cache",
+                  "make_test": "`time make test` once set-up is done",
+                  "make_test_slow": "`time make test-slow`"}
+
+
 def render_measured() -> str:
     m = load("measured")
 
     def said(key: str) -> str:
-        return m[key] if m[key] is not None else f"TODO-LEAD ({m['todo'][key]})"
+        return m[key] if m.get(key) else f"not measured yet ({HOW_TO_MEASURE[key]})"
     return (f"* the first `make run` on a fresh clone: {said('first_run')};\n"
             f"* `make test` (every test not marked slow): {said('make_test')};\n"
             f"* `make test-slow` (the slow end-to-end tests): {said('make_test_slow')}.\n")
