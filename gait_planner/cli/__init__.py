@@ -61,14 +61,20 @@ def _add_plan_options(parser: argparse.ArgumentParser, scene_default: str | None
                         metavar="NAME|FILE.yaml", help=SCENE_HELP)
     parser.add_argument("--step-length", type=float, help="m (default: the scene's)")
     parser.add_argument("--cost", help="kinetic_energy | torque_squared (default: the scene's)")
-    parser.add_argument("--intervals", type=int, help="intervals per phase (default: the scene's); the half cycle keeps its length")
-    parser.add_argument("--mu", type=float, help="friction coefficient (default: the scene's)")
+    # the request's field names (as `call` has them), and the short names of earlier releases
+    parser.add_argument("--intervals-per-phase", "--intervals", dest="intervals", type=int,
+                        metavar="N", help="intervals per phase (default: the scene's); the "
+                        "half cycle keeps its length")
+    parser.add_argument("--friction-coefficient", "--mu", dest="mu", type=float, metavar="MU",
+                        help="friction coefficient (default: the scene's)")
     parser.add_argument("--steps", type=int, default=1,
                         help="half cycles to record, joined by the mirror (default 1)")
     parser.add_argument("--posture", default="", choices=("", "paper", "human"),
                         help="paper: the scene's ranges; human: also a stance knee of at most "
                         "20 deg in single support (default: the scene's)")
-    parser.add_argument("--max-time", type=float, help="solver time limit, s (default 600)")
+    parser.add_argument("--max-solve-time", "--max-time", dest="max_time", type=float,
+                        metavar="S", help="solver time limit, s (default: the scene's "
+                        "max_solve_time option, 600 s unless set)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--no-rrd", action="store_true", help="do not write the rerun .rrd")
     parser.add_argument("--compile", action=argparse.BooleanOptionalAction, default=True,
