@@ -48,7 +48,7 @@ from gait_planner.io.urdf import kinematic_tree
 from gait_planner.result import PlanResult
 
 __all__ = ["METADATA_NAME", "TOPICS", "CdrEncoder", "QosProfile", "encoder_for", "plan_metadata",
-           "qos_yaml", "write_plan_mcap"]
+           "qos_yaml", "register_topics", "write_plan_mcap"]
 
 METADATA_NAME = "gait_planner.plan"
 DEFAULT_PERIODICITY = (
@@ -253,21 +253,29 @@ def recording_encoder() -> CdrEncoder:
     return encoder_for(tuple(recording_schemas().items()))
 
 
-def _write(result: PlanResult, stream, start_ns: int) -> None:
-    records = sorted(_records(result, start_ns), key=lambda r: (r[0], r[1]))
-    writer = Writer(stream, compression=CompressionType.ZSTD)
-    writer.start(profile="ros2", library=_library())
-    texts = recording_schemas()
-    encoder = encoder_for(tuple(texts.items()))
+def register_topics(writer: Writer, topics: Mapping[str, tuple[str, QosProfile]],
+                    texts: Mapping[str, str]) -> dict[str, int]:
+    """Register each topic (name -> (ROS type, offered QoS)) on `writer` as a CDR channel,
+    one ros2msg schema per type from `texts` (`recording_schemas`); topic -> channel id."""
     schemas: dict[str, int] = {}  # ROS type -> schema id
-    channels: dict[str, int] = {}  # topic -> channel id
-    for topic, (ros_type, qos) in TOPICS.items():
+    channels: dict[str, int] = {}
+    for topic, (ros_type, qos) in topics.items():
         if ros_type not in schemas:
             schemas[ros_type] = writer.register_schema(ros_type, SchemaEncoding.ROS2,
                                                        texts[ros_type].encode("utf-8"))
         channels[topic] = writer.register_channel(
             topic, MessageEncoding.CDR, schemas[ros_type],
             metadata={"offered_qos_profiles": qos_yaml(qos)})
+    return channels
+
+
+def _write(result: PlanResult, stream, start_ns: int) -> None:
+    records = sorted(_records(result, start_ns), key=lambda r: (r[0], r[1]))
+    writer = Writer(stream, compression=CompressionType.ZSTD)
+    writer.start(profile="ros2", library=_library())
+    texts = recording_schemas()
+    encoder = encoder_for(tuple(texts.items()))
+    channels = register_topics(writer, TOPICS, texts)
     sequence = dict.fromkeys(TOPICS, 0)
     for log_time, _, topic, message in records:
         sequence[topic] += 1

@@ -77,7 +77,7 @@ def node_stamps_ns(result: PlanResult, start_ns: int) -> list[int]:
     return [int(start_ns) + int(round((tn - t[0]) * NS_PER_S)) for tn in t]
 
 
-def _header(ns: int, frame_id: str) -> dict[str, Any]:
+def header(ns: int, frame_id: str) -> dict[str, Any]:
     return {"stamp": time_msg(ns), "frame_id": frame_id}
 
 
@@ -124,7 +124,7 @@ def _axis_quaternion(axis, angle: float) -> dict[str, float]:
             "w": float(math.cos(0.5 * angle))}
 
 
-def _vector3(v) -> dict[str, float]:
+def vector3(v) -> dict[str, float]:
     return {"x": float(v[0]), "y": float(v[1]), "z": float(v[2])}
 
 
@@ -203,7 +203,7 @@ def joint_trajectory(result: PlanResult, stamp_ns: int = 0) -> dict[str, Any]:
         }
         for n in range(result.n_nodes)
     ]
-    return {"header": _header(stamp_ns, ""), "joint_names": list(result.joint_angle_names),
+    return {"header": header(stamp_ns, ""), "joint_names": list(result.joint_angle_names),
             "points": points}
 
 
@@ -214,7 +214,7 @@ def multibody_states(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
     bodies = list(result.body_names)
     return [
         {
-            "header": _header(stamps[n], WORLD_FRAME),
+            "header": header(stamps[n], WORLD_FRAME),
             "node": n,
             "time": float(t[n] - t[0]),
             "phase": str(result.phases[n]),
@@ -279,17 +279,17 @@ def contact_forces(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
         names = list(result.active_contacts[n])
         wrenches = foot_wrenches(result, n)
         messages.append({
-            "header": _header(stamps[n], WORLD_FRAME),
+            "header": header(stamps[n], WORLD_FRAME),
             "node": n,
             "time": float(t[n] - t[0]),
             "contact_names": names,
-            "points": [_vector3(p) for p in contact_points(result, n, names)],
-            "forces": [_vector3(np.asarray(result.contact_forces[c], dtype=float)[n])
+            "points": [vector3(p) for p in contact_points(result, n, names)],
+            "forces": [vector3(np.asarray(result.contact_forces[c], dtype=float)[n])
                        for c in names],
             "wrench_bodies": [w[0] for w in wrenches],
-            "wrench_points": [_vector3(w[1]) for w in wrenches],
-            "wrenches": [{"force": _vector3(w[2]), "torque": _vector3(w[3])} for w in wrenches],
-            "centers_of_pressure": [_vector3(w[4]) for w in wrenches],
+            "wrench_points": [vector3(w[1]) for w in wrenches],
+            "wrenches": [{"force": vector3(w[2]), "torque": vector3(w[3])} for w in wrenches],
+            "centers_of_pressure": [vector3(w[4]) for w in wrenches],
         })
     return messages
 
@@ -300,7 +300,7 @@ def joint_states(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
     effort = node_efforts(result)
     return [
         {
-            "header": _header(stamps[n], ""),
+            "header": header(stamps[n], ""),
             "name": list(result.joint_angle_names),
             "position": _floats(result.joint_angles[n]),
             "velocity": _floats(result.joint_velocities[n]),
@@ -311,8 +311,8 @@ def joint_states(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
 
 
 def _transform(ns: int, parent: str, child: str, translation, rotation: dict) -> dict[str, Any]:
-    return {"header": _header(ns, parent), "child_frame_id": child,
-            "transform": {"translation": _vector3(translation), "rotation": rotation}}
+    return {"header": header(ns, parent), "child_frame_id": child,
+            "transform": {"translation": vector3(translation), "rotation": rotation}}
 
 
 def tf_messages(result: PlanResult, start_ns: int,

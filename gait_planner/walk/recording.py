@@ -18,32 +18,25 @@ import os
 from pathlib import Path
 from typing import Any
 
-from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import CompressionType, Writer
 
 from gait_planner.io.atomic import atomic_target
-from gait_planner.io.mcap_writer import STREAM, encoder_for, qos_yaml, recording_schemas
+from gait_planner.io.mcap_writer import (STREAM, encoder_for, recording_schemas,
+                                         register_topics)
+from gait_planner.io.messages import header, vector3
 
 __all__ = ["TOPICS", "write_walk_mcap"]
 
-TOPICS = {"/walk/joint_states": "sensor_msgs/msg/JointState",
-          "/walk/feedforward": "sensor_msgs/msg/JointState",
-          "/walk/feedback": "sensor_msgs/msg/JointState",
-          "/walk/contact_forces": "gait_planner_msgs/msg/ContactForces"}
-
-
-def _header(ns: int) -> dict[str, Any]:
-    return {"stamp": {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000},
-            "frame_id": "world"}
+TOPICS = {"/walk/joint_states": ("sensor_msgs/msg/JointState", STREAM),
+          "/walk/feedforward": ("sensor_msgs/msg/JointState", STREAM),
+          "/walk/feedback": ("sensor_msgs/msg/JointState", STREAM),
+          "/walk/contact_forces": ("gait_planner_msgs/msg/ContactForces", STREAM)}
 
 
 def _joints(ns: int, names, position=(), velocity=(), effort=()) -> dict[str, Any]:
-    return {"header": _header(ns), "name": list(names), "position": list(map(float, position)),
-            "velocity": list(map(float, velocity)), "effort": list(map(float, effort))}
-
-
-def _vec(v) -> dict[str, float]:
-    return {"x": float(v[0]), "y": float(v[1]), "z": float(v[2])}
+    return {"header": header(ns, "world"), "name": list(names),
+            "position": list(map(float, position)), "velocity": list(map(float, velocity)),
+            "effort": list(map(float, effort))}
 
 
 def write_walk_mcap(result: dict[str, Any], path: str | os.PathLike, every: int = 10) -> Path:
@@ -58,15 +51,7 @@ def write_walk_mcap(result: dict[str, Any], path: str | os.PathLike, every: int 
     with atomic_target(target) as tmp, open(tmp, "wb") as stream:
         writer = Writer(stream, compression=CompressionType.ZSTD)
         writer.start(profile="ros2", library="gait_planner walk")
-        schemas: dict[str, int] = {}
-        channels: dict[str, int] = {}
-        for topic, ros_type in TOPICS.items():
-            if ros_type not in schemas:
-                schemas[ros_type] = writer.register_schema(ros_type, SchemaEncoding.ROS2,
-                                                           texts[ros_type].encode("utf-8"))
-            channels[topic] = writer.register_channel(
-                topic, MessageEncoding.CDR, schemas[ros_type],
-                metadata={"offered_qos_profiles": qos_yaml(STREAM)})
+        channels = register_topics(writer, TOPICS, texts)
         for seq, k in enumerate(range(0, len(series["time"]), every), start=1):
             ns = int(round(series["time"][k] * 1e9))
             ff, fb = series["feedforward"][k], series["feedback"][k]
@@ -77,16 +62,16 @@ def write_walk_mcap(result: dict[str, Any], path: str | os.PathLike, every: int 
                 "/walk/feedforward": _joints(ns, names, effort=ff),
                 "/walk/feedback": _joints(ns, names, effort=fb),
                 "/walk/contact_forces": {
-                    "header": _header(ns), "node": k, "time": float(series["time"][k]),
+                    "header": header(ns, "world"), "node": k, "time": float(series["time"][k]),
                     "contact_names": [contacts[i] for i in active],
-                    "points": [_vec(series["contact_position"][k][i]) for i in active],
-                    "forces": [_vec(series["ground_force"][k][i]) for i in active],
+                    "points": [vector3(series["contact_position"][k][i]) for i in active],
+                    "forces": [vector3(series["ground_force"][k][i]) for i in active],
                     "wrench_bodies": [], "wrench_points": [], "wrenches": [],
                     "centers_of_pressure": []},
             }
             for topic, message in messages.items():
                 writer.add_message(channels[topic], log_time=ns, publish_time=ns, sequence=seq,
-                                   data=encoder.encode(TOPICS[topic], message))
+                                   data=encoder.encode(TOPICS[topic][0], message))
         writer.add_metadata("gait_planner.walk", {
             k: v if isinstance(v, str) else json.dumps(v)
             for k, v in result.items() if k != "series"})
