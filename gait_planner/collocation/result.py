@@ -163,6 +163,8 @@ def build_result(tr: CollocationTranscription, x: np.ndarray, p: np.ndarray, g: 
             "base_time_step": repr(s.base_time_step),
             "scaling_bounds": ",".join(repr(b) for b in s.scaling_bounds),
             "torque_regularisation": repr(s.torque_regularisation),
+            "foot_half_width": repr(s.foot_half_width),
+            "strike_speed_max": repr(s.strike_speed_max),
             "kinetic_energy": repr(kinetic), "torque_squared": repr(torque),
             "kinetic_energy_discrete": repr(discrete),
             "impacts": ",".join(impacts),

@@ -52,7 +52,8 @@ import numpy as np
 
 from gait_planner.collocation.mesh import Mesh
 from gait_planner.collocation.minimal import MinimalModel
-from gait_planner.ocp.clearance import clearance_rows, clearance_schedule
+from gait_planner.ocp.clearance import (clearance_rows, clearance_schedule, strike_rows,
+                                        strike_schedule)
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.mirror import torque_mirror
 from gait_planner.ocp.posture import (joint_limit_margins, joint_margin_constants,
@@ -285,9 +286,16 @@ class CollocationTranscription:
                 for c in self.mesh.phase_of_interval]  # interval K: the image of 0
         spacing = s.base_time_step * sum(self.mesh.base_steps) / K  # s at sigma = 1
         ground, self.clearances = clearance_rows(
-            mb, lambda j: self.q[j], clearance_schedule(scene, held, s, spacing))
+            mb, lambda j: self.q[j], clearance_schedule(scene, held, s, spacing),
+            s.foot_half_width)
         if ground:
             self._ineq.append(("ground_clearance", ca.vertcat(*ground)))
+        strikes = strike_schedule(scene, held) if s.strike_speed_max > 0 else {}
+        if strikes:
+            c = ca.DM([spacing, s.strike_speed_max])
+            self._ineq.append(("strike_speed", ca.vertcat(
+                *[strike_rows(mb, points)(self.q[j], self.q[j + 1], self.h[j], c)
+                  for j, points in strikes.items()])))
         root = mb.block(scene.root.body).start
         inner = self.q[1 : K + 1]
         if s.torso_lean_max > 0:

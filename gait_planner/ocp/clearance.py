@@ -14,6 +14,21 @@ minimal-energy foot rode the bound and the swing knee's torque zigzagged at the 
 walker2d). Every swing node still clears `GROUND_BAND` (1 mm) of the verifier while
 sin(pi / (2 ramp_nodes)) > GROUND_BAND / swing_clearance.
 
+In 3D scenes the foot is as wide as the plan's full contact assumes (`foot_half_width`,
+the roll moment's lever): the height is required of both edges of a swing point, the point
++- foot_half_width along its body's lateral director d2, not only of the point on the
+heel-toe line. With the centre line alone walker3d's minimal-energy swing foot rolled up
+to 28 deg and put an edge 14 mm below the ground, and a simulated foot of that width
+struck early and fell (`gait-planner walk`, benchmarks/HISTORY.md).
+
+A strike is perfectly plastic: whatever speed the point brings to the ground is lost in
+the impact, and the minimal-energy optimum uses that as a brake. walker3d's heel arrived at
+3 m/s forward and 0.3 m/s down (a 6 degree approach), so a body a few millimetres lower,
+as on a compliant ground or a robot's soft sole, struck 24 ms early and 7.6 cm short, and
+a simulated walker's feedback doubled (`gait-planner walk`). `strike_speed_max` (m/s)
+bounds the striking point's mean horizontal speed over the interval that ends at its
+strike (`strike_schedule`, `strike_rows`): the foot comes down rather than in.
+
 Used by both transcriptions (`gait_planner.ocp.transcription`,
 `gait_planner.collocation.transcription`), so the two solve the same problem.
 """
@@ -24,6 +39,7 @@ import math
 from typing import Callable, Sequence
 
 import casadi as ca
+import numpy as np
 
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
@@ -72,6 +88,39 @@ def required_clearances(scene: Scene, held: Sequence[frozenset[str] | set[str]],
     return out
 
 
+def strike_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]]
+                    ) -> dict[int, tuple[str, ...]]:
+    """{interval n: contact points that strike at its end}: held in interval n + 1 (interval
+    P the mirror image of interval 0, `required_clearances`), not in interval n; held
+    (P,) as there. Only intervals with a strike are listed, points in the scene's order."""
+    period = len(held)
+    partner = contact_partners(scene)
+    after = list(held[1:]) + [{partner[p] for p in held[0]}]
+    out = {}
+    for n in range(period):
+        points = tuple(c.name for c in scene.contacts
+                       if c.name in after[n] and c.name not in held[n])
+        if points:
+            out[n] = points
+    return out
+
+
+def strike_rows(mb: Multibody, points: Sequence[str]) -> ca.Function:
+    """CasADi Function (q_n, q_{n+1}, h_n, c) -> one margin (>= 0) per striking point:
+    ((v h_n)^2 - |x_{n+1} - x_n|_xy^2) / (v c0)^2, c = (base time step s, v = strike speed
+    bound m/s): the point's mean horizontal speed over the interval below v (the row is
+    smooth, and O(1) at sigma = 1). In planar scenes x only."""
+    q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
+        ca.SX.sym("c", 2)
+    rows = []
+    for point in points:
+        G = ca.DM(mb.contact_rows(point)[:-1])  # the horizontal rows
+        step = ca.mtimes(G, q1 - q0)
+        rows.append(((c[1] * h) ** 2 - ca.sumsqr(step)) / (c[1] * c[0]) ** 2)
+    return ca.Function("strike_speed_" + "_".join(points), [q0, q1, h, c],
+                       [ca.vertcat(*rows)], ["q", "q_next", "h", "c"], ["margin"])
+
+
 def clearance_schedule(scene: Scene, held: Sequence[set[str]], settings: GaitSettings,
                        node_spacing: float) -> dict[int, dict[str, float]]:
     """`required_clearances` of the settings (held as there; node_spacing s the time
@@ -82,15 +131,38 @@ def clearance_schedule(scene: Scene, held: Sequence[set[str]], settings: GaitSet
                                settings.swing_clearance_ramp / node_spacing)
 
 
+def edge_heights(mb: Multibody, point: str, half_width: float) -> np.ndarray:
+    """Constant rows (r, k): heights (m) z = row @ q of what must clear the ground for a
+    swing contact point: its two foot edges z_C -+ half_width d2_z (r = 2) in a 3D scene
+    with half_width > 0, else the point itself (r = 1)."""
+    z = mb.contact_rows(point)[-1:]
+    if mb.scene.planar or half_width <= 0:
+        return z
+    d2z = np.zeros((1, mb.k))
+    d2z[0, mb.block(mb.scene.contact(point).body).start + 8] = half_width
+    return np.vstack([z - d2z, z + d2z])
+
+
+def schedule_heights(mb: Multibody, points: dict[str, float], half_width: float
+                     ) -> tuple[np.ndarray, list[float]]:
+    """(rows (r, k) of `edge_heights` of every point of one node of a `clearance_schedule`,
+    their required heights (r,) m)."""
+    blocks = [edge_heights(mb, name, half_width) for name in points]
+    heights = [h for b, h in zip(blocks, points.values()) for _ in range(b.shape[0])]
+    return np.vstack(blocks), heights
+
+
 def clearance_rows(mb: Multibody, q_at: Callable[[int], ca.MX],
-                   schedule: dict[int, dict[str, float]]) -> tuple[list, list[float]]:
+                   schedule: dict[int, dict[str, float]], half_width: float
+                   ) -> tuple[list, list[float]]:
     """The "ground_clearance" rows z - height >= 0 of every swing point of `schedule`
-    (`clearance_schedule`; q_at(n) the configuration (k,) of node n) and their heights (m),
-    in row order."""
+    (`clearance_schedule`; q_at(n) the configuration (k,) of node n), at its two foot edges
+    (`edge_heights`, half_width m), and their heights (m), in row order."""
     rows: list = []
     heights: list[float] = []
     for n, points in schedule.items():
-        for name, height in points.items():
-            rows.append(ca.mtimes(ca.DM(mb.contact_rows(name)[-1:]), q_at(n)) - height)
-            heights.append(height)
+        if points:
+            C, h = schedule_heights(mb, points, half_width)
+            rows.append(ca.mtimes(ca.DM(C), q_at(n)) - ca.DM(h))
+            heights += h
     return rows, heights

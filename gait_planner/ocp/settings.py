@@ -42,7 +42,9 @@ class GaitSettings:
     slides along the ground at zero force; swing_clearance_ramp s: that height is required
     in full only this long (at sigma = 1) after the point's release and before its strike,
     and grows along a quarter sine over it (`gait_planner.ocp.clearance`; 0 = in full from
-    the first swing node); joint_speed_max deg/s (0 = off): every joint's relative rotation
+    the first swing node); strike_speed_max m/s (0 = off): a contact point's mean horizontal
+    speed over the interval that ends at its strike stays below this (`gait_planner.ocp.
+    clearance`); joint_speed_max deg/s (0 = off): every joint's relative rotation
     over an interval stays below joint_speed_max * h_n;
     phase_joint_limits: ((phase, ((angle, lo rad, hi rad), ...)), ...) from the option
     ``phase_joint_limits: {phase: {angle: [lo, hi]}}`` in degrees, ranges at the nodes that
@@ -78,6 +80,7 @@ class GaitSettings:
     ground_clearance: bool = True
     swing_clearance: float = 0.0
     swing_clearance_ramp: float = 0.0
+    strike_speed_max: float = 0.0
     joint_speed_max: float = 0.0
     twist_regularisation: float = 0.0
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
@@ -122,7 +125,7 @@ class GaitSettings:
         except PostureError as err:
             raise SettingsError(str(err)) from None
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
-                     "foot_half_width", "swing_clearance", "swing_clearance_ramp",
+                     "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
                      "joint_speed_max", "twist_regularisation"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")

@@ -165,6 +165,8 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
             "base_time_step": repr(s.base_time_step),
             "scaling_bounds": ",".join(repr(b) for b in s.scaling_bounds),
             "torque_regularisation": repr(s.torque_regularisation),
+            "foot_half_width": repr(s.foot_half_width),
+            "strike_speed_max": repr(s.strike_speed_max),
             "joint_limits_deg": ",".join(f"{name}:{np.degrees(lo):.6g}:{np.degrees(hi):.6g}"
                                          for name, lo, hi in s.joint_limits),
             "torque_squared": repr(float(torque.item())),

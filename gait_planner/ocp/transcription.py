@@ -45,7 +45,8 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
-from gait_planner.ocp.clearance import clearance_rows, clearance_schedule
+from gait_planner.ocp.clearance import (clearance_rows, clearance_schedule, schedule_heights,
+                                        strike_rows, strike_schedule)
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.elements import ElementGroup, Layout
 from gait_planner.ocp.mirror import configuration_mirror, increment_mirror, torque_mirror
@@ -294,12 +295,19 @@ class Transcription:
         held = [{p for bc in self.contacts[k] for p in bc.points}
                 for k in self.phase_of_interval[: N - 1]]  # interval N-1: the image of 0
         schedule = clearance_schedule(mb.scene, held, s, s.base_time_step)
-        ground, self.clearances = clearance_rows(mb, lambda n: self.Q[:, n], schedule)
+        ground, self.clearances = clearance_rows(mb, lambda n: self.Q[:, n], schedule,
+                                                 s.foot_half_width)
         if ground:
             first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
             self._clearance_elements(schedule, first_row)
             self._ineq.append(("ground_clearance", ca.vertcat(*ground)))
             self._without_elements["ground_clearance"] = ca.MX(-ca.DM(self.clearances))
+        strikes = strike_schedule(mb.scene, held) if s.strike_speed_max > 0 else {}
+        if strikes:
+            rows = self._strike_elements(strikes,
+                                         sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
+            self._ineq.append(("strike_speed", rows))
+            self._without_elements["strike_speed"] = ca.MX(rows.shape[0], 1)
         root = mb.block(mb.scene.root.body).start
         inner = self.Q[:, 1:N]
         for name, entry, bound in (("torso_lean", 11, self._lean_bound),
@@ -340,21 +348,44 @@ class Transcription:
         points (the required heights are the rows' constant parts)."""
         nodes: dict[tuple[tuple[str, ...], bool], list[tuple[int, np.ndarray]]] = {}
         row = first_row
+        half_width = self.settings.foot_half_width
         for n, points in schedule.items():
             if points:
+                size = len(schedule_heights(self.mb, points, half_width)[1])
                 nodes.setdefault((tuple(points), self.layout.mirrored(n == self.N - 1)), []).append(
-                    (n, row + np.arange(len(points))))
-                row += len(points)
+                    (n, row + np.arange(size)))
+                row += size
         q, c = ca.SX.sym("q", self.mb.k), ca.SX.sym("c", 1)
         for (points, mirrored), chosen in nodes.items():
-            heights = ca.vertcat(*[ca.mtimes(ca.DM(self.mb.contact_rows(p)[-1:]), q)
-                                   for p in points])
-            fn = ca.Function("clearance_" + "_".join(points), [q, c], [heights], ["q", "c"], ["z"])
+            C, _ = schedule_heights(self.mb, dict.fromkeys(points, 0.0), half_width)
+            fn = ca.Function("clearance_" + "_".join(points), [q, c], [ca.mtimes(ca.DM(C), q)],
+                             ["q", "c"], ["z"])
             self.elements.append(ElementGroup(
                 self.layout.node_element(fn, mirrored),
                 np.stack([self.layout.u_index(n) for n, _ in chosen], 1),
                 np.stack([self.layout.node_p_index(n) for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), np.zeros(1)))
+
+    def _strike_elements(self, strikes: dict[int, tuple[str, ...]], first_row: int) -> ca.MX:
+        """The strike_speed rows (`strike_rows`) of the intervals that end at a strike
+        (`strike_schedule`), from row first_row of g on, declared as interval elements;
+        returns them as one MX column."""
+        c = np.array([self.settings.base_time_step, self.settings.strike_speed_max])
+        groups: dict[tuple[tuple[str, ...], bool], list[tuple[int, np.ndarray]]] = {}
+        out, row = [], first_row
+        for n, points in strikes.items():
+            groups.setdefault((points, self.layout.mirrored(n == self.N - 2)), []).append(
+                (n, row + np.arange(len(points))))
+            row += len(points)
+            out.append(strike_rows(self.mb, points)(self.Q[:, n], self.Q[:, n + 1], self.h[n],
+                                                    ca.DM(c)))
+        for (points, next_mirrored), chosen in groups.items():
+            self.elements.append(ElementGroup(
+                self.layout.interval_element(strike_rows(self.mb, points), next_mirrored),
+                np.stack([self.layout.interval_z_index(n) for n, _ in chosen], 1),
+                np.stack([self.layout.interval_p_index(n) for n, _ in chosen], 1),
+                np.stack([rows for _, rows in chosen], 1), c))
+        return ca.vertcat(*out)
 
     def _node_rows(self):
         """Declares, at each node 1..N-1, the rows that depend on its configuration and
@@ -555,12 +586,12 @@ class Transcription:
 def relaxed_lower_bounds(groups, lbg: np.ndarray, clearances: list[float]) -> np.ndarray:
     """lbg with the group [(name, size, is_equality)] "ground_clearance" (rows z - height)
     lowered by each row's required height `clearances` (points only above the ground) and
-    "joint_speed" free."""
+    "joint_speed" and "strike_speed" free."""
     out, offset = lbg.copy(), 0
     for name, size, _ in groups:
         if name == "ground_clearance":
             out[offset : offset + size] = -np.asarray(clearances)
-        elif name == "joint_speed":
+        elif name in ("joint_speed", "strike_speed"):
             out[offset : offset + size] = -np.inf
         offset += size
     return out

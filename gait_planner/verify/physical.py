@@ -6,7 +6,12 @@ equations it was solved with (issue: a physical plan), on what the recording pub
 * Swing clearance: a contact point is at ground height (z < `GROUND_BAND`) only where it is
   held (listed at the node), or at the node where it is released (listed at the node
   before). Anywhere else it is a swing point sliding along the ground at zero force, which
-  a real foot would catch on: a scuff.
+  a real foot would catch on: a scuff. In 3D, with the metadata's ``foot_half_width`` w,
+  the point's two foot edges z -+ w d2_z (d2 its body's lateral director) are checked too:
+  the foot is as wide as the full contact's roll moment assumes.
+* Strike speed: a contact point's mean horizontal speed over the interval that ends where
+  it is first held again, against the metadata's ``strike_speed_max`` (0 or absent: noted
+  only).
 * Joint speed: the published JointTrajectory velocities stay below `JOINT_SPEED_MAX`.
 * Torque smoothness: away from contact switches (a node whose held contacts differ from its
   neighbour's, and the nodes next to it), no joint's published effort zigzags: three
@@ -37,8 +42,10 @@ class PhysicalReport:
     """Measured physical properties of one recording (units in the field comments)."""
 
     max_point_friction_ratio: float  # max over points sqrt(Fx^2 + Fy^2) / (mu Fz)
-    min_swing_height: float  # m, lowest contact point where it is neither held nor released
+    min_swing_height: float  # m, lowest swing point (or foot edge, 3D) neither held nor released
     scuffs: tuple[tuple[str, int], ...]  # (point, node) at ground height while swinging
+    max_strike_speed: float  # m/s, horizontal, over the interval before a strike
+    strike_speed_bound: float  # m/s, the metadata's strike_speed_max (0: none)
     max_joint_speed: float  # deg/s, published velocities
     fastest_joint: str
     max_torque_second_difference: float  # relative to the peak effort, away from switches
@@ -86,18 +93,32 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
                         f"cone: |F_t| / (mu F_z) = {worst[2]:.3g}")
 
     lowest, scuffs = np.inf, []
+    half_width = 0.0 if scene.planar else float(rec.metadata.get("foot_half_width", 0.0))
     for name in scene.contacts:
         C = mech.contact_matrix(name)
+        body = scene.contacts[name][0]
         for n in range(n_nodes):
             if name in active[n] or (n > 0 and name in active[n - 1]):
                 continue
-            z = float((C @ q[n])[2])
+            z = float((C @ q[n])[2]) - half_width * abs(float(mech.director(q[n], body, 1)[2]))
             lowest = min(lowest, z)
             if z < GROUND_BAND:
                 scuffs.append((name, n))
     if scuffs and scene.options.get("ground_clearance", True) is not False:
         failures.append(f"swing contact points at ground height without force (scuffing), "
                         f"(point, node): {scuffs[:6]}{' ...' if len(scuffs) > 6 else ''}")
+
+    strike, times = 0.0, np.asarray(rec.times, dtype=float)
+    for name in scene.contacts:
+        C = mech.contact_matrix(name)[:2]
+        for n in range(1, n_nodes):
+            if name in active[n] and name not in active[n - 1]:
+                step = float(np.linalg.norm(C @ (q[n] - q[n - 1])))
+                strike = max(strike, step / (times[n] - times[n - 1]))
+    bound = float(rec.metadata.get("strike_speed_max", 0.0))
+    if bound > 0 and strike > bound * (1 + 1e-6):
+        failures.append(f"a contact point strikes at {strike:.4g} m/s horizontally "
+                        f"(strike_speed_max {bound:g} m/s)")
 
     speed = np.degrees(np.abs(np.asarray(rec.velocities, dtype=float)))
     fastest = np.unravel_index(int(speed.argmax()), speed.shape) if speed.size else (0, 0)
@@ -114,6 +135,7 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
                         f"(angle, node): {zigzags[:6]}{' ...' if len(zigzags) > 6 else ''}")
     return PhysicalReport(
         max_point_friction_ratio=ratio, min_swing_height=float(lowest), scuffs=tuple(scuffs),
+        max_strike_speed=strike, strike_speed_bound=bound,
         max_joint_speed=max_speed, fastest_joint=rec.joint_names[fastest[1]] if speed.size else "",
         max_torque_second_difference=second, zigzags=tuple(zigzags),
         switch_nodes=switches, failures=tuple(failures))

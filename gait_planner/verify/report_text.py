@@ -148,9 +148,15 @@ def _physical(p, rows: _Rows) -> None:
     rows.group("physical plausibility")
     if math.isfinite(p.min_swing_height):
         scuffing = p.min_swing_height < GROUND_BAND
-        rows.row("lowest swing point (neither held nor released)",
+        rows.row("lowest swing point or foot edge (not held)",
                  _number(p.min_swing_height, "m"), f"limit >= {GROUND_BAND:g} m",
                  ("FAILED" if rows.failed("scuffing") else "noted") if scuffing else "ok")
+    label = "fastest strike (horizontal, interval before)"
+    if p.strike_speed_bound > 0:
+        rows.row(label, _number(p.max_strike_speed, "m/s"), f"limit {p.strike_speed_bound:g} m/s",
+                 "FAILED" if rows.failed("strikes at") else "ok")
+    else:
+        rows.row(label, _number(p.max_strike_speed, "m/s"), "no bound (strike_speed_max)")
     rows.within(f"fastest joint ({p.fastest_joint})", p.max_joint_speed, "deg/s",
                 JOINT_SPEED_MAX)
     rows.row("torque 2nd difference away from switches", _number(

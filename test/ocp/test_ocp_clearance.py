@@ -96,3 +96,34 @@ def test_the_declared_ramps_keep_swing_points_above_the_verifier_ground_band():
         ramp_nodes = gait.options["swing_clearance_ramp"] / gait.base_time_step
         lowest = gait.options["swing_clearance"] * math.sin(math.pi / (2 * ramp_nodes))
         assert lowest > GROUND_BAND, (name, lowest)
+
+
+def test_strikes_are_the_intervals_before_the_strike_nodes_counted_by_hand(walker3d_held):
+    """Within the half cycle, foot_l_heel strikes at node 16 and foot_l_forefoot at 24
+    (EVENTS); the right points strike in the next half cycle (55, 63), not here."""
+    from gait_planner.ocp.clearance import strike_schedule
+
+    scene, held = walker3d_held
+    assert strike_schedule(scene, held) == {15: ("foot_l_heel",), 23: ("foot_l_forefoot",)}
+
+
+@settings(max_examples=60, deadline=None)
+@given(pitch=st.floats(-0.6, 0.6), roll=st.floats(-0.6, 0.6), yaw=st.floats(-3.1, 3.1),
+       width=st.floats(0.0, 0.08))
+def test_edge_heights_are_the_lower_foot_edges(walker3d_held, pitch, roll, yaw, width):
+    """`edge_heights` of a swing point are the heights of the points +- width along its
+    foot's d2, for any foot attitude: the lower one is what clears the ground."""
+    from gait_planner.model.rotations import rot_x, rot_y, rot_z
+    from gait_planner.ocp.clearance import edge_heights
+
+    scene, _ = walker3d_held
+    mb = Multibody(scene)
+    q = np.zeros(mb.k)
+    block = mb.block("foot_l")
+    D = rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
+    q[block] = np.r_[0.1, 0.2, 0.3, D[:, 0], D[:, 1], D[:, 2]]
+    point = mb.contact_rows("foot_l_heel") @ q
+    rows = edge_heights(mb, "foot_l_heel", width) @ q
+    edges = sorted((point + s * width * D[:, 1])[2] for s in (1.0, -1.0))
+    assert rows.shape == ((2,) if width > 0 else (1,))
+    assert sorted(rows) == pytest.approx(edges if width > 0 else [point[2]], abs=1e-12)
