@@ -8,19 +8,24 @@ along the foot's d2, their lowest points on the contact point when the foot is l
 point contact as the plan assumes, and a foot that can carry the full-contact roll moment
 (up to the normal force times foot_half_width) the plan allows. The joint PD's damping
 -kd v is the joints' MuJoCo damping (implicit: the feet's small inertias make an explicit
-kd unstable at any practical step); the controller adds kd v_ref.
+kd unstable at any practical step); the controller adds kd v_ref. Every body gets the
+scene's principal moments after compiling (`set_inertia`): the URDF must carry a
+realisable tensor, the plan may use one that is not (the paper's torso), and the simulated
+walker is the planned one.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Mapping
 
 import numpy as np
 
 from gait_planner.io.mcap_reader import RecordedPlan
 from gait_planner.model.scene import Scene
 
-__all__ = ["WalkModel", "build_model"]
+__all__ = ["WalkModel", "build_model", "plan_qpos", "set_inertia"]
 
 
 @dataclass(frozen=True)
@@ -69,6 +74,7 @@ def build_model(rec: RecordedPlan, scene: Scene, half_width: float, radius: floa
         if spec.joint(name) is not None:
             spec.joint(name).damping = [damping, 0.0, 0.0]
     model = spec.compile()
+    set_inertia(model, {b.name: tuple(b.inertia) for b in scene.bodies})
     names = {model.joint(j).name for j in range(model.njnt)}
     missing = [n for n in rec.joint_names if n not in names]
     if missing:
@@ -76,3 +82,36 @@ def build_model(rec: RecordedPlan, scene: Scene, half_width: float, radius: floa
     qpos = np.array([model.joint(n).qposadr[0] for n in rec.joint_names])
     dof = np.array([model.joint(n).dofadr[0] for n in rec.joint_names])
     return WalkModel(model, qpos, dof, scene.root.body, planar)
+
+
+def plan_qpos(wm, root: int, q_row: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """MuJoCo qpos (nq,) of one plan node: the root (body index `root` in the plan's q) from
+    its block of q_row (12 nb,) (free: COM and quaternion of D = [d1 d2 d3]; planar: x, z,
+    pitch), the hinges from the plan's joint angles (na,) rad."""
+    import mujoco
+
+    phi, D = q_row[12 * root:12 * root + 3], q_row[12 * root + 3:12 * root + 12].reshape(3, 3).T
+    qpos = np.zeros(wm.model.nq)
+    if wm.planar:
+        qpos[:3] = phi[0], phi[2], math.atan2(D[0, 2], D[2, 2])
+    else:
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(D).reshape(-1))
+        qpos[:7] = np.r_[phi, quat]
+    qpos[wm.qpos] = angles
+    return qpos
+
+
+def set_inertia(model, inertia: Mapping[str, tuple[float, float, float]]) -> None:
+    """Give bodies (name -> principal moments (J1, J2, J3) kg m^2 about d1, d2, d3) these
+    moments in the compiled model: MuJoCo's dynamics need only the tensor, so a
+    non-realisable one (the paper's torso, `gait_planner.io.urdf.realisable_inertia`)
+    is simulated as it is planned."""
+    import mujoco
+
+    for name, moments in inertia.items():
+        b = model.body(name).id
+        R = np.zeros(9)
+        mujoco.mju_quat2Mat(R, model.body_iquat[b])  # MuJoCo's principal frame in the body's
+        R = R.reshape(3, 3)
+        model.body_inertia[b] = np.diag(R.T @ np.diag(moments) @ R)

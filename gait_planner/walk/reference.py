@@ -106,20 +106,51 @@ class Reference:
                    np.vstack(parts["r"]), np.vstack(parts["e"]), tuple(parts["a"]), period, s,
                    (v * flip, -w * flip))
 
+    def _node_weight(self, t: float) -> tuple[int, float]:
+        """(n, a): t lies a of the way from node n to node n + 1 (clipped to the ends)."""
+        n = int(np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2))
+        return n, float(np.clip((t - self.times[n]) / (self.times[n + 1] - self.times[n]), 0.0, 1.0))
+
+    def q_at(self, t: float) -> np.ndarray:
+        """The configuration (12 nb,) interpolated at t."""
+        n, a = self._node_weight(t)
+        return (1 - a) * self.q[n] + a * self.q[n + 1]
+
     def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...]]:
         """Angles, rates, efforts interpolated at time t, and the contacts held there."""
-        n = int(np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2))
-        a = float(np.clip((t - self.times[n]) / (self.times[n + 1] - self.times[n]), 0.0, 1.0))
+        n, a = self._node_weight(t)
         mix = lambda x: (1 - a) * x[n] + a * x[n + 1]  # noqa: E731
         return mix(self.angles), mix(self.rates), mix(self.efforts), self.active[n]
 
     def root_at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """Root COM position and director matrix D (columns d1 d2 d3) interpolated at t."""
         i = self.scene.body_index(self.scene.root.body)
-        n = int(np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2))
-        a = float(np.clip((t - self.times[n]) / (self.times[n + 1] - self.times[n]), 0.0, 1.0))
-        row = (1 - a) * self.q[n] + a * self.q[n + 1]
+        row = self.q_at(t)
         return row[12 * i:12 * i + 3], row[12 * i + 3:12 * i + 12].reshape(3, 3).T
+
+    def com_at(self, t: float) -> np.ndarray:
+        """The whole body's centre of mass (3,) m, world, interpolated at t."""
+        masses = np.array([b.mass for b in self.scene.bodies])
+        phi = self.q_at(t).reshape(-1, 12)[:, :3]
+        return masses @ phi / masses.sum()
+
+    def swing_windows(self, legs: list[set[str]]) -> list[tuple[float, float, int]]:
+        """(lift-off time s, strike time s, leg) of every swing of the legs (each a set of
+        contact names): the spans between nodes where none of the leg's contacts is held,
+        from the node that releases the last to the node that strikes the first."""
+        out = []
+        for leg, contacts in enumerate(legs):
+            free = [not (contacts & set(a)) for a in self.active[:-1]]
+            n = 0
+            while n < len(free):
+                if free[n]:
+                    m = n
+                    while m < len(free) and free[m]:
+                        m += 1
+                    out.append((float(self.times[n]), float(self.times[m]), leg))
+                    n = m
+                n += 1
+        return out
 
     def root_rate_at(self, t: float, h: float) -> np.ndarray:
         """The root's angular velocity (world) at t: central difference over +-h."""

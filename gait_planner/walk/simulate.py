@@ -12,20 +12,21 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import yaml
 
-from gait_planner.walk.controller import Gains, hip_legs, torso_torque
+from gait_planner.walk.controller import Gains, ReferenceController
 
-__all__ = ["CONFIG", "load_config", "walk"]
+__all__ = ["CONFIG", "ground_forces", "load_config", "walk"]
 
 CONFIG = Path(__file__).resolve().parents[2] / "config" / "walk.yaml"
 
 
 _KEYS = {"simulation": ("time_step", "foot_sphere_radius", "contact_time_constant"),
          "joints": ("kp", "kd"), "torso": ("kp", "kd"),
+         "placement": ("kp", "kd", "max_shift"),
          "stop": ("height_drop", "tilt", "joint_error")}
 
 
@@ -71,10 +72,14 @@ def _rms(x) -> float:
 
 
 def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
-         config: dict[str, Any] | None = None, series: bool = False) -> dict[str, Any]:
+         config: dict[str, Any] | None = None, series: bool = False,
+         progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
+    """The walk of the module docstring; scale multiplies the plan's efforts (the
+    self-test); series adds the per-step trace (key "series"); progress(walked, steps) is
+    called at every half cycle's end."""
     import mujoco
 
-    from gait_planner.walk.mujoco_model import build_model
+    from gait_planner.walk.mujoco_model import build_model, plan_qpos
     from gait_planner.walk.reference import Reference
 
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
@@ -91,24 +96,20 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     wm = build_model(rec, scene, half_width, sim["foot_sphere_radius"], sim["time_step"],
                      sim["contact_time_constant"], cfg["joints"]["kd"])
     model, data = wm.model, mujoco.MjData(wm.model)
-    gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], cfg["torso"]["kp"], cfg["torso"]["kd"])
-    legs = hip_legs(scene, rec.joint_names)
+    place = cfg["placement"]
+    gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], cfg["torso"]["kp"], cfg["torso"]["kd"],
+                  place["kp"], place["kd"])
+    control = ReferenceController(model, wm, ref, gains, place["max_shift"], scale)
     root_id = model.body(wm.root).id
-    jnt_ids = np.array([model.joint(n).id for n in rec.joint_names])
 
-    phi, D = ref.root_at(0.0)
+    i_root = scene.body_index(scene.root.body)
+    data.qpos[:] = plan_qpos(wm, i_root, ref.q[0], ref.angles[0])
     v0, w0 = ref.root_rate0
     if wm.planar:
-        data.qpos[:3] = phi[0], phi[2], math.atan2(D[0, 2], D[2, 2])
         data.qvel[:3] = v0[0], v0[2], w0[1]
     else:
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, D.reshape(-1))
-        data.qpos[:7] = np.r_[phi, quat]
-        data.qvel[:6] = np.r_[v0, D.T @ w0]
-    data.qpos[wm.qpos] = ref.angles[0]
+        data.qvel[:6] = np.r_[v0, ref.root_at(0.0)[1].T @ w0]
     data.qvel[wm.dof] = ref.rates[0]
-    mujoco.mj_forward(model, data)
 
     stop = cfg["stop"]
     h = model.opt.timestep
@@ -117,79 +118,56 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     trace: dict[str, list] = {k: [] for k in ("time", "position", "velocity", "torso",
                                               "torso_ref", "ground_force",
                                               "contact_position")}
-    force = np.zeros(6)
     contact_ids = [model.body(c.name).id for c in scene.contacts]
-    ground = model.geom("ground").id
-    drift, placement, boundaries = [], [], 1
-    reason, vel = "completed", np.zeros(6)
-    ci = {c.name: (scene.body_index(c.body), np.asarray(scene.body(c.body).points[c.point]))
-          for c in scene.contacts}
+    drift, placement, per_half, boundaries, start = [], [], [], 1, 0
+    reason = "completed"
     while data.time < t_end - 0.5 * h:
+        # kinematics of the current state, the control on it, then the step (mj_step1/2):
+        # what is recorded at a step is all of one state
+        mujoco.mj_step1(model, data)
         t = data.time
-        a_ref, r_ref, e_ref, active = ref.at(t)
-        phi_ref, D_ref = ref.root_at(t)
-        w_ref = ref.root_rate_at(t, h)
-        qj, vj = data.qpos[wm.qpos], data.qvel[wm.dof]
-        D_sim = data.xmat[root_id].reshape(3, 3)
-        mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_BODY, root_id, vel, 0)
-        fb = gains.kp * (a_ref - qj) + gains.kd * (r_ref - vj)
-        stance = [idx for idx, contacts in legs if contacts & set(active)]
-        for idx in stance:
-            axes = data.xaxis[jnt_ids[idx]]
-            fb[idx] += torso_torque(gains, D_sim, D_ref, vel[:3], w_ref, axes) / len(stance)
+        ff, fb, plan_effort, plan_angles = control(data)
         data.qfrc_applied[:] = 0.0
-        # -kd vj is MuJoCo's (implicit) joint damping (walk.mujoco_model)
-        data.qfrc_applied[wm.dof] = scale * e_ref + fb + gains.kd * vj
-        errs.append(a_ref - qj)
-        ffs.append(scale * e_ref)
+        # -kd v is MuJoCo's (implicit) joint damping (walk.mujoco_model)
+        data.qfrc_applied[wm.dof] = ff + fb + gains.kd * data.qvel[wm.dof]
+        errs.append(plan_angles - data.qpos[wm.qpos])
+        ffs.append(ff)
         fbs.append(fb)
-        plans.append(e_ref)
-        mujoco.mj_step(model, data)
-        if series:
-            trace["time"].append(data.time)
-            trace["position"].append(data.qpos[wm.qpos].copy())
-            trace["velocity"].append(data.qvel[wm.dof].copy())
-            trace["torso"].append(np.r_[data.xpos[root_id], data.xmat[root_id]])
-            trace["torso_ref"].append(np.r_[phi_ref, D_ref.reshape(-1)])
-            per_point = np.zeros((len(contact_ids), 3))
-            for c in range(data.ncon):
-                geoms = (data.contact[c].geom1, data.contact[c].geom2)
-                body = model.geom_bodyid[geoms[1] if geoms[0] == ground else geoms[0]]
-                mujoco.mj_contactForce(model, data, c, force)
-                # the ground's force on the foot, world: the contact frame's rows are its axes,
-                # the first the normal, pointing from geom1 to geom2
-                f = data.contact[c].frame.reshape(3, 3).T @ force[:3]
-                per_point[contact_ids.index(body)] += f if geoms[0] == ground else -f
-            trace["ground_force"].append(per_point)
-            trace["contact_position"].append(data.xpos[contact_ids].copy())
-        # the checks, after the step
-        com = data.xpos[root_id]
+        plans.append(plan_effort)
+        com = data.xpos[root_id].copy()
+        phi_ref, D_ref = ref.root_at(t)
         tilt = math.degrees(math.acos(np.clip(data.xmat[root_id].reshape(3, 3)[:, 2] @ D_ref[:, 2],
                                               -1, 1)))
+        if series:
+            trace["time"].append(t)
+            trace["position"].append(data.qpos[wm.qpos].copy())
+            trace["velocity"].append(data.qvel[wm.dof].copy())
+            trace["torso"].append(np.r_[com, data.xmat[root_id]])
+            trace["torso_ref"].append(np.r_[phi_ref, D_ref.reshape(-1)])
+            trace["contact_position"].append(data.xpos[contact_ids].copy())
+        mujoco.mj_step2(model, data)
+        if series:  # the contact forces of that state, solved in mj_step2
+            trace["ground_force"].append(ground_forces(model, data, contact_ids))
         worst = int(np.argmax(np.abs(errs[-1])))
         if com[2] < phi_ref[2] - stop["height_drop"]:
             reason = (f"fall: torso centre of mass {com[2]:.3f} m high, "
-                      f"{phi_ref[2] - com[2]:.3f} m below the plan at t = {data.time:.3f} s")
+                      f"{phi_ref[2] - com[2]:.3f} m below the plan at t = {t:.3f} s")
         elif tilt > stop["tilt"]:
-            reason = f"fall: torso tilted {tilt:.1f} deg from the plan at t = {data.time:.3f} s"
+            reason = f"fall: torso tilted {tilt:.1f} deg from the plan at t = {t:.3f} s"
         elif abs(math.degrees(errs[-1][worst])) > stop["joint_error"]:
             reason = (f"lost tracking: {rec.joint_names[worst]} "
                       f"{math.degrees(errs[-1][worst]):+.1f} deg from the plan at t = "
-                      f"{data.time:.3f} s")
+                      f"{t:.3f} s")
         if reason != "completed":
             break
         if data.time >= boundaries * ref.period - 0.5 * h:
-            phi_b, _ = ref.root_at(data.time)
-            drift.append((com - phi_b).tolist())
-            n = int(np.argmin(np.abs(ref.times - data.time)))
-            q_n = ref.q[n]
-            worst_foot = 0.0
-            for c in ref.active[n]:
-                i, p = ci[c]
-                planned = q_n[12 * i:12 * i + 3] + q_n[12 * i + 3:12 * i + 12].reshape(3, 3).T @ p
-                worst_foot = max(worst_foot, float(np.linalg.norm(
-                    data.xpos[model.body(c).id] - planned)))
-            placement.append(worst_foot)
+            mujoco.mj_kinematics(model, data)
+            drift.append((data.xpos[root_id] - ref.root_at(data.time)[0]).tolist())
+            placement.append(_placement_error(ref, model, data, control))
+            per_half.append(_rms(np.degrees(errs[start:])))
+            start = len(errs)
+            if progress is not None:
+                progress(boundaries, steps)
             boundaries += 1
     if series:
         extra = {"joint_names": list(rec.joint_names),
@@ -202,10 +180,42 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         "half_cycles_walked": len(drift), "time_walked_s": round(float(data.time), 4),
         "stopped": reason,
         "joint_rms_deg": _rms(errs_deg), "joint_max_deg": float(np.abs(errs_deg).max(initial=0)),
+        "joint_rms_per_half_cycle_deg": per_half,
         "feedback_share": _rms(fbs) / max(_rms(plans), 1e-12),
         "feedforward_rms_nm": _rms(ffs), "feedback_rms_nm": _rms(fbs), "plan_rms_nm": _rms(plans),
         "torso_drift_m": drift, "foot_placement_error_m": placement,
-        "controller": {"joints": cfg["joints"], "torso": cfg["torso"],
+        "controller": {"joints": cfg["joints"], "torso": cfg["torso"], "placement": place,
                        "simulation": sim, "foot_half_width": half_width},
         **({"series": extra} if series else {}),
     }
+
+
+def ground_forces(model, data, contact_ids: list[int]) -> np.ndarray:
+    """(n_contacts, 3) N, world: the ground's force on each planned contact point's spheres,
+    summed, from the contacts MuJoCo solved in the last step."""
+    import mujoco
+
+    ground = model.geom("ground").id
+    force = np.zeros(6)
+    per_point = np.zeros((len(contact_ids), 3))
+    for c in range(data.ncon):
+        geoms = (data.contact[c].geom1, data.contact[c].geom2)
+        body = model.geom_bodyid[geoms[1] if geoms[0] == ground else geoms[0]]
+        mujoco.mj_contactForce(model, data, c, force)
+        # the contact frame's rows are its axes, the first the normal, from geom1 to geom2
+        f = data.contact[c].frame.reshape(3, 3).T @ force[:3]
+        per_point[contact_ids.index(body)] += f if geoms[0] == ground else -f
+    return per_point
+
+
+def _placement_error(ref, model, data, control) -> float:
+    """m: the largest distance of a contact point the plan holds at the node nearest to
+    data.time from where the plan puts it."""
+    n = int(np.argmin(np.abs(ref.times - data.time)))
+    q_n = ref.q[n]
+    worst = 0.0
+    for c in ref.active[n]:
+        i, p = control.points[c]
+        planned = q_n[12 * i:12 * i + 3] + q_n[12 * i + 3:12 * i + 12].reshape(3, 3).T @ p
+        worst = max(worst, float(np.linalg.norm(data.xpos[control.contact_body[c]] - planned)))
+    return worst

@@ -1,9 +1,10 @@
 """gait-planner walk: a recorded plan walked in MuJoCo by the reference controller.
 
-Measured with config/walk.yaml as committed: walker2d's default plan walks 10 of 10 half
-cycles (feedback share 0.71, joint RMS 2.0 deg, the torso 0.37 m behind the plan at the
-end); with the plan's torques x0 it walks 1 (share 2.6), x0.5 2 (2.2). walker3d's walks 1
-(not tested here; the issue's target of 10 with a share <= 0.4 is not reached yet).
+Measured with config/walk.yaml as committed (2026-11-27): walker2d's default plan walks 10
+of 10 half cycles (feedback share 0.22, joint RMS 0.50 deg), with the plan's torques x0 1
+(share 2.4), x0.5 5 (1.6); walker3d's walks 10 of 10 (share 0.36, joint RMS 0.97 deg), x0
+1, x0.5 1. The bounds below leave room for round-off in the plan (the walk of a chaotic
+system: benchmarks/HISTORY.md gives the spread over simulation settings).
 """
 
 from __future__ import annotations
@@ -28,19 +29,33 @@ def walker2d_plan(tmp_path_factory) -> Path:
     return out
 
 
-@pytest.mark.slow
-def test_walker2d_default_plan_walks_and_the_self_test_does_worse(walker2d_plan):
+def _walks_ten_and_the_self_test_does_worse(plan: Path, share: float):
     from gait_planner.cli.walk import self_test
     from gait_planner.walk.simulate import walk
 
-    full = walk(walker2d_plan, 10)
+    full = walk(plan, 10)
     assert full["half_cycles_walked"] == 10 and full["stopped"] == "completed", full["stopped"]
-    assert full["feedback_share"] < 0.8 and full["joint_rms_deg"] < 3.0
-    assert len(full["torso_drift_m"]) == full["half_cycles_walked"]
-    rows = self_test(str(walker2d_plan), 10, full)
+    assert full["feedback_share"] < share and full["joint_rms_deg"] < 2.0
+    assert len(full["torso_drift_m"]) == len(full["joint_rms_per_half_cycle_deg"]) == 10
+    rows = self_test(str(plan), 10, full)
     zero = next(r for r in rows if r["torque_scale"] == 0)
     assert zero["half_cycles_walked"] < full["half_cycles_walked"]
     assert all(r["worse"] for r in rows)
+
+
+@pytest.mark.slow
+def test_walker2d_default_plan_walks_and_the_self_test_does_worse(walker2d_plan):
+    _walks_ten_and_the_self_test_does_worse(walker2d_plan, 0.3)
+
+
+@pytest.mark.slow
+def test_walker3d_default_plan_walks_and_the_self_test_does_worse(tmp_path):
+    """The issue's target: ten half cycles with the feedback adding at most 40 %."""
+    out = tmp_path / "w3.mcap"
+    exe = Path(sys.executable).with_name("gait-planner")
+    subprocess.run([str(exe), "plan", "--scene", "walker3d", "--out", str(out)], check=True,
+                   capture_output=True)
+    _walks_ten_and_the_self_test_does_worse(out, 0.4)
 
 
 def test_one_half_cycle_of_walker2d_is_walked_and_recorded(walker2d_plan, tmp_path, capsys):
@@ -95,6 +110,6 @@ def test_a_bad_controller_config_names_the_key(tmp_path):
 
     assert load_config()["joints"]["kp"] > 0
     bad = tmp_path / "walk.yaml"
-    bad.write_text(CONFIG.read_text().replace("kd: 300.0", "kd: -1"))
+    bad.write_text(CONFIG.read_text().replace("kd: 100.0", "kd: -1"))
     with pytest.raises(ValueError, match=r"walk.yaml: torso.kd must be a finite number >= 0"):
         load_config(bad)
