@@ -1,6 +1,7 @@
-"""``gait-planner walk RUN.mcap [--steps K] [--self-test] [--json] [--out WALK.mcap]``: walk a
-recorded plan in MuJoCo with the reference controller (`gait_planner.walk.simulate`);
---out records the walk (`gait_planner.walk.recording`). --self-test walks it
+"""``gait-planner walk RUN.mcap [--steps K] [--self-test] [--json] [--out WALK.mcap]
+[--rrd WALK.rrd]``: walk a recorded plan in MuJoCo with the reference controller
+(`gait_planner.walk.simulate`); --out records the walk (`gait_planner.walk.recording`), --rrd
+draws it over the plan in rerun (`gait_planner.walk.rerun_walk`). --self-test walks it
 again with the plan's torques scaled by config/walk.yaml's self_test_scales (0 and 0.5) and
 says whether each did measurably worse (fewer half cycles or a larger feedback share).
 """
@@ -53,6 +54,8 @@ def format_summary(r: dict[str, Any]) -> str:
              + " ".join(f"{v:.3f}" for v in r["foot_placement_error_m"])]
     if "out" in r:
         lines.append(f"  recorded in {r['out']}")
+    if "rrd" in r:
+        lines.append(f"  rerun view in {r['rrd']} (open it with `rerun {r['rrd']}`)")
     for row in r.get("self_test", []):
         lines.append(f"  self-test, plan torques x{row['torque_scale']:g}: "
                      f"{row['half_cycles_walked']} half cycles, feedback share "
@@ -77,24 +80,42 @@ def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.Argument
     parser.add_argument("--out", metavar="WALK.mcap", default=None,
                         help="record the walk: simulated joint states, feed-forward and "
                         "feedback torques, ground forces (200 Hz)")
+    parser.add_argument("--rrd", metavar="WALK.rrd", default=None,
+                        help="draw the walk in rerun: the simulated walker over the planned "
+                        "one, the ground forces of both, joint angles, torques and the errors "
+                        "per half cycle (200 Hz)")
     parser.set_defaults(handler=_walk_command)
     return parser
 
 
+def _write(key: str, path: str, result: dict[str, Any]) -> None:
+    """result[key] = the absolute path the walk was written to (`key` "out": MCAP, "rrd")."""
+    if key == "out":
+        from gait_planner.walk.recording import write_walk_mcap as writer
+    else:
+        from gait_planner.walk.rerun_walk import save_walk_rrd as writer
+    try:
+        result[key] = str(writer(result, path))
+    except OSError as error:
+        raise CliError(f"cannot write {path}: {error}") from error
+
+
 def _walk_command(args: argparse.Namespace) -> int:
-    from gait_planner.walk.recording import write_walk_mcap
+    from gait_planner.walk.recording import output_path
     from gait_planner.walk.simulate import walk
 
+    outputs = {k: v for k, v in (("out", args.out), ("rrd", args.rrd)) if v is not None}
     try:
-        result = walk(args.recording, args.steps, series=args.out is not None)
-        if args.out is not None:
-            result["out"] = str(write_walk_mcap(result, args.out))
-            del result["series"]
+        targets = [output_path(path) for path in outputs.values()]  # before the walk
+        if len(set(targets)) < len(targets):
+            raise ValueError(f"--out and --rrd name the same file {targets[0]}")
+        result = walk(args.recording, args.steps, series=bool(outputs))
+        for key, path in outputs.items():
+            _write(key, path, result)
+        result.pop("series", None)
         if args.self_test:
             result["self_test"] = self_test(args.recording, args.steps, result)
     except ValueError as error:
         raise CliError(str(error)) from error
-    except OSError as error:
-        raise CliError(f"cannot write {args.out}: {error}") from error
     print(json.dumps(result, indent=2) if args.json else format_summary(result))
     return 0

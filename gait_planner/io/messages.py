@@ -55,7 +55,7 @@ __all__ = ["check_result", "contact_forces", "contact_points", "fill_message", "
            "joint_states",
            "joint_trajectory", "multibody_states", "node_efforts", "plan_response_fields",
            "quaternion_msg", "robot_description", "node_stamps_ns", "tf_messages", "tf_static",
-           "time_msg", "WORLD_FRAME"]
+           "time_msg", "walk_response_fields", "WORLD_FRAME"]
 
 NS_PER_S = 1_000_000_000
 
@@ -375,6 +375,19 @@ def plan_response_fields(result: PlanResult, mcap_path: str | None,
         "continuous_base_force": _setting(result, "continuous_base_force"),
         "continuous_dynamics": str(result.settings.get("continuous_dynamics", "")),
     }
+
+
+def walk_response_fields(steps: int, walked: Mapping[str, Any] | None,
+                         error: str = "") -> dict[str, Any]:
+    """The walk fields of PlanGait's response for a walk of `steps` half cycles: `walked` is
+    the summary of `gait_planner.walk.simulate.walk`, None when the walk could not run
+    (`error` says why: walk_stopped "not walked: ERROR", feedback share NaN)."""
+    if walked is None:
+        return {"walk_steps": int(steps), "walk_half_cycles": 0,
+                "walk_feedback_share": math.nan, "walk_stopped": f"not walked: {error}"}
+    return {"walk_steps": int(steps), "walk_half_cycles": int(walked["half_cycles_walked"]),
+            "walk_feedback_share": float(walked["feedback_share"]),
+            "walk_stopped": str(walked["stopped"])}
 
 
 def _setting(result: PlanResult, key: str) -> float:

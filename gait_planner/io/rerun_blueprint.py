@@ -38,10 +38,12 @@ from gait_planner.io.rerun_series import (PlotGroup, joint_of, plot_groups, pose
                                           whole_body_com)
 from gait_planner.result import PlanResult
 
-__all__ = ["blueprint"]
+__all__ = ["blueprint", "plot_view"]
 
 
-def _plot(group: PlotGroup) -> rrb.TimeSeriesView:
+def plot_view(group: PlotGroup) -> rrb.TimeSeriesView:
+    """A plot of the group's series and its boundary lines, without legend, its time axis
+    linked to every other plot's."""
     return rrb.TimeSeriesView(
         origin="/plots", name=group.title,
         contents=[f"+ /{p}" for p in (*group.paths, group.boundary_path)],
@@ -51,7 +53,7 @@ def _plot(group: PlotGroup) -> rrb.TimeSeriesView:
 def _eye(result: PlanResult) -> rrb.EyeControls3D:
     """A camera in front of the walker and to its right, looking at the middle of its path
     (distances scaled by the mean height h of the centre of mass; walker3d: h = 1.0 m)."""
-    com = whole_body_com(result, poses(result)[0])
+    com = whole_body_com(result, poses(result.q)[0])
     h = float(com[:, 2].mean())
     target = np.array([0.5 * (com[0, 0] + com[-1, 0]), float(com[:, 1].mean()), 0.6 * h])
     return rrb.EyeControls3D(kind="Orbital", position=target + h * np.array([1.5, -2.1, 0.8]),
@@ -61,7 +63,7 @@ def _eye(result: PlanResult) -> rrb.EyeControls3D:
 def blueprint(result: PlanResult) -> rrb.Blueprint:
     """The layout of the module docstring for `result`'s recording."""
     groups = plot_groups(result)
-    plots = {g.key: _plot(g) for g in groups}
+    plots = {g.key: plot_view(g) for g in groups}
     joint_rows: dict[str, list] = {}  # joint -> angles per side, then torques per side
     for g in groups:
         if g.key.startswith(("joint_angle_", "joint_torque_")):

@@ -31,16 +31,16 @@ import numpy as np
 from gait_planner.io.messages import node_efforts
 from gait_planner.result import PlanResult
 
-__all__ = ["BOUNDARY_COLOR", "COLOUR_KEY", "PlotGroup", "angular_momentum", "axis_of",
-           "joint_of", "phase_boundaries", "plot_groups", "poses", "series_color",
-           "series_name", "series_values", "side_of", "whole_body_com"]
+__all__ = ["AXIS_COLORS", "BOUNDARY_COLOR", "COLOUR_KEY", "PlotGroup", "angular_momentum",
+           "axis_of", "joint_color", "joint_of", "phase_boundaries", "plot_groups", "poses",
+           "series_color", "series_name", "series_values", "side_of", "whole_body_com"]
 
 # Colours of the series: joint angles by their axis (pitch, roll, yaw; a revolute joint's
 # angle as a pitch), the same in every joint plot; x, y, z components red, green, blue
 # (forefoot forces lighter than heel forces).
 _JOINT_PALETTE = ((31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40),
                   (148, 103, 189), (140, 86, 75), (227, 119, 194), (127, 127, 127))
-_AXIS_COLORS = ((214, 39, 40), (44, 160, 44), (31, 119, 180))
+AXIS_COLORS = ((214, 39, 40), (44, 160, 44), (31, 119, 180))
 _LIGHT_AXIS_COLORS = ((250, 140, 130), (140, 220, 120), (120, 180, 240))
 _ENERGY_COLORS = {"kinetic": (214, 39, 40), "potential": (31, 119, 180), "total": (40, 40, 40)}
 BOUNDARY_COLOR = (150, 150, 150)
@@ -60,10 +60,11 @@ class PlotGroup:
     key: str
     title: str
     paths: tuple[str, ...]
+    boundaries: str = "phase_boundaries"  # the plot's grey vertical lines: plots/<this>/<key>
 
     @property
     def boundary_path(self) -> str:
-        return f"plots/phase_boundaries/{self.key}"
+        return f"plots/{self.boundaries}/{self.key}"
 
 
 def side_of(name: str) -> str:
@@ -122,20 +123,26 @@ def plot_groups(result: PlanResult) -> list[PlotGroup]:
     return groups
 
 
+def joint_color(name: str) -> tuple[int, int, int]:
+    """The colour of a joint angle's series (and its torque's) by the angle's axis: pitch
+    blue, roll orange, yaw green; a revolute joint's angle as a pitch."""
+    axis = axis_of(name)
+    return _JOINT_PALETTE[_AXES.index(axis) if axis else 0]
+
+
 def series_color(result: PlanResult, path: str) -> tuple[int, int, int]:
     """The colour of the series at `path` (a path of `plot_groups`)."""
     parts = path.split("/")
     kind, name = parts[1], parts[2]
     if kind in ("joint_angle", "joint_torque"):
-        axis = axis_of(name)
-        return _JOINT_PALETTE[_AXES.index(axis) if axis else 0]
+        return joint_color(name)
     if kind == "contact_force":
         axis = "xyz".index(parts[3])
         body = result.scene.contact(name).body
         first = _feet(result)[body][0] == name
-        return (_AXIS_COLORS if first else _LIGHT_AXIS_COLORS)[axis]
+        return (AXIS_COLORS if first else _LIGHT_AXIS_COLORS)[axis]
     if kind == "angular_momentum":
-        return _AXIS_COLORS["xyz".index(name)]
+        return AXIS_COLORS["xyz".index(name)]
     if kind == "energy":
         return _ENERGY_COLORS[name]
     bodies = list(_feet(result))
@@ -155,10 +162,11 @@ def series_name(result: PlanResult, path: str) -> str:
     return name
 
 
-def poses(result: PlanResult) -> tuple[np.ndarray, np.ndarray]:
-    """(N+1, nb, 3) COMs and (N+1, nb, 3, 3) director matrices D = [d1 d2 d3]."""
-    q = np.asarray(result.q, dtype=float).reshape(result.n_nodes, -1, 12)
-    return q[:, :, :3], np.transpose(q[:, :, 3:].reshape(result.n_nodes, -1, 3, 3), (0, 1, 3, 2))
+def poses(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Configurations q (n, 12 nb) -> (n, nb, 3) COMs and (n, nb, 3, 3) director matrices
+    D = [d1 d2 d3]."""
+    q = np.asarray(q, dtype=float).reshape(len(q), -1, 12)
+    return q[:, :, :3], np.transpose(q[:, :, 3:].reshape(len(q), -1, 3, 3), (0, 1, 3, 2))
 
 
 def whole_body_com(result: PlanResult, phi: np.ndarray) -> np.ndarray:
@@ -178,7 +186,7 @@ def angular_momentum(result: PlanResult) -> np.ndarray:
     a_n x a_{n+1} / h_n; without gravity and ground forces the variational integrator
     conserves this interval value exactly (its discrete momentum map).
     """
-    phi, D = poses(result)
+    phi, D = poses(result.q)
     c = whole_body_com(result, phi)
     h = np.diff(np.asarray(result.times, dtype=float))
     r = phi - c[:, None, :]

@@ -37,48 +37,29 @@ import numpy as np
 import rerun as rr
 
 from gait_planner.io.atomic import atomic_target
-from gait_planner.io.messages import contact_points, foot_wrenches, quaternion_msg
+from gait_planner.io.messages import contact_points, foot_wrenches
 from gait_planner.io.rerun_blueprint import blueprint
-from gait_planner.io.rerun_series import (BOUNDARY_COLOR, COLOUR_KEY, phase_boundaries,
-                                          plot_groups, poses, series_color, series_name,
-                                          series_values, side_of, whole_body_com)
-from gait_planner.io.urdf import body_shapes
+from gait_planner.io.rerun_draw import (Columns, log_bodies, log_boundaries, log_ground,
+                                        log_poses, send_scalars, skeleton)
+from gait_planner.io.rerun_series import (COLOUR_KEY, phase_boundaries, plot_groups, poses,
+                                          series_color, series_name, series_values, side_of,
+                                          whole_body_com)
 from gait_planner.result import PlanResult
 
 __all__ = ["FORCE_SCALE", "APPLICATION_ID", "log_plan", "save_rrd", "show"]
 
 APPLICATION_ID = "gait_planner"
 FORCE_SCALE = 1.5e-3  # m of arrow per N of force
-_GROUND_HALF_SIZE, _GROUND_STEP = 1.5, 0.25  # m
 _CONTACT_COLOR = (20, 160, 60)
 _WRENCH_COLOR = (230, 120, 0)
-_BODY_ALPHA = 150  # the bodies let the arrows, trails and skeleton inside them show
 _SKELETON_COLOR = (40, 40, 40)
 _COM_TRAIL_COLOR = (190, 0, 170)
 _SIDE_COLORS = {"right": (200, 60, 60), "left": (50, 90, 200)}
 
 
-def _rgb(color) -> tuple[int, int, int]:
-    return tuple(int(round(255 * c)) for c in color[:3])  # type: ignore[return-value]
-
-
 def _log_static(result: PlanResult, rec: rr.RecordingStream) -> None:
-    rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    ticks = np.arange(-_GROUND_HALF_SIZE, _GROUND_HALF_SIZE + 1e-9, _GROUND_STEP)
-    h = _GROUND_HALF_SIZE
-    lines = [[[x, -h, 0.0], [x, h, 0.0]] for x in ticks] + [[[-h, y, 0.0], [h, y, 0.0]]
-                                                              for y in ticks]
-    rec.log("world/ground", rr.LineStrips3D(lines, radii=0.001, colors=(150, 150, 150)),
-            static=True)
-    for name, shape in body_shapes(result.scene).items():
-        color = (*_rgb(shape.color), _BODY_ALPHA)
-        if shape.kind == "box":
-            geometry = rr.Boxes3D(sizes=[shape.size], centers=[shape.centre], colors=[color],
-                                  fill_mode="solid")
-        else:
-            geometry = rr.Cylinders3D(lengths=[shape.size[2]], radii=[shape.size[0]],
-                                      centers=[shape.centre], colors=[color], fill_mode="solid")
-        rec.log(f"world/walker/{name}", geometry, static=True)
+    log_ground(rec)
+    log_bodies(rec, result.scene, "world/walker")
     stats = result.stats
     sigma = ", ".join(f"{s:.4f}" for s in result.phase_scaling)
     summary = (
@@ -93,23 +74,6 @@ def _log_static(result: PlanResult, rec: rr.RecordingStream) -> None:
         f"| max constraint violation | {stats.max_constraint_violation:.3g} m |\n"
         f"| max dynamics residual | {stats.max_dynamics_residual:.3g} |\n")
     rec.log("plan", rr.TextDocument(summary, media_type=rr.MediaType.MARKDOWN), static=True)
-
-
-def _skeleton(result: PlanResult, phi: np.ndarray, D: np.ndarray) -> list[np.ndarray]:
-    scene = result.scene
-    index = {b.name: i for i, b in enumerate(scene.bodies)}
-    strips = []
-    for joint in scene.joints:
-        p, c = index[joint.parent], index[joint.child]
-        point = phi[p] + D[p] @ np.asarray(scene.body(joint.parent).points[joint.parent_point])
-        strips.append(np.array([phi[p], point, phi[c]]))
-    feet: dict[str, list[np.ndarray]] = {}
-    for contact in scene.contacts:
-        b = index[contact.body]
-        feet.setdefault(contact.body, []).append(
-            phi[b] + D[b] @ np.asarray(scene.body(contact.body).points[contact.point]))
-    strips += [np.array(points) for points in feet.values() if len(points) > 1]
-    return strips
 
 
 def _trail_points(result: PlanResult) -> dict[str, np.ndarray]:
@@ -138,53 +102,23 @@ def _contact_rows(result: PlanResult, n: int) -> dict[str, list]:
                           for body, r, F, M, cop in wrenches]}
 
 
-class _Columns:
-    """The per-node instances of one entity, sent as one columnar chunk (`send`): a row per
-    node, each with its own number of instances (strips, points or arrows)."""
-
-    def __init__(self, indexes: list):
-        self.indexes, self.values, self.lengths = indexes, {}, []
-
-    def add(self, **fields) -> None:
-        counts = {len(v) for v in fields.values()}
-        assert len(counts) == 1, fields.keys()
-        self.lengths.append(counts.pop())
-        for key, value in fields.items():
-            self.values.setdefault(key, []).extend(value)
-
-    def send(self, rec: rr.RecordingStream, path: str, archetype, **style) -> None:
-        """The rows as `archetype` columns, partitioned by node; `style` (radii, colors,
-        show_labels: the same at every node) logged once, static."""
-        rec.log(path, archetype.from_fields(**style), static=True)
-        values = {k: (np.array(v, dtype=float).reshape(-1, 3) if k in
-                      ("positions", "origins", "vectors") else v)
-                  for k, v in self.values.items()}
-        rec.send_columns(path, indexes=self.indexes,
-                         columns=archetype.columns(**values).partition(self.lengths))
-
-
 def _log_motion(result: PlanResult, rec: rr.RecordingStream) -> None:
     """The walker, skeleton, trails and contacts at every node, each entity one columnar
     chunk (timelines time and node): the same data as logging node after node, about 0.1 s
     faster per recording of walker3d (615 log calls)."""
-    phi, D = poses(result)
+    phi, D = poses(result.q)
     com = whole_body_com(result, phi)
     trails = _trail_points(result)
     side = {c.name: side_of(c.body) for c in result.scene.contacts}
     t = np.asarray(result.times, dtype=float) - float(result.times[0])
     nodes = np.arange(result.n_nodes)
     indexes = [rr.TimeColumn("time", duration=t), rr.TimeColumn("node", sequence=nodes)]
-    for i, body in enumerate(result.body_names):
-        quaternions = [[v["x"], v["y"], v["z"], v["w"]]
-                       for v in (quaternion_msg(D[n, i]) for n in nodes)]
-        rec.send_columns(f"world/walker/{body}", indexes=indexes,
-                         columns=rr.Transform3D.columns(translation=phi[:, i],
-                                                        quaternion=quaternions))
+    log_poses(rec, "world/walker", result.body_names, indexes, phi, D)
     names = ("skeleton", "com", "com_total", "trail_com", *trails, "points", "forces", "cops",
              "wrenches")
-    columns = {name: _Columns(indexes) for name in names}
+    columns = {name: Columns(indexes) for name in names}
     for n in nodes:
-        columns["skeleton"].add(strips=_skeleton(result, phi[n], D[n]))
+        columns["skeleton"].add(strips=skeleton(result.scene, phi[n], D[n]))
         columns["com"].add(positions=list(phi[n]), labels=list(result.body_names))
         columns["com_total"].add(positions=[com[n]], labels=["centre of mass"])
         ground = com[: n + 1] * [1.0, 1.0, 0.0] + [0.0, 0.0, 0.002]  # above the grid
@@ -224,11 +158,6 @@ def _log_motion(result: PlanResult, rec: rr.RecordingStream) -> None:
                      columns=rr.StateChange.columns(state=[phases[n] for n in changes]))
 
 
-def _series(rec: rr.RecordingStream, path: str, t: np.ndarray, values: np.ndarray) -> None:
-    rec.send_columns(path, indexes=[rr.TimeColumn("time", duration=t)],
-                     columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=float)))
-
-
 def _log_series(result: PlanResult, rec: rr.RecordingStream) -> None:
     t = np.asarray(result.times, dtype=float) - float(result.times[0])
     values = series_values(result)
@@ -238,18 +167,9 @@ def _log_series(result: PlanResult, rec: rr.RecordingStream) -> None:
             rec.log(path, rr.SeriesLines(colors=series_color(result, path),
                                          names=series_name(result, path),
                                          widths=1.5), static=True)
-            _series(rec, path, t, values[path])
-        data = np.concatenate([values[p] for p in group.paths])
-        low, high = float(data.min()), float(data.max())
-        if high - low < 1e-9:
-            low, high = low - 1.0, high + 1.0
-        # one polyline of vertical segments: (t_b, low) -> (t_b + 1 us, high), then a gap
-        times = np.repeat(boundaries, 3) + np.tile([0.0, 1e-6, 2e-6], len(boundaries))
-        heights = np.tile([low, high, np.nan], len(boundaries))
-        rec.log(group.boundary_path, rr.SeriesLines(  # not averaged within a pixel
-            colors=BOUNDARY_COLOR, widths=1.0, names="phase boundaries",
-            aggregation_policy="Off"), static=True)
-        _series(rec, group.boundary_path, times, heights)
+            send_scalars(rec, path, t, values[path])
+        log_boundaries(rec, group, np.concatenate([values[p] for p in group.paths]),
+                       boundaries, "phase boundaries")
 
 
 def log_plan(result: PlanResult, recording: rr.RecordingStream) -> None:

@@ -25,7 +25,7 @@ from gait_planner.io.mcap_writer import (STREAM, encoder_for, recording_schemas,
                                          register_topics)
 from gait_planner.io.messages import header, vector3
 
-__all__ = ["TOPICS", "write_walk_mcap"]
+__all__ = ["TOPICS", "output_path", "write_walk_mcap"]
 
 TOPICS = {"/walk/joint_states": ("sensor_msgs/msg/JointState", STREAM),
           "/walk/feedforward": ("sensor_msgs/msg/JointState", STREAM),
@@ -39,12 +39,19 @@ def _joints(ns: int, names, position=(), velocity=(), effort=()) -> dict[str, An
             "effort": list(map(float, effort))}
 
 
-def write_walk_mcap(result: dict[str, Any], path: str | os.PathLike, every: int = 10) -> Path:
-    """Write the walk `result` (with its "series") to `path` atomically; the absolute path."""
-    series = result["series"]
+def output_path(path: str | os.PathLike) -> Path:
+    """`path` made absolute, for a walk's recording; ValueError naming it if its folder does
+    not exist."""
     target = Path(path).expanduser().resolve()
     if not target.parent.is_dir():
         raise ValueError(f"cannot write {path}: no folder {target.parent}")
+    return target
+
+
+def write_walk_mcap(result: dict[str, Any], path: str | os.PathLike, every: int = 10) -> Path:
+    """Write the walk `result` (with its "series") to `path` atomically; the absolute path."""
+    series = result["series"]
+    target = output_path(path)
     texts = recording_schemas()
     encoder = encoder_for(tuple(texts.items()))
     names, contacts = series["joint_names"], series["contact_names"]
