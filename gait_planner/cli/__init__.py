@@ -75,6 +75,11 @@ def _add_plan_options(parser: argparse.ArgumentParser, scene_default: str | None
     parser.add_argument("--max-solve-time", "--max-time", dest="max_time", type=float,
                         metavar="S", help="solver time limit, s (default: the scene's "
                         "max_solve_time option, 600 s unless set)")
+    parser.add_argument("--walk", type=int, default=0, metavar="K",
+                        help="then walk the recorded plan K half cycles in MuJoCo with the "
+                        "reference controller (as `walk RUN.mcap --steps K`; config/walk.yaml) "
+                        "and print the walk's summary, with --json under \"walk\"; a fall "
+                        "leaves the exit status 0 (default 0: no walk)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--no-rrd", action="store_true", help="do not write the rerun .rrd")
     parser.add_argument("--compile", action=argparse.BooleanOptionalAction, default=True,
@@ -120,6 +125,9 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     target = Path(out)
     if target.suffix != ".mcap":
         raise CliError(f"--out must name a .mcap file, got {out!r}")
+    if args.walk < 0:
+        raise CliError(f"--walk must be a number of half cycles >= 0 (0: no walk), "
+                       f"got {args.walk}")
     request = PlanRequest(scene=args.scene, step_length=args.step_length, cost=args.cost,
                           friction_coefficient=args.mu, intervals_per_phase=args.intervals,
                           max_solve_time=args.max_time, output_name=target.stem,
@@ -132,13 +140,31 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     except RequestError as err:
         raise CliError(str(err)) from None
     data = summary(outcome)
-    if args.json:
-        print(json.dumps(data, indent=2))
-    else:
+    if not args.json:
         width = max(len(k) for k in data)
         for key, value in data.items():
             print(f"{key:<{width}}  {value}")
+    if args.walk and data["success"]:
+        data["walk"] = _walk_plan(data["mcap"], args.walk, printed=not args.json)
+    if args.json:
+        print(json.dumps(data, indent=2))
     return data
+
+
+def _walk_plan(mcap: str, steps: int, printed: bool) -> dict:
+    """Walk the recorded plan `steps` half cycles in MuJoCo (--walk) and return the walk's
+    summary (`gait_planner.walk.simulate.walk`), `printed` as `gait-planner walk` prints it."""
+    from gait_planner.cli.walk import format_summary
+    from gait_planner.walk.simulate import walk
+
+    print(f"walking the plan {steps} half cycles in MuJoCo ...", file=sys.stderr, flush=True)
+    try:
+        walked = walk(mcap, steps)
+    except ValueError as error:
+        raise CliError(f"--walk: cannot walk the recorded plan: {error}") from None
+    if printed:
+        print(format_summary(walked))
+    return walked
 
 
 def _plan(args: argparse.Namespace) -> int:

@@ -15,8 +15,9 @@ request and answer, with feedback while the plan is made and cancel.
   message still learns the phase (the server's feedback writer may not yet have matched a
   new client's reader when the goal is accepted: a "building" lost that way failed CI once).
 * Cancel: accepted while the problem is built or solved, refused while the found plan is
-  being recorded (a second or two). An accepted cancel stops IPOPT within one iteration, and
-  the goal ends canceled with nothing recorded or published.
+  being recorded (a second or two) or walked (phase "walking", parameter walk_steps). An
+  accepted cancel stops IPOPT within one iteration, and the goal ends canceled with nothing
+  recorded or published.
 """
 
 from __future__ import annotations
@@ -71,7 +72,8 @@ class PlanGaitActionServer:
         if self._worker.request_stop(self._tickets.get(id(goal_handle.request), -1)):
             self._node.get_logger().info("plan goal canceled: stopping the solver")
             return CancelResponse.ACCEPT
-        self._node.get_logger().info("cancel refused: the plan is being recorded or is over")
+        self._node.get_logger().info(
+            "cancel refused: the plan is being recorded or walked, or is over")
         return CancelResponse.REJECT
 
     def _await_cancel_mark(self, goal_handle: ServerGoalHandle) -> None:

@@ -101,6 +101,8 @@ def answer_dict(res) -> dict:
         "continuous_torque_error_at_switches": res.continuous_torque_error_at_switches,
         "continuous_base_force": res.continuous_base_force,
         "continuous_dynamics": res.continuous_dynamics,
+        "walk_steps": res.walk_steps, "walk_half_cycles": res.walk_half_cycles,
+        "walk_feedback_share": res.walk_feedback_share, "walk_stopped": res.walk_stopped,
     }
 
 
@@ -233,7 +235,7 @@ def call_plan_gait_action(fields: Mapping[str, Any], *, timeout: float,
             print("canceling the goal ...", file=out, flush=True)
             canceled = goal.cancel_goal_async()
             _spin_until(node, canceled.done, CANCEL_WAIT, "cancel response", presence)
-            print("cancel refused (the plan is being recorded); waiting for the result"
+            print("cancel refused (the plan is being recorded or walked); waiting for the result"
                   if not canceled.result().goals_canceling else
                   "cancel accepted; waiting for the node to stop (a problem being built is "
                   "finished first; Ctrl-C again leaves at once)", file=out, flush=True)

@@ -17,10 +17,13 @@ Topics (reliable; volatile so a restarting controller never re-runs an old plan)
 ``/gait_planner/contact_forces`` (one message per node). A plan is answered once its MCAP
 recording is written and its topics are published; its rerun recording (.rrd, same stem)
 follows from a helper process (`gait_planner.io.rrd_recorder`; "wrote the rerun
-recording" in the log). SIGINT and SIGTERM stop a running solve within one iteration and
-end the node (`main`); a killed node leaves the ROS graph within 3 s (its DDS lease:
-`DDS_PROFILE`), so its clients stop waiting for it. At start the node removes temporary
-recording files that killed processes left in its output folder.
+recording" in the log). With the parameter walk_steps > 0 the recorded plan is then walked
+in MuJoCo (`gait_planner.walk`; action phase "walking") before the answer, which carries how
+it went (walk_* fields; a fall or a walk that cannot run leaves the plan's success as it is),
+and the walk's summary is logged. SIGINT and SIGTERM stop a running solve within one
+iteration and end the node (`main`); a killed node leaves the ROS graph within 3 s (its DDS
+lease: `DDS_PROFILE`), so its clients stop waiting for it. At start the node removes
+temporary recording files that killed processes left in its output folder.
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
+from gait_planner.cli.walk import format_summary
 from gait_planner.io import messages
 from gait_planner.io.atomic import remove_stale_temporaries
 from gait_planner.io.rrd_recorder import RrdRecorder
@@ -50,6 +54,7 @@ from gait_planner.request import PlanRequest, RequestError, plan_request
 from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
 from gait_planner.ros.worker import Closed, Lapsed, PlanWorker, Stopped
+from gait_planner.walk.simulate import walk
 from gait_planner_msgs.msg import ContactForces, MultibodyState
 from gait_planner_msgs.srv import PlanGait
 from trajectory_msgs.msg import JointTrajectory
@@ -164,6 +169,7 @@ class GaitPlannerNode(Node):
         """Plan `request` (service request or action goal), record and publish the plan,
         and fill `answer` (service response or action result: the same fields). Runs in
         the worker's plan thread."""
+        walk_steps = int(self._param("walk_steps"))  # as set when the request arrived
         try:
             planned = plan_request(  # 0 or empty fields: the node's or the scene's defaults
                 request, default_scene=self._param("default_scene"),
@@ -199,10 +205,29 @@ class GaitPlannerNode(Node):
             self.get_logger().info(
                 f"planned {result.scene.name}: cost {result.cost_value:.6g}, duration "
                 f"{result.duration:.4f} s, recorded {outcome.mcap_path}")
+            if walk_steps:
+                messages.fill_message(answer, self._walk(outcome.mcap_path, walk_steps))
         elif stopped:
             self.get_logger().info(f"{answer.message}: nothing recorded")
         else:
             self.get_logger().warning(f"plan failed: {result.message}")
+
+    def _walk(self, mcap_path: Path, steps: int) -> dict:
+        """Walk the recorded plan `steps` half cycles in MuJoCo (parameter walk_steps; phase
+        "walking", in the plan thread) and return the answer's walk fields; a walk that cannot
+        run is told there and in the log, never raised."""
+        self._worker.enter("walking")
+        try:
+            walked = walk(mcap_path, steps)
+        except ValueError as err:  # the plan cannot be walked, e.g. a scene without feet
+            self.get_logger().warning(f"could not walk the plan: {err}")
+            return messages.walk_response_fields(steps, None, str(err))
+        except Exception as err:  # noqa: BLE001  (a bug of the walk must not stop the service)
+            error = f"internal error ({type(err).__name__}): {err}"
+            self.get_logger().error(f"could not walk the plan: {error}")
+            return messages.walk_response_fields(steps, None, error)
+        self.get_logger().info(f"walked the plan: {format_summary(walked)}")
+        return messages.walk_response_fields(steps, walked)
 
     def _stopped_message(self) -> str:
         """Why a plan stopped: a cancel (`STOPPED`), or the node's shutdown."""

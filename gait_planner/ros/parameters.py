@@ -18,6 +18,7 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescr
 from rclpy.node import Node
 
 from gait_planner.model.loader import available_scenes
+from gait_planner.request import MAX_STEPS
 
 MAX_SOLVE_TIME = 3600.0  # s, the largest time limit a request may ask for (request_ranges)
 
@@ -71,6 +72,12 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         ParameterType.PARAMETER_INTEGER,
         "Action feedback every this many IPOPT iterations (and at every phase change)",
         integer_range=[IntegerRange(from_value=1, to_value=1000, step=1)])),
+    "walk_steps": (0, _descriptor(
+        ParameterType.PARAMETER_INTEGER,
+        "Half cycles to walk each plan in MuJoCo after it is recorded and published "
+        "(gait_planner.walk, config/walk.yaml; about 1 s of computing per half cycle), "
+        f"0..{MAX_STEPS}; 0 = no walk. The result's walk_* fields say how it went",
+        integer_range=[IntegerRange(from_value=0, to_value=MAX_STEPS, step=1)])),
 }
 
 

@@ -27,6 +27,9 @@ Listener = Callable[[str, int, float, float], None]
 # a goal's plan starts milliseconds after its acceptance was sent
 RESERVATION_TIMEOUT = 2.0
 POLL = 0.1  # s, how often a caller waiting in `run` looks at the node's closing and ticks
+# phases after the plan is found, in which a stop is refused: the plan is being recorded and
+# published, or (node parameter walk_steps) the recorded plan is walked in MuJoCo
+UNSTOPPABLE = ("recording", "walking")
 
 
 class Stopped(Exception):
@@ -91,9 +94,9 @@ class PlanWorker:
     def request_stop(self, ticket: int | None = None) -> bool:
         """Stop the running plan (with `ticket`: only the plan of that reservation, so that a
         late cancel never stops the next request); refused (False) once it is recording its
-        result or when that plan is over."""
+        result or walking it (`UNSTOPPABLE`) or when that plan is over."""
         with self._guard:
-            if self.phase == "recording" or ticket not in (None, self.ticket):
+            if self.phase in UNSTOPPABLE or ticket not in (None, self.ticket):
                 return False
             self._stop.set()
             return True

@@ -56,6 +56,10 @@ EXPECTED_FIELDS = {
         "continuous_torque_error_at_switches": "double",
         "continuous_base_force": "double",
         "continuous_dynamics": "string",
+        "walk_steps": "int32",
+        "walk_half_cycles": "int32",
+        "walk_feedback_share": "double",
+        "walk_stopped": "string",
     },
     ContactForces: {
         "header": "std_msgs/Header",
