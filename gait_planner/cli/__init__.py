@@ -154,12 +154,13 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
 def _walk_plan(mcap: str, steps: int, printed: bool) -> dict:
     """Walk the recorded plan `steps` half cycles in MuJoCo (--walk) and return the walk's
     summary (`gait_planner.walk.simulate.walk`), `printed` as `gait-planner walk` prints it."""
-    from gait_planner.cli.walk import format_summary
+    from gait_planner.cli.walk import print_progress
     from gait_planner.walk.simulate import walk
+    from gait_planner.walk.summary import format_summary
 
     print(f"walking the plan {steps} half cycles in MuJoCo ...", file=sys.stderr, flush=True)
     try:
-        walked = walk(mcap, steps)
+        walked = walk(mcap, steps, progress=print_progress)
     except ValueError as error:
         raise CliError(f"--walk: cannot walk the recorded plan: {error}") from None
     if printed:

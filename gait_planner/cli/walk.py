@@ -1,18 +1,22 @@
 """``gait-planner walk RUN.mcap [--steps K] [--self-test] [--json] [--out WALK.mcap]
 [--rrd WALK.rrd]``: walk a recorded plan in MuJoCo with the reference controller
-(`gait_planner.walk.simulate`); --out records the walk (`gait_planner.walk.recording`), --rrd
-draws it over the plan in rerun (`gait_planner.walk.rerun_walk`). --self-test walks it
-again with the plan's torques scaled by config/walk.yaml's self_test_scales (0 and 0.5) and
-says whether each did measurably worse (fewer half cycles or a larger feedback share).
+(`gait_planner.walk.simulate`): a line on stderr at each half cycle's end, the summary
+(`gait_planner.walk.summary`) on stdout; --out records the walk
+(`gait_planner.walk.recording`), --rrd draws it over the plan in rerun
+(`gait_planner.walk.rerun_walk`). --self-test walks it again with the plan's torques scaled
+by config/walk.yaml's self_test_scales (0 and 0.5) and says whether each did measurably worse
+(fewer half cycles or a larger feedback share).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from typing import Any
 
 from gait_planner.cli.errors import CliError
+from gait_planner.walk.summary import format_summary, half_cycles_done
 
 
 def _steps(text: str) -> int:
@@ -41,29 +45,6 @@ def self_test(path: str, steps: int, full: dict[str, Any]) -> list[dict[str, Any
     return rows
 
 
-def format_summary(r: dict[str, Any]) -> str:
-    lines = [f"{r['scene']} ({r['recording']}): walked {r['half_cycles_walked']} of "
-             f"{r['steps']} half cycles in {r['time_walked_s']:.3f} s: {r['stopped']}",
-             f"  joint error vs plan   RMS {r['joint_rms_deg']:.2f} deg, max "
-             f"{r['joint_max_deg']:.2f} deg",
-             f"  feedback share        {100 * r['feedback_share']:.0f} % (RMS feedback "
-             f"{r['feedback_rms_nm']:.1f} N m / RMS plan torque {r['plan_rms_nm']:.1f} N m)",
-             "  torso drift per half cycle (m, x y z): "
-             + "; ".join(" ".join(f"{v:+.3f}" for v in d) for d in r["torso_drift_m"]),
-             "  foot placement error per half cycle (m): "
-             + " ".join(f"{v:.3f}" for v in r["foot_placement_error_m"])]
-    if "out" in r:
-        lines.append(f"  recorded in {r['out']}")
-    if "rrd" in r:
-        lines.append(f"  rerun view in {r['rrd']} (open it with `rerun {r['rrd']}`)")
-    for row in r.get("self_test", []):
-        lines.append(f"  self-test, plan torques x{row['torque_scale']:g}: "
-                     f"{row['half_cycles_walked']} half cycles, feedback share "
-                     f"{100 * row['feedback_share']:.0f} %: "
-                     f"{'worse (the check can fail)' if row['worse'] else 'NOT worse'}")
-    return "\n".join(lines)
-
-
 def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "walk", help="walk a recorded plan in MuJoCo with a reference controller",
@@ -88,6 +69,12 @@ def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.Argument
     return parser
 
 
+def print_progress(walked: int, steps: int) -> None:
+    """`walk`'s progress: a line on stderr at each half cycle's end (as `plan` prints its
+    phases and iterations)."""
+    print(f"-- walking ({half_cycles_done(walked, steps)})", file=sys.stderr, flush=True)
+
+
 def _write(key: str, path: str, result: dict[str, Any]) -> None:
     """result[key] = the absolute path the walk was written to (`key` "out": MCAP, "rrd")."""
     if key == "out":
@@ -109,7 +96,7 @@ def _walk_command(args: argparse.Namespace) -> int:
         targets = [output_path(path) for path in outputs.values()]  # before the walk
         if len(set(targets)) < len(targets):
             raise ValueError(f"--out and --rrd name the same file {targets[0]}")
-        result = walk(args.recording, args.steps, series=bool(outputs))
+        result = walk(args.recording, args.steps, series=bool(outputs), progress=print_progress)
         for key, path in outputs.items():
             _write(key, path, result)
         result.pop("series", None)

@@ -9,11 +9,13 @@ request and answer, with feedback while the plan is made and cancel.
   its message) and logs it, and `gait-planner call --action` prints it.
 * Feedback: the phase at every phase change (cost NaN) and iteration, cost and constraint
   violation every ``feedback_every`` IPOPT iterations, with the seconds since the goal was
-  accepted. While nothing new comes (a build, the guess, the recording, a slow iteration)
-  the phase is sent again every `FEEDBACK_HEARTBEAT` s (cost NaN, the iteration count so
-  far). So a long build shows that the node is alive, and a client that lost the first
-  message still learns the phase (the server's feedback writer may not yet have matched a
-  new client's reader when the goal is accepted: a "building" lost that way failed CI once).
+  accepted; while walking, the phase with how far the walk got at each half cycle's end
+  ("walking (2 of 10 half cycles done)", `PlanWorker.detail`). While nothing new comes (a
+  build, the guess, the recording, a slow iteration) the phase is sent again every
+  `FEEDBACK_HEARTBEAT` s (cost NaN, the iteration count so far). So a long build shows that
+  the node is alive, and a client that lost the first message still learns the phase (the
+  server's feedback writer may not yet have matched a new client's reader when the goal is
+  accepted: a "building" lost that way failed CI once).
 * Cancel: accepted while the problem is built or solved, refused while the found plan is
   being recorded (a second or two) or walked (phase "walking", parameter walk_steps). An
   accepted cancel stops IPOPT within one iteration, and the goal ends canceled with nothing

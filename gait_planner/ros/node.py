@@ -18,9 +18,10 @@ Topics (reliable; volatile so a restarting controller never re-runs an old plan)
 recording is written and its topics are published; its rerun recording (.rrd, same stem)
 follows from a helper process (`gait_planner.io.rrd_recorder`; "wrote the rerun
 recording" in the log). With the parameter walk_steps > 0 the recorded plan is then walked
-in MuJoCo (`gait_planner.walk`; action phase "walking") before the answer, which carries how
-it went (walk_* fields; a fall or a walk that cannot run leaves the plan's success as it is),
-and the walk's summary is logged. SIGINT and SIGTERM stop a running solve within one
+in MuJoCo (`gait_planner.walk`; action phase "walking", then "walking (k of K half cycles
+done)" at each half cycle's end) before the answer, which carries how it went (walk_*
+fields; a fall or a walk that cannot run leaves the plan's success as it is), and the walk's
+summary is logged. SIGINT and SIGTERM stop a running solve within one
 iteration and end the node (`main`); a killed node leaves the ROS graph within 3 s (its DDS
 lease: `DDS_PROFILE`), so its clients stop waiting for it. At start the node removes
 temporary recording files that killed processes left in its output folder.
@@ -42,7 +43,6 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-from gait_planner.cli.walk import format_summary
 from gait_planner.io import messages
 from gait_planner.io.atomic import remove_stale_temporaries
 from gait_planner.io.rrd_recorder import RrdRecorder
@@ -55,6 +55,7 @@ from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
 from gait_planner.ros.worker import Closed, Lapsed, PlanWorker, Stopped
 from gait_planner.walk.simulate import walk
+from gait_planner.walk.summary import format_summary, half_cycles_done
 from gait_planner_msgs.msg import ContactForces, MultibodyState
 from gait_planner_msgs.srv import PlanGait
 from trajectory_msgs.msg import JointTrajectory
@@ -214,11 +215,13 @@ class GaitPlannerNode(Node):
 
     def _walk(self, mcap_path: Path, steps: int) -> dict:
         """Walk the recorded plan `steps` half cycles in MuJoCo (parameter walk_steps; phase
-        "walking", in the plan thread) and return the answer's walk fields; a walk that cannot
-        run is told there and in the log, never raised."""
+        "walking", in the plan thread; each half cycle's end is told as the phase "walking (k
+        of K half cycles done)") and return the answer's walk fields; a walk that cannot run
+        is told there and in the log, never raised."""
         self._worker.enter("walking")
         try:
-            walked = walk(mcap_path, steps)
+            walked = walk(mcap_path, steps, progress=lambda k, n: self._worker.detail(
+                half_cycles_done(k, n)))
         except ValueError as err:  # the plan cannot be walked, e.g. a scene without feet
             self.get_logger().warning(f"could not walk the plan: {err}")
             return messages.walk_response_fields(steps, None, str(err))

@@ -8,8 +8,9 @@ response"), and that goal must not keep the node busy for ever. (When Fast DDS h
 discovered the client's response reader 100 ms after the request, rclpy 9.1.2 only warns
 "failed to send response (timeout)" and the goal runs; `gait_planner.ros.client.send_goal`
 follows it by its feedback.) When the node shuts down (SIGINT, SIGTERM) `close` stops the
-solve and lets every waiting callback return, so the executor never waits for a plan. The build of a problem cannot be interrupted: the plan thread is a
-daemon, and `gait_planner.ros.node.main` leaves without waiting for it (`wait_idle`).
+solve and lets every waiting callback return, so the executor never waits for a plan. The
+build of a problem cannot be interrupted: the plan thread is a daemon, and
+`gait_planner.ros.node.main` leaves without waiting for it (`wait_idle`).
 """
 
 from __future__ import annotations
@@ -111,6 +112,14 @@ class PlanWorker:
         listener = self._listener
         if listener is not None:
             listener(phase, self.iterations, float("nan"), float("nan"))
+
+    def detail(self, text: str) -> None:
+        """Tell the current listener where the phase has got to, as the phase "<phase>
+        (<text>)" (cost NaN); the phase itself, which decides whether a stop is refused,
+        stays."""
+        listener = self._listener
+        if listener is not None:
+            listener(f"{self.phase} ({text})", self.iterations, float("nan"), float("nan"))
 
     def progress(self, iteration: int, cost: float, violation: float) -> None:
         """Pass an IPOPT iteration on to the current listener."""

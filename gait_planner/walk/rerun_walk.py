@@ -16,8 +16,8 @@ at the default step of 0.5 ms), the plan at its nodes. Entities:
 * ``plots/joint_angle/<angle>/{sim,plan}`` (deg), ``plots/joint_torque/<angle>/
   {feedforward,feedback}`` (N m), ``plots/ground_force/<contact>/{sim,plan}`` (N, z);
 * ``plots/half_cycle/joint_rms`` (deg: the simulated angles against the plan's over each half
-  cycle begun), ``plots/half_cycle/torso_drift/{x,y,z}`` and
-  ``plots/half_cycle/foot_placement`` (m, the summary's), at each half cycle's end;
+  cycle walked), ``plots/half_cycle/torso_drift/{x,y,z}`` and
+  ``plots/half_cycle/foot_placement`` (m), the summary's, at each half cycle's end;
 * ``plots/half_cycles/<plot>``: grey lines at the half cycles' ends in every plot;
 * ``walk``: the summary (markdown).
 
@@ -164,10 +164,11 @@ def _color(scene, path: str) -> tuple[int, int, int]:
     return _light(base) if parts[3] in ("plan", "feedforward") else base
 
 
-def _summary(result: dict[str, Any], rms: np.ndarray) -> str:
-    rows = "".join(f"| {k + 1} | {rms[k]:.2f} | {' '.join(f'{v:+.3f}' for v in d)} | {p:.3f} |\n"
-                   for k, (d, p) in enumerate(zip(result["torso_drift_m"],
-                                                  result["foot_placement_error_m"])))
+def _summary(result: dict[str, Any]) -> str:
+    rows = "".join(f"| {k + 1} | {rms:.2f} | {' '.join(f'{v:+.3f}' for v in d)} | {p:.3f} |\n"
+                   for k, (rms, d, p) in enumerate(zip(result["joint_rms_per_half_cycle_deg"],
+                                                       result["torso_drift_m"],
+                                                       result["foot_placement_error_m"])))
     return (f"# {result['scene']}: walked {result['half_cycles_walked']} of {result['steps']} "
             f"half cycles\n\n{result['stopped']} ({result['recording']})\n\n"
             f"joint RMS {result['joint_rms_deg']:.2f} deg (max {result['joint_max_deg']:.2f}), "
@@ -204,8 +205,7 @@ def walk_blueprint(groups: list[PlotGroup]) -> rrb.Blueprint:
 
 
 def _values(result: dict[str, Any], ref: Reference, plan_f: np.ndarray, ks: np.ndarray):
-    """({plot path: (times s, values)} of every series of `_groups`, the joint RMS (deg) of
-    each half cycle begun)."""
+    """{plot path: (times s, values)} of every series of `_groups`."""
     series = result["series"]
     time = series["time"]
     values: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -217,18 +217,13 @@ def _values(result: dict[str, Any], ref: Reference, plan_f: np.ndarray, ks: np.n
     for j, c in enumerate(ref.scene.contacts):
         values[f"plots/ground_force/{c.name}/sim"] = time[ks], series["ground_force"][ks, j, 2]
         values[f"plots/ground_force/{c.name}/plan"] = ref.times, plan_f[:, j, 2]
-    plan_angles = np.array([np.interp(time, ref.times, col) for col in ref.angles.T]).T
-    half = np.minimum((time // ref.period).astype(int), result["steps"] - 1)
-    errors = np.degrees(series["position"] - plan_angles)
-    rms = np.array([np.sqrt(np.mean(errors[half == k] ** 2)) for k in np.unique(half)])
-    values["plots/half_cycle/joint_rms"] = (
-        np.minimum((np.arange(len(rms)) + 1) * ref.period, time[-1]), rms)
     walked = ref.period * np.arange(1, result["half_cycles_walked"] + 1)
+    values["plots/half_cycle/joint_rms"] = walked, np.array(result["joint_rms_per_half_cycle_deg"])
     drift = np.array(result["torso_drift_m"]).reshape(-1, 3)
     for a, axis in enumerate("xyz"):
         values[f"plots/half_cycle/torso_drift/{axis}"] = walked, drift[:, a]
     values["plots/half_cycle/foot_placement"] = walked, np.array(result["foot_placement_error_m"])
-    return values, rms
+    return values
 
 
 def _log_plots(rec, scene, groups: list[PlotGroup], values, ends: np.ndarray) -> None:
@@ -255,7 +250,7 @@ def save_walk_rrd(result: dict[str, Any], path: str | os.PathLike, every: int = 
     n = len(series["time"])
     ks = np.unique(np.r_[np.arange(0, n, every), n - 1]).astype(int)
     plan_f = _plan_forces(plan, ref)
-    values, rms = _values(result, ref, plan_f, ks)
+    values = _values(result, ref, plan_f, ks)
     groups = _groups(scene, series["joint_names"])
     rec = rr.RecordingStream(APPLICATION_ID)
     rec.send_recording_name(f"walk of {scene.name}: {result['half_cycles_walked']} of "
@@ -270,7 +265,7 @@ def save_walk_rrd(result: dict[str, Any], path: str | os.PathLike, every: int = 
                          ref.times, ref.q, plan_f)
             _log_plots(rec, scene, groups, values,
                        ref.period * np.arange(1, result["steps"] + 1))
-            rec.log("walk", rr.TextDocument(_summary(result, rms),
+            rec.log("walk", rr.TextDocument(_summary(result),
                                             media_type=rr.MediaType.MARKDOWN), static=True)
             rec.flush()
         finally:

@@ -1,8 +1,9 @@
 """Walking each plan after it is made (issue #25): the node's parameter walk_steps (checked
-when set; the walk runs in the plan thread as the action phase "walking", a cancel is
-refused then, and the answer's walk_* fields say how it went, also when the walk cannot run)
-and `gait-planner plan/run --walk K`. The walks are of walker2d's default plan, which the
-reference controller walks (test/walk/test_walk.py); compass has no feet to walk on."""
+when set; the walk runs in the plan thread as the action phase "walking", told at each half
+cycle's end, a cancel is refused then, and the answer's walk_* fields say how it went, also
+when the walk cannot run) and `gait-planner plan/run --walk K` (a line per half cycle). The
+walks are of walker2d's default plan, which the reference controller walks
+(test/walk/test_walk.py); compass has no feet to walk on."""
 
 from __future__ import annotations
 
@@ -93,7 +94,9 @@ def test_the_node_walks_each_plan_and_answers_how_it_went(
     assert result.success and result.mcap_path == str(tmp_path / "walked.mcap")
     phases = [f.phase for f in feedback]
     assert phases.index("walking") > phases.index("recording")
-    assert set(phases[phases.index("walking"):]) == {"walking"}  # the heartbeat repeats it
+    # then each half cycle's end, in order; the heartbeat repeats the last
+    assert list(dict.fromkeys(phases[phases.index("walking"):])) == [
+        "walking", *(f"walking ({k} of 3 half cycles done)" for k in (1, 2, 3))]
     # walker2d's default plan walks: every half cycle asked, with the feedback a fraction of
     # the plan's torque (a walk with the plan's torques alone falls: test/walk/test_walk.py)
     assert (result.walk_steps, result.walk_half_cycles) == (3, 3), result.walk_stopped
@@ -133,7 +136,9 @@ def test_plan_walk_walks_the_recorded_plan_and_prints_the_summary(tmp_path, caps
     assert f"mcap                      {out}" in printed.out
     assert f"walker2d ({out}): walked 2 of 2 half cycles in " in printed.out
     assert "feedback share" in printed.out and "torso drift per half cycle" in printed.out
-    assert "walking the plan 2 half cycles in MuJoCo" in printed.err
+    assert "joint RMS per half cycle (deg): " in printed.out
+    assert ("walking the plan 2 half cycles in MuJoCo ...\n-- walking (1 of 2 half cycles done)"
+            "\n-- walking (2 of 2 half cycles done)\n") in printed.err
 
     ran = tmp_path / "run.mcap"  # `run` (what `make run` calls) walks the same way
     assert main(["run", "--scene", "walker2d", "--out", str(ran), "--no-rrd", "--no-viewer",
