@@ -37,7 +37,8 @@ docs: setup
 	$(PYTHON) tools/docs.py --plan $(SCREENSHOT)
 
 # Benchmarks (benchmarks/README.md): `bench` rewrites benchmarks/REPORT.md and
-# benchmarks/results/*.json (~30 min on 2 cores); `bench-quick` is a smoke run (~3 min)
+# benchmarks/results/*.json (~40 min on 2 cores, the plans walked in MuJoCo ~6 of them:
+# benchmarks/walk.py); `bench-quick` is a smoke run (~3 min)
 # writing to build/bench-quick/ instead.
 bench: setup
 	$(PYTHON) benchmarks/bench.py

@@ -1,6 +1,6 @@
 """Run the benchmarks and rewrite benchmarks/REPORT.md (`make bench`, `make bench-quick`).
 
-    .venv/bin/python benchmarks/bench.py            # everything (~30 min on 2 cores)
+    .venv/bin/python benchmarks/bench.py            # everything (~40 min on 2 cores)
     .venv/bin/python benchmarks/bench.py --quick    # smoke run (~3 min): small cases only,
                                                     # results and report in build/bench-quick/
 
@@ -27,6 +27,7 @@ FULL = [
     ["work_precision.py"],
     ["hard_cases.py", "--time-limit", "45"],
     ["integrators.py", "--long-steps", "30000"],
+    ["walk.py"],
 ]
 QUICK = [
     ["model_size.py", "--quick", "--compiled"],
@@ -34,6 +35,7 @@ QUICK = [
     ["work_precision.py", "--quick"],
     ["hard_cases.py", "--quick", "--time-limit", "20"],
     ["integrators.py", "--quick"],
+    ["walk.py", "--quick"],
 ]
 
 

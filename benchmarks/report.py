@@ -284,10 +284,42 @@ def speed(cold, node) -> list[str]:
     return out
 
 
+def walk(doc) -> list[str]:
+    out = ["## 7. Plans walked in MuJoCo", ""]
+    if doc is None:
+        return out + ["Not measured.", ""]
+    steps = doc["header"].get("steps", "?")
+    out += [provenance(doc), "",
+            f"`walk.py`: each plan made by `gait-planner plan` (time limit "
+            f"{doc['header'].get('time_limit_s', '?')} s), then walked {steps} half cycles by "
+            "`gait-planner walk` (config/walk.yaml) and again with the plan's torques scaled "
+            "down (the self-test: the feedback must not do the plan's work). Feedback share: "
+            "RMS feedback / RMS plan torque; drift: the torso's distance from the plan (x y z) "
+            "after the last half cycle walked; placement: the worst distance of a held contact "
+            "point from the plan's at a half cycle's end. The hard requests are "
+            "`hard_cases.py`'s a user can ask for (plan options or a changed scene file).", ""]
+    rows = [dict(r, planned=(f"{r['plan'].get('nodes')} nodes, {r['plan']['wall_s']:.0f} s"
+                             + ("" if r["plan"].get("certified") else ", certificate fails")
+                             if r["plan"]["success"] else "failed"),
+                 walked=("–" if r["half_cycles_walked"] is None
+                            else f"{r['half_cycles_walked']} of {r['steps']}"),
+                 drift=" ".join(f"{x:+.3f}" for x in r.get("torso_drift_last_m") or []),
+                 selftest=", ".join(f"×{t['torque_scale']:g}: {t['half_cycles_walked']} "
+                                    f"({t['feedback_share']:.0%})" for t in r["self_test"]))
+            for r in doc["rows"]]
+    return out + table(rows, [
+        ("scene", "scene", ""), ("case", "case", ""), ("plan", "planned", ""),
+        ("half cycles walked", "walked", ""),
+        ("feedback share", "feedback_share", ".0%"), ("joint RMS deg", "joint_rms_deg", ".2f"),
+        ("joint max deg", "joint_max_deg", ".1f"), ("drift m", "drift", ""),
+        ("placement m", "foot_placement_error_max_m", ".3f"),
+        ("self-test: walked (feedback)", "selftest", ""), ("why it stopped", "stopped", "")]) + [""]
+
+
 def main() -> None:
     docs = {name: load(name) for name in ("work_precision", "integrators", "model_size",
                                          "model_size_compiled", "hard_cases", "cold_solve",
-                                         "node_latency_walker3d", "request_sweep")}
+                                         "node_latency_walker3d", "request_sweep", "walk")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
              "`benchmarks/results/*.json`; every number below is in those files with the "
@@ -301,6 +333,7 @@ def main() -> None:
     lines += hard_cases(docs["hard_cases"])
     lines += speed(docs["cold_solve"], docs["node_latency_walker3d"])
     lines += request_sweep(docs["request_sweep"])
+    lines += walk(docs["walk"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")

@@ -213,12 +213,22 @@ def render_walk() -> str:
     for r in load("walk")["rows"]:
         tests = ", ".join(f"×{t['torque_scale']:g}: {t['half_cycles_walked']} "
                           f"({100 * t['feedback_share']:.0f} %)" for t in r["self_test"])
-        rows.append([r["scene"], f"{r['half_cycles_walked']} of {r['steps']}", r["stopped"],
-                     f"{100 * r['feedback_share']:.0f} %",
+        rows.append([r["scene"], r["case"], f"{r['half_cycles_walked']} of {r['steps']}",
+                     r["stopped"], f"{100 * r['feedback_share']:.0f} %",
                      f"{r['joint_rms_deg']:.2f} / {r['joint_max_deg']:.2f}", tests])
-    return table(["default plan", "half cycles walked", "why it stopped", "feedback share",
+    return table(["scene", "plan", "half cycles walked", "why it stopped", "feedback share",
                   "joint error RMS / max (deg)", "plan torques scaled: walked (feedback)"],
                  rows) + "\n" + source("walk")
+
+
+def render_walk_line() -> str:
+    """The README's sentence on the default plans walked in MuJoCo."""
+    rows = {r["scene"]: r for r in load("walk")["rows"] if r["case"] == "default"}
+    parts = [f"{name}'s default plan walks {r['half_cycles_walked']} of {r['steps']} half "
+             f"cycles with the feedback adding {100 * r['feedback_share']:.0f} % of the plan's "
+             f"torque" for name, r in rows.items() if name in ("walker3d", "walker2d")]
+    measured = source("walk")[1:-3]  # "Measured ..., commit ...: `command`"
+    return "In MuJoCo, " + "; ".join(parts) + " (m" + measured[1:] + ").\n"
 
 
 def render_request_limits() -> str:

@@ -6,6 +6,12 @@ the plan mirrored k times and shifted k step lengths): director coordinates thro
 `configuration_mirror`, joint angles from them, and joint rates and efforts (conjugate to
 the angles, `gait_planner.io.messages`) through the signed permutation the mirror applies
 to the angles. `at(t)` interpolates linearly between nodes.
+
+A recording of K > 1 half cycles (`plan --steps K`: metadata ``steps`` = K and
+``half_cycle_nodes`` = H, K (H - 2) + 2 nodes, made by `walk_on` the same way) is joined
+from its first half cycle, so that any number of steps can be walked; its recorded half
+cycles are those mirror images (`verify.joined` checks them), and the walked reference
+equals the recorded nodes.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from gait_planner.model.loader import scene_from_text
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.mirror import configuration_mirror, contact_partners
+from gait_planner.verify.joined import half_cycle
 
 __all__ = ["Reference", "scene_of"]
 
@@ -28,6 +35,20 @@ def scene_of(rec: RecordedPlan) -> Scene:
     """The planner's scene from the recording's attached scene file."""
     name = f"{rec.metadata.get('scene', '')}.yaml"
     return scene_from_text(rec.scene_text, name)
+
+
+def _first_half_cycle(rec: RecordedPlan) -> RecordedPlan:
+    """The recording itself if it holds one half cycle, else its first (module docstring);
+    ValueError naming the file if its node count is not that of its metadata."""
+    steps = int(rec.metadata.get("steps", 1))
+    if steps == 1:
+        return rec
+    H = int(rec.metadata.get("half_cycle_nodes", 0))
+    if H < 3 or rec.n_nodes != steps * (H - 2) + 2:
+        raise ValueError(f"{rec.path}: {rec.n_nodes} nodes are not {steps} joined half cycles "
+                         f"(metadata steps) of half_cycle_nodes = "
+                         f"{rec.metadata.get('half_cycle_nodes')!r}: K (H - 2) + 2 nodes")
+    return half_cycle(rec, H)
 
 
 def _omega(D: np.ndarray, D_dot: np.ndarray) -> np.ndarray:
@@ -71,6 +92,7 @@ class Reference:
 
     @classmethod
     def from_recording(cls, rec: RecordedPlan, steps: int) -> "Reference":
+        rec = _first_half_cycle(rec)
         scene = scene_of(rec)
         N = rec.n_nodes - 1
         s = float(rec.metadata["step_length"])

@@ -113,3 +113,30 @@ def test_a_bad_controller_config_names_the_key(tmp_path):
     bad.write_text(CONFIG.read_text().replace("kd: 100.0", "kd: -1"))
     with pytest.raises(ValueError, match=r"walk.yaml: torso.kd must be a finite number >= 0"):
         load_config(bad)
+
+
+def test_a_recording_of_ten_half_cycles_is_walked_as_recorded(tmp_path):
+    """`plan --steps 10` records the joined half cycles; the walk's reference is those
+    nodes (joined from the first half cycle), so it walks on past the first join."""
+    import dataclasses
+
+    from gait_planner.io.mcap_reader import read_plan_mcap
+    from gait_planner.walk.reference import Reference
+    from gait_planner.walk.simulate import walk
+
+    out = tmp_path / "w2x10.mcap"
+    exe = Path(sys.executable).with_name("gait-planner")
+    subprocess.run([str(exe), "plan", "--scene", "walker2d", "--steps", "10", "--no-rrd",
+                    "--out", str(out)], check=True, capture_output=True)
+    rec = read_plan_mcap(out)
+    ref = Reference.from_recording(rec, 10)
+    assert len(ref.times) == rec.n_nodes == 392 and ref.active == tuple(rec.active_contacts)
+    for walked, recorded in ((ref.times, rec.times), (ref.q, rec.q), (ref.angles, rec.positions),
+                             (ref.rates, rec.velocities), (ref.efforts, rec.effort)):
+        assert abs(walked - recorded).max() < 1e-9
+    assert Reference.from_recording(rec, 12).times[-1] > rec.times[-1]  # more than recorded
+    wrong = dataclasses.replace(rec, metadata=dict(rec.metadata, half_cycle_nodes="40"))
+    with pytest.raises(ValueError, match=r"392 nodes are not 10 joined half cycles .* '40'"):
+        Reference.from_recording(wrong, 10)
+    result = walk(out, 2)
+    assert result["half_cycles_walked"] == 2 and result["stopped"] == "completed"
