@@ -85,7 +85,8 @@ def request_settings(request: PlanRequest, scenes: SceneLookup = load_scene,
             intervals_per_phase=request.intervals_per_phase,
             max_solve_time=request.max_solve_time,
             **({"compiled": True} if request.compiled else {}),
-            **({"posture": request.posture} if request.posture else {}))
+            **({"posture": request.posture} if request.posture else {}),
+            **({"speed": request.speed} if request.speed else {}))
     except (SceneError, SettingsError, RangeError) as err:
         raise RequestError(str(err)) from None
     return scene, settings

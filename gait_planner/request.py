@@ -3,12 +3,14 @@ the action, ``gait-planner call`` before sending, ``gait-planner plan``).
 
 The fields are those of ``msg_defs/srv/PlanGait.srv``. 0 or an empty string means the
 default: the scene's (step_length, cost, friction_coefficient, intervals_per_phase,
-posture), the node's (scene, max_solve_time; ``plan``: GaitSettings' time limit) or 1
-(steps). A negative, NaN or infinite number is refused with `RequestError` naming the
-field, its value and what is allowed, e.g. "step_length must be > 0 m, or 0 for the
-scene's default, got -0.5". Numbers that pass this rule still meet the scene's ranges
-(`gait_planner.ocp.request_ranges`) when the request is planned. Pure Python: no ROS, no
-CasADi, so a client checks a request before it sends it.
+posture), the node's (scene, max_solve_time; ``plan``: GaitSettings' time limit), 1
+(steps) or free phase durations (speed). A negative, NaN or infinite number is refused
+with `RequestError` naming the field, its value and what is allowed, e.g. "step_length
+must be > 0 m, or 0 for the scene's default, got -0.5". Numbers that pass this rule still
+meet the scene's ranges (`gait_planner.ocp.request_ranges`; a speed: the half-cycle
+durations the scene's scaling_bounds allow at the step length,
+`gait_planner.ocp.settings.speed_range`) when the request is planned. Pure Python: no ROS,
+no CasADi, so a client checks a request before it sends it.
 """
 
 from __future__ import annotations
@@ -22,13 +24,14 @@ from typing import Any
 MAX_STEPS = 100  # half cycles one request may join (60 s of walking for walker3d)
 # the request's fields (PlanGait.srv), in its order
 FIELDS = ("scene", "step_length", "cost", "friction_coefficient", "intervals_per_phase",
-          "max_solve_time", "output_name", "cold_start", "steps", "posture")
+          "max_solve_time", "output_name", "cold_start", "steps", "posture", "speed")
 # numeric field -> (unit, what 0 stands for)
 _NUMBERS = {
     "step_length": (" m", "the scene's default"),
     "friction_coefficient": ("", "the scene's default"),
     "intervals_per_phase": ("", "the scene's default"),
     "max_solve_time": (" s", "the default limit"),
+    "speed": (" m/s", "free phase durations"),
 }
 
 
@@ -52,6 +55,7 @@ class PlanRequest:
     compiled: bool = False  # compile the derivative elements (GaitSettings.compiled)
     steps: int = 1  # half cycles in the result, joined by the mirror (`ocp.walk_on`)
     posture: str = ""  # "paper" or "human" (`model.posture`); empty = the scene's
+    speed: float | None = None  # m/s, step_length / half cycle (GaitSettings.speed); None: free
 
 
 def _refuse(name: str, value: Any, allowed: str) -> RequestError:

@@ -10,7 +10,10 @@ from types import SimpleNamespace
 
 import pytest
 
-from gait_planner.pipeline import request_settings
+from gait_planner.cli.ros_commands import SPEED_HELP
+from gait_planner.model.loader import load_scene
+from gait_planner.ocp.settings import settings_for, speed_range
+from gait_planner.pipeline import plan_and_record, request_settings
 from gait_planner.request import FIELDS, MAX_STEPS, PlanRequest, RequestError, plan_request
 
 SCENE_DEFAULT = "the scene's default"
@@ -35,6 +38,8 @@ REFUSED = [
     ("steps", MAX_STEPS + 1, f"steps must be a whole number of half cycles from 1 to "
      f"{MAX_STEPS}, or 0 for 1, got {MAX_STEPS + 1}"),
     ("step_length", "0.5", f"step_length must be > 0 m, or 0 for {SCENE_DEFAULT}, got '0.5'"),
+    ("speed", -1.0, "speed must be > 0 m/s, or 0 for free phase durations, got -1.0"),
+    ("speed", math.nan, "speed must be > 0 m/s, or 0 for free phase durations, got nan"),
 ]
 
 
@@ -51,7 +56,7 @@ def test_a_bad_number_is_refused_the_same_way_everywhere(name, value, message):
 def test_zero_and_empty_fields_are_the_defaults():
     message = SimpleNamespace(scene="", step_length=0.0, cost="", friction_coefficient=0.0,
                               intervals_per_phase=0, max_solve_time=0.0, output_name="",
-                              cold_start=False, steps=0, posture="")
+                              cold_start=False, steps=0, posture="", speed=0.0)
     assert set(vars(message)) == set(FIELDS)
     request = plan_request(message, default_scene="walker2d", default_max_solve_time=60.0,
                            compiled=True)
@@ -69,10 +74,10 @@ def test_given_values_pass_unchanged_and_unknown_fields_are_named():
     request = plan_request(scene="compass", step_length=0.31, friction_coefficient=0.7,
                            intervals_per_phase=4, max_solve_time=5.0, steps=3,
                            cost="kinetic_energy", output_name="x", cold_start=True,
-                           posture="paper",
+                           posture="paper", speed=0.8,
                            default_max_solve_time=60.0)
     assert (request.step_length, request.friction_coefficient, request.intervals_per_phase,
-            request.max_solve_time, request.steps) == (0.31, 0.7, 4, 5.0, 3)
+            request.max_solve_time, request.steps, request.speed) == (0.31, 0.7, 4, 5.0, 3, 0.8)
     assert (request.cost, request.output_name, request.cold_start, request.posture) == (
         "kinetic_energy", "x", True, "paper")
     with pytest.raises(TypeError, match="not fields of a plan request: mu"):
@@ -82,3 +87,47 @@ def test_given_values_pass_unchanged_and_unknown_fields_are_named():
 def test_the_scene_ranges_still_apply_after_the_sign_rule():
     with pytest.raises(RequestError, match=r"step_length = 3.0 is outside the range"):
         request_settings(plan_request(scene="compass", step_length=3.0))
+
+
+class _NoPlanner:
+    """A planner that fails the test if anything asks it to build or plan."""
+
+    def plan(self, *args, **kwargs):
+        raise AssertionError("a refused request reached the planner")
+
+    prepare = plan
+
+
+WALKER2D_SPEEDS = "[1.0834, 3.2503] m/s (a half cycle of 0.195 to 0.585 s: sigma within " \
+    "scaling_bounds [0.5, 1.5])"
+
+
+@pytest.mark.parametrize("speed", [1.0, 3.3])
+def test_an_unreachable_speed_is_refused_with_its_range_before_anything_is_built(
+        speed, tmp_path):
+    """walker2d's 0.6338 m step over a half cycle of 0.39 s times sigma in [0.5, 1.5]."""
+    with pytest.raises(RequestError) as refused:
+        plan_and_record(_NoPlanner(), plan_request(scene="walker2d", speed=speed), tmp_path)
+    assert str(refused.value) == (f"speed = {speed} m/s is outside the range scene 'walker2d' "
+                                  f"allows at step_length 0.6338 m: {WALKER2D_SPEEDS}")
+    assert not any(tmp_path.iterdir())
+    # the range moves with the step length: 1.0 m/s is a 0.5 m step in 0.5 s
+    _, settings = request_settings(plan_request(scene="walker2d", step_length=0.5, speed=1.0))
+    assert settings.speed == 1.0 and speed_range(settings) == pytest.approx((0.5 / 0.585,
+                                                                             0.5 / 0.195))
+
+
+def test_a_speed_reaches_the_settings_and_0_leaves_the_durations_free():
+    message = SimpleNamespace(scene="", step_length=0.0, cost="", friction_coefficient=0.0,
+                              intervals_per_phase=0, max_solve_time=0.0, output_name="",
+                              cold_start=False, steps=0, posture="", speed=1.2)  # as received
+    _, settings = request_settings(plan_request(message, default_scene="walker2d"))
+    assert settings.speed == 1.2
+    _, free = request_settings(plan_request(scene="walker2d", speed=0.0))
+    assert free.speed == 0.0
+
+
+@pytest.mark.parametrize("scene", ["walker2d", "walker3d"])
+def test_the_help_shows_the_speeds_a_scene_reaches(scene):
+    slow, fast = speed_range(settings_for(load_scene(scene)))
+    assert f"{slow:.3f} to {fast:.3f} m/s" in SPEED_HELP

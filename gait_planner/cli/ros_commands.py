@@ -13,6 +13,13 @@ import sys
 
 from gait_planner.cli.errors import CliError
 
+# `plan`, `run` and `call` --speed (GaitSettings.speed, ocp.settings.speed_range)
+SPEED_HELP = ("mean forward speed of the half cycle, m/s: step length / duration, held by the "
+              "phase durations (default 0: durations free). Reachable: the step length over "
+              "the half cycle's nominal length times sigma's scaling bounds, e.g. walker2d/3d "
+              "at their 0.6338 m step 1.083 to 3.250 m/s; a speed outside is refused with "
+              "its range")
+
 
 def add_node_parser(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
@@ -114,6 +121,7 @@ def add_call_parser(commands: argparse._SubParsersAction) -> None:
     parser.add_argument("--posture", default="", choices=("", "paper", "human"),
                         help="paper: the scene's ranges; human: also a stance knee of at most "
                         "20 deg in single support (default: the scene's)")
+    parser.add_argument("--speed", type=float, default=0.0, metavar="M/S", help=SPEED_HELP)
     parser.add_argument("--action", action="store_true",
                         help="use the action: print feedback, Ctrl-C cancels")
     parser.add_argument("--timeout", type=float, default=900.0, metavar="S",

@@ -165,6 +165,7 @@ def build_result(tr: CollocationTranscription, x: np.ndarray, p: np.ndarray, g: 
             "torque_regularisation": repr(s.torque_regularisation),
             "foot_half_width": repr(s.foot_half_width),
             "strike_speed_max": repr(s.strike_speed_max),
+            "speed": repr(s.speed),
             "kinetic_energy": repr(kinetic), "torque_squared": repr(torque),
             "kinetic_energy_discrete": repr(discrete),
             "impacts": ",".join(impacts),

@@ -35,6 +35,8 @@ and regularisers), transcribed the way bioptim, OpenSim Moco or Drake users woul
   625 deg/s just after its heel strike). Box bounds on the joint rates made it fragile:
   on every knot and midpoint walker2d did not converge (212 iterations in 120 s), on the
   impact knots alone it converged or not depending on the swing clearance ramp.
+* A requested speed (settings.speed > 0): the product's row on the half cycle's duration
+  (`ocp.transcription.speed_row`).
 * Periodicity: theta_K, w_K (after the impact, if any, at the end) and tau_K are the
   mirror images of theta_0, w_0, tau_0 (expressions, not unknowns: no redundant rows).
 
@@ -59,7 +61,8 @@ from gait_planner.ocp.mirror import torque_mirror
 from gait_planner.ocp.posture import (joint_limit_margins, joint_margin_constants,
                                       joint_speed_margins, twist_squares)
 from gait_planner.ocp.settings import GaitSettings
-from gait_planner.ocp.transcription import FORCE_SCALE, TORQUE_SCALE, relaxed_lower_bounds
+from gait_planner.ocp.transcription import (FORCE_SCALE, TORQUE_SCALE, relaxed_lower_bounds,
+                                           speed_row)
 
 ACCELERATION_SCALE = 10.0  # rad/s^2
 
@@ -195,6 +198,9 @@ class CollocationTranscription:
             self._eq.append(("contact_establish", ca.vertcat(*touch)))
         first = self.contacts[0][0].points[0]
         self._eq.append(("pin_x", ca.mtimes(ca.DM(mb.contact_rows(first)[0:1]), self.q[0])))
+        if s.speed > 0:  # the product's row (`speed_row`): knots 0..K span the half cycle
+            self._eq.append(("speed", speed_row(self.step, ca.sum1(ca.vertcat(*self.h)),
+                                                s.speed)))
 
     # ---- one phase ---------------------------------------------------------------------
 
@@ -362,5 +368,6 @@ class CollocationTranscription:
 
     def relaxed_lower_bounds(self, lbg: np.ndarray) -> np.ndarray:
         """lbg of the first stage, as the product's (`Transcription.relaxed_lower_bounds`):
-        swing points only above the ground, joint speeds free."""
+        swing points only above the ground, joint speeds free, a requested speed only a
+        lower bound on the half cycle's duration."""
         return relaxed_lower_bounds(self.constraint_groups(), lbg, self.clearances)

@@ -45,7 +45,10 @@ class GaitSettings:
     the first swing node); strike_speed_max m/s (0 = off): a contact point's mean horizontal
     speed over the interval that ends at its strike stays below this (`gait_planner.ocp.
     clearance`); joint_speed_max deg/s (0 = off): every joint's relative rotation
-    over an interval stays below joint_speed_max * h_n;
+    over an interval stays below joint_speed_max * h_n; speed m/s (0 = free durations):
+    the half cycle's mean forward speed step_length / (t_{N-1} - t_0), held by one
+    equality row on sigma (`gait_planner.ocp.transcription.speed_row`); `settings_for`
+    refuses a speed outside `speed_range`;
     phase_joint_limits: ((phase, ((angle, lo rad, hi rad), ...)), ...) from the option
     ``phase_joint_limits: {phase: {angle: [lo, hi]}}`` in degrees, ranges at the nodes that
     start an interval of that phase only; posture "paper" (the scene's declared ranges) or
@@ -82,6 +85,7 @@ class GaitSettings:
     swing_clearance_ramp: float = 0.0
     strike_speed_max: float = 0.0
     joint_speed_max: float = 0.0
+    speed: float = 0.0
     twist_regularisation: float = 0.0
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
@@ -126,9 +130,39 @@ class GaitSettings:
             raise SettingsError(str(err)) from None
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
-                     "joint_speed_max", "twist_regularisation"):
+                     "joint_speed_max", "speed", "twist_regularisation"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")
+
+
+def duration_range(s: GaitSettings) -> tuple[float, float]:
+    """(shortest, longest) half cycle t_{N-1} - t_0 of `s`, s: its sum(intervals) - 1
+    intervals (interval N-1 is the mirror image of interval 0) of base_time_step each at
+    sigma = 1, every sigma at the lower or the upper scaling bound (walker2d/3d: 0.39 s
+    times 0.5 or 1.5)."""
+    nominal = (sum(s.intervals) - 1) * s.base_time_step
+    lo, hi = s.scaling_bounds
+    return lo * nominal, hi * nominal
+
+
+def speed_range(s: GaitSettings) -> tuple[float, float]:
+    """(slowest, fastest) mean forward speed (m/s) of a half cycle of s.step_length within
+    `duration_range` (walker2d/3d at their 0.6338 m step: 1.083 to 3.250 m/s)."""
+    shortest, longest = duration_range(s)
+    return s.step_length / longest, s.step_length / shortest
+
+
+def check_speed(s: GaitSettings, scene_name: str) -> None:
+    """SettingsError if s.speed > 0 lies outside `speed_range`, naming the field, the value
+    and the reachable range."""
+    if s.speed > 0:
+        (slow, fast), (shortest, longest) = speed_range(s), duration_range(s)
+        if not slow <= s.speed <= fast:
+            raise SettingsError(
+                f"speed = {s.speed} m/s is outside the range scene {scene_name!r} allows at "
+                f"step_length {s.step_length:g} m: [{slow:.4f}, {fast:.4f}] m/s (a half cycle "
+                f"of {shortest:.4g} to {longest:.4g} s: sigma within scaling_bounds "
+                f"[{s.scaling_bounds[0]:g}, {s.scaling_bounds[1]:g}])")
 
 
 _OPTION_NAMES = {f.name for f in dataclasses.fields(GaitSettings)} - {
@@ -148,7 +182,10 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
     intervals * base_time_step, at sigma = 1) stays the scene's (walker2d/3d: 8 intervals
     per phase of 10 ms; 16 per phase: 5 ms). A fixed base step would instead ask for
     another gait (24 per phase: a half cycle three times as long, J 6.99 against 20.76 on
-    walker3d)."""
+    walker3d).
+
+    A speed > 0 outside `speed_range` of the resulting settings is refused (`check_speed`)
+    before anything is built."""
     gait = scene.gait
     if gait is None:
         raise SettingsError(f"scene {scene.name!r} declares no gait: nothing to plan")
@@ -189,7 +226,7 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
     if intervals_per_phase is not None:  # another grid on the same half cycle
         base_time_step *= sum(intervals) / (int(intervals_per_phase) * len(intervals))
         intervals = (int(intervals_per_phase),) * len(gait.phases)
-    return GaitSettings(
+    settings = GaitSettings(
         step_length=gait.step_length if step_length is None else float(step_length),
         base_time_step=base_time_step,
         scaling_bounds=tuple(gait.scaling_bounds),
@@ -199,3 +236,5 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
         intervals=intervals,
         **options,
     )
+    check_speed(settings, scene.name)
+    return settings

@@ -167,6 +167,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
             "torque_regularisation": repr(s.torque_regularisation),
             "foot_half_width": repr(s.foot_half_width),
             "strike_speed_max": repr(s.strike_speed_max),
+            "speed": repr(s.speed),
             "joint_limits_deg": ",".join(f"{name}:{np.degrees(lo):.6g}:{np.degrees(hi):.6g}"
                                          for name, lo, hi in s.joint_limits),
             "torque_squared": repr(float(torque.item())),

@@ -249,6 +249,9 @@ class Transcription:
             self._eq.append(("contact_establish", ca.vertcat(*est)))
         first = self.contacts[0][0].points[0]
         self._eq.append(("pin_x", ca.mtimes(ca.DM(mb.contact_rows(first)[0:1]), self.Q[:, 0])))
+        if self.settings.speed > 0:  # an equality: before the first inequality group
+            self._eq.append(("speed", speed_row(self.step, ca.sum1(self.h[0 : N - 1]),
+                                                self.settings.speed)))
         cones = []
         for n in self.lam_nodes:
             lam = self.lam_of_node[n]
@@ -576,22 +579,37 @@ class Transcription:
 
     def relaxed_lower_bounds(self, lbg: np.ndarray) -> np.ndarray:
         """lbg of a first, relaxed stage: swing points only above the ground (not by
-        swing_clearance), joint speeds free. From a kinematic guess IPOPT finds the gait
-        of the relaxed problem in about 100 iterations and the full one from there; with
-        every limit from the start its inertia-free attempt stalled (walker3d: 851
-        iterations through the fallback; benchmarks/HISTORY.md)."""
+        swing_clearance), joint speeds free, a requested speed only a lower bound on the
+        half cycle's duration (sigma is fixed then; `speed_row`). From a kinematic guess
+        IPOPT finds the gait of the relaxed problem in about 100 iterations and the full
+        one from there; with every limit from the start its inertia-free attempt stalled
+        (walker3d: 851 iterations through the fallback; benchmarks/HISTORY.md). With a
+        speed, sigma starting at the speed's value instead of the upper bound changed
+        nothing measurable (walker3d 1.4 m/s: 146 iterations instead of 177, walker2d 65
+        instead of 51, the same optimum; 2026-11-27)."""
         return relaxed_lower_bounds(self.constraint_groups(), lbg, self.clearances)
+
+
+def speed_row(step, duration, speed: float):
+    """The row of a requested mean forward speed (m/s) of the half cycle (both
+    transcriptions): 1/speed - duration/step (s/m), 0 when step / duration = speed. Linear
+    in sigma; the constant 1/speed drops out of its derivatives, so the compiled derivatives
+    of the NLP's rest (`ocp.derivatives`) are the same for every speed. Below 0 when the half
+    cycle is shorter than step/speed, above when longer: with only its upper bound (the
+    first stage, `relaxed_lower_bounds`) it asks for a half cycle at least that long, which
+    sigma fixed at its upper bound gives within `settings.speed_range`."""
+    return 1.0 / speed - duration / step
 
 
 def relaxed_lower_bounds(groups, lbg: np.ndarray, clearances: list[float]) -> np.ndarray:
     """lbg with the group [(name, size, is_equality)] "ground_clearance" (rows z - height)
     lowered by each row's required height `clearances` (points only above the ground) and
-    "joint_speed" and "strike_speed" free."""
+    "joint_speed", "strike_speed" and "speed" free below (`speed_row`)."""
     out, offset = lbg.copy(), 0
     for name, size, _ in groups:
         if name == "ground_clearance":
             out[offset : offset + size] = -np.asarray(clearances)
-        elif name in ("joint_speed", "strike_speed"):
+        elif name in ("joint_speed", "strike_speed", "speed"):
             out[offset : offset + size] = -np.inf
         offset += size
     return out

@@ -313,6 +313,11 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
     if not abs(duration - duration_recorded) <= L["time"] * max(1.0, abs(duration)):
         fail(f"metadata duration {duration_recorded!r} s differs from t_(N-1) - t_0 = "
              f"{duration!r} s")
+    speed, pace = _metadata_float(meta, "speed"), _safe_ratio(step, duration)
+    if speed > 0 and not abs(pace - speed) <= L["time"] * speed:  # 0 or absent: free
+        fail(f"the half cycle's mean speed step_length / (t_(N-1) - t_0) = {pace!r} m/s "
+             f"differs from the requested speed {speed!r} m/s (metadata speed; relative "
+             f"limit {L['time']:.0e})")
     cost_name = meta.get("cost", "")
     if cost_name == "kinetic_energy":
         v = np.diff(q, axis=0)[: N - 1] / h[: N - 1, None]

@@ -36,6 +36,7 @@ EXPECTED_FIELDS = {
         "cold_start": "boolean",
         "steps": "int32",
         "posture": "string",
+        "speed": "double",
     },
     PlanGait.Response: {
         "success": "boolean",
