@@ -126,7 +126,7 @@ def test_walker3d_plan_on_the_continuous_dynamics():
     plan follows the continuous dynamics to about a degree. In the first phase (right foot
     flat) every joint stays within 2.5 deg but the swing foot's yaw about the shank, the
     lightest degree of freedom (0.0007 kg m^2), which drifts at a near-constant rate from
-    the phase's start: 7.8 deg after 8 intervals since its edges must clear the ground
+    the phase's start: 8.2 deg after 8 intervals since its edges must clear the ground
     (ocp/clearance.py; 2.1 deg before, when the foot could roll). (The point-contact
     phases drift tens of degrees: a 3D point contact leaves the light foot free to roll
     about it; measured, not asserted.)"""
