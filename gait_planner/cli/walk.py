@@ -29,14 +29,17 @@ def _steps(text: str) -> int:
     return value
 
 
-def self_test(path: str, steps: int, full: dict[str, Any]) -> list[dict[str, Any]]:
-    """The walks with the plan's torques scaled down; `worse` = fewer half cycles or more
-    feedback than the full-torque walk `full`."""
+def self_test(path: str, steps: int, full: dict[str, Any],
+              config: dict[str, Any] | None = None) -> list[dict[str, Any]]:
+    """The walks with the plan's torques scaled down (config's self_test_scales; None:
+    config/walk.yaml); `worse` = fewer half cycles or more feedback than the full-torque
+    walk `full`."""
     from gait_planner.walk.simulate import load_config, walk
 
+    config = config or load_config()
     rows = []
-    for scale in load_config()["self_test_scales"]:
-        r = walk(path, steps, scale=float(scale))
+    for scale in config["self_test_scales"]:
+        r = walk(path, steps, scale=float(scale), config=config)
         worse = (r["half_cycles_walked"] < full["half_cycles_walked"]
                  or r["feedback_share"] > full["feedback_share"])
         rows.append({"torque_scale": scale, "half_cycles_walked": r["half_cycles_walked"],
@@ -61,6 +64,9 @@ def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.Argument
     parser.add_argument("--out", metavar="WALK.mcap", default=None,
                         help="record the walk: simulated joint states, feed-forward and "
                         "feedback torques, ground forces (200 Hz)")
+    parser.add_argument("--config", metavar="WALK.yaml", default=None,
+                        help="the controller's parameters (default: config/walk.yaml, whose "
+                        "keys and units a file of your own must have)")
     parser.add_argument("--rrd", metavar="WALK.rrd", default=None,
                         help="draw the walk in rerun: the simulated walker over the planned "
                         "one, the ground forces of both, joint angles, torques and the errors "
@@ -89,19 +95,24 @@ def _write(key: str, path: str, result: dict[str, Any]) -> None:
 
 def _walk_command(args: argparse.Namespace) -> int:
     from gait_planner.walk.recording import output_path
-    from gait_planner.walk.simulate import walk
+    from gait_planner.walk.simulate import CONFIG, load_config, walk
 
     outputs = {k: v for k, v in (("out", args.out), ("rrd", args.rrd)) if v is not None}
     try:
         targets = [output_path(path) for path in outputs.values()]  # before the walk
         if len(set(targets)) < len(targets):
             raise ValueError(f"--out and --rrd name the same file {targets[0]}")
-        result = walk(args.recording, args.steps, series=bool(outputs), progress=print_progress)
+        try:
+            config = load_config(args.config or CONFIG)
+        except OSError as error:
+            raise ValueError(f"cannot read {args.config}: {error}") from None
+        result = walk(args.recording, args.steps, config=config, series=bool(outputs),
+                      progress=print_progress)
         for key, path in outputs.items():
             _write(key, path, result)
         result.pop("series", None)
         if args.self_test:
-            result["self_test"] = self_test(args.recording, args.steps, result)
+            result["self_test"] = self_test(args.recording, args.steps, result, config)
     except ValueError as error:
         raise CliError(str(error)) from error
     print(json.dumps(result, indent=2) if args.json else format_summary(result))

@@ -34,7 +34,10 @@ def load_config(path: str | Path = CONFIG) -> dict[str, Any]:
     """The controller's parameters (config/walk.yaml); ValueError naming the file and the key
     if one is missing or not a finite number >= 0 (time_step and radius > 0)."""
     with open(path, encoding="utf-8") as stream:
-        cfg = yaml.safe_load(stream)
+        try:
+            cfg = yaml.safe_load(stream)
+        except yaml.YAMLError as error:
+            raise ValueError(f"{path}: not a YAML file: {error}") from None
     for section, keys in _KEYS.items():
         for key in keys:
             value = (cfg.get(section) or {}).get(key) if isinstance(cfg, dict) else None

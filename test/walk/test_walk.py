@@ -9,6 +9,7 @@ system: benchmarks/HISTORY.md gives the spread over simulation settings).
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -140,3 +141,20 @@ def test_a_recording_of_ten_half_cycles_is_walked_as_recorded(tmp_path):
         Reference.from_recording(wrong, 10)
     result = walk(out, 2)
     assert result["half_cycles_walked"] == 2 and result["stopped"] == "completed"
+
+
+def test_walk_takes_a_controller_file_and_names_what_is_wrong(walker2d_plan, tmp_path, capsys):
+    from gait_planner.walk.simulate import CONFIG
+
+    mine = tmp_path / "mine.yaml"
+    mine.write_text(CONFIG.read_text().replace("tilt: 35.0", "tilt: 0.5"))
+    assert main(["walk", str(walker2d_plan), "--steps", "2", "--config", str(mine),
+                 "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["stopped"].startswith("fall: torso tilted")  # 0.5 deg: at once
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("joints: [kp: 1")
+    assert main(["walk", str(walker2d_plan), "--config", str(broken)]) == 2
+    assert "broken.yaml: not a YAML file" in capsys.readouterr().err
+    assert main(["walk", str(walker2d_plan), "--config", str(tmp_path / "none.yaml")]) == 2
+    assert "cannot read" in capsys.readouterr().err
