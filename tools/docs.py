@@ -238,13 +238,17 @@ def render_request_limits() -> str:
 
     from gait_planner.model.loader import load_scene_file
     from gait_planner.ocp import request_ranges as ranges
-    from gait_planner.ocp.settings import GaitSettings
+    from gait_planner.ocp.settings import GaitSettings, settings_for, speed_range
     from gait_planner.request import MAX_STEPS
 
     node = yaml.safe_load((ROOT / "config/gait_planner.yaml").read_text())
     limit = node["gait_planner"]["ros__parameters"]["max_solve_time"]
     reach = ", ".join(f"{path.stem} {ranges.reach(load_scene_file(path)):.2f} m"
                       for path in sorted((ROOT / "config/scenes").glob("*.yaml")))
+    speeds = ", ".join(
+        f"{path.stem} {lo:.3f} to {hi:.3f} m/s at its {st.step_length:g} m step"
+        for path in sorted((ROOT / "config/scenes").glob("walker*.yaml"))
+        for st in [settings_for(load_scene_file(path))] for lo, hi in [speed_range(st)])
     (mu_lo, mu_hi), (n_lo, n_hi) = ranges.FRICTION_RANGE, ranges.INTERVALS_RANGE
     return (f"* `step_length`: at most the legs' reach ({reach});\n"
             f"* `friction_coefficient`: {mu_lo:g} to {mu_hi:g};\n"
@@ -252,7 +256,9 @@ def render_request_limits() -> str:
             f"* `max_solve_time`: up to {ranges.MAX_SOLVE_TIME:g} s; 0 means the node's "
             f"`max_solve_time` ({limit:g} s in `config/gait_planner.yaml`), in `plan` the "
             f"scene's option `max_solve_time` (default {GaitSettings.max_solve_time:g} s);\n"
-            f"* `steps`: 1 to {MAX_STEPS} half cycles.\n")
+            f"* `steps`: 1 to {MAX_STEPS} half cycles;\n"
+            f"* `speed`: what the scene's σ bounds allow at the requested step length, "
+            f"step_length / longest to step_length / shortest half cycle ({speeds}).\n")
 
 
 def render_parameters() -> str:
