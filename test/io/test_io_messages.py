@@ -168,8 +168,12 @@ def test_stamps_are_exact_nanoseconds_and_increasing(result):
 
 
 def test_plan_response_fields_match_the_service_definition(result):
+    """The plan's fields and the walk's (filled after a walk, `walk_response_fields`) make
+    up the response, each field once."""
     fields_ = messages.plan_response_fields(result, "/tmp/plan.mcap", START_NS)
-    assert set(fields_) == set(srv_response_fields("PlanGait"))
+    walk = messages.walk_response_fields(0, None, "off")
+    assert not set(fields_) & set(walk)
+    assert set(fields_) | set(walk) == set(srv_response_fields("PlanGait"))
     assert fields_["mcap_path"] == "/tmp/plan.mcap"
     assert fields_["cost"] == result.cost_value and fields_["iterations"] == 42
     assert fields_["phase_scaling"] == list(result.phase_scaling)
