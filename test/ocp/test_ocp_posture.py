@@ -256,7 +256,7 @@ def test_human_posture_straightens_the_stance_knee(name):
     from gait_planner.ocp.solve import Planner
 
     scene = load_scene(name)
-    result = Planner().plan(scene, settings_for(scene, posture="human"))
+    result = Planner().plan(scene, settings_for(scene, posture="human", compiled=True))
     assert result.success, result.message
     knee = np.degrees(result.joint_angles[:, list(result.joint_angle_names).index("knee_r")])
     single = [n for n in range(1, result.n_nodes - 1)
