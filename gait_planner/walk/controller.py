@@ -152,11 +152,16 @@ class ReferenceController:
             _, D_ref = ref.root_at(t)
             mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_BODY, self.root,
                                      self._vel, 0)
-            D = data.xmat[self.root].reshape(3, 3)
+            D, w_ref = data.xmat[self.root].reshape(3, 3), ref.root_rate_at(t, h)
             for idx in stance:
-                fb[idx] += torso_torque(g, D, D_ref, self._vel[:3], ref.root_rate_at(t, h),
+                fb[idx] += torso_torque(g, D, D_ref, self._vel[:3], w_ref,
                                         data.xaxis[self.joint_ids[idx]]) / len(stance)
         return self.scale * efforts, fb, efforts, angles
+
+    def planned_point(self, q_row: np.ndarray, contact: str) -> np.ndarray:
+        """World position (3,) m of a contact point in the plan's configuration q_row."""
+        i, p = self.points[contact]
+        return q_row[12 * i:12 * i + 3] + q_row[12 * i + 3:12 * i + 12].reshape(3, 3).T @ p
 
     def _shift(self, data, t: float, active) -> np.ndarray:
         """`placement_shift` of the centre of mass against the held contacts `active`."""
@@ -165,9 +170,7 @@ class ReferenceController:
         ref, h = self.ref, self.model.opt.timestep
         mujoco.mj_subtreeVel(self.model, data)
         q_ref = ref.q_at(t)
-        planned = np.mean([q_ref[12 * i:12 * i + 3]
-                           + q_ref[12 * i + 3:12 * i + 12].reshape(3, 3).T @ p
-                           for i, p in (self.points[c] for c in active)], axis=0)
+        planned = np.mean([self.planned_point(q_ref, c) for c in active], axis=0)
         support = np.mean([data.xpos[self.contact_body[c]] for c in active], axis=0)
         com_rate = (ref.com_at(t + h) - ref.com_at(t - h)) / (2 * h)
         return placement_shift(self.gains,

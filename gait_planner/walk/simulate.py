@@ -166,7 +166,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         if data.time >= boundaries * ref.period - 0.5 * h:
             mujoco.mj_kinematics(model, data)
             drift.append((data.xpos[root_id] - ref.root_at(data.time)[0]).tolist())
-            placement.append(_placement_error(ref, model, data, control))
+            placement.append(_placement_error(ref, data, control))
             per_half.append(_rms(np.degrees(errs[start:])))
             start = len(errs)
             if progress is not None:
@@ -211,14 +211,13 @@ def ground_forces(model, data, contact_ids: list[int]) -> np.ndarray:
     return per_point
 
 
-def _placement_error(ref, model, data, control) -> float:
+def _placement_error(ref, data, control) -> float:
     """m: the largest distance of a contact point the plan holds at the node nearest to
     data.time from where the plan puts it."""
     n = int(np.argmin(np.abs(ref.times - data.time)))
     q_n = ref.q[n]
     worst = 0.0
     for c in ref.active[n]:
-        i, p = control.points[c]
-        planned = q_n[12 * i:12 * i + 3] + q_n[12 * i + 3:12 * i + 12].reshape(3, 3).T @ p
-        worst = max(worst, float(np.linalg.norm(data.xpos[control.contact_body[c]] - planned)))
+        worst = max(worst, float(np.linalg.norm(data.xpos[control.contact_body[c]]
+                                                - control.planned_point(q_n, c))))
     return worst
