@@ -28,6 +28,7 @@ FULL = [
     ["hard_cases.py", "--time-limit", "45"],
     ["integrators.py", "--long-steps", "30000"],
     ["walk.py"],
+    ["gait_trends.py"],
 ]
 QUICK = [
     ["model_size.py", "--quick", "--compiled"],
@@ -36,6 +37,7 @@ QUICK = [
     ["hard_cases.py", "--quick", "--time-limit", "20"],
     ["integrators.py", "--quick"],
     ["walk.py", "--quick"],
+    ["gait_trends.py", "--quick"],
 ]
 
 

@@ -9,7 +9,8 @@ Rows (the scene's default request changed in one way): step length 0.3 m and 0.9
 mu = 0.2, narrow sigma bounds [0.9, 1.1], a cold start from the standing pose, a
 deliberately poor guess (the kinematic guess turned by random rotations of up to 0.3 rad at
 every node), very coarse (3) and very fine (24) grids, a nearly stretched knee (knees within
-[0, 5] deg), the torque-squared cost; and the variational integrator's passive walker3d
+[0, 5] deg), the torque-squared cost, ramps of +-10 deg, stairs of +-0.15 m, speeds of 1.2 and 1.6 m/s
+and 0.8 m/s at a 0.45 m step (issue #26); and the variational integrator's passive walker3d
 with a large step (dt = 0.05 s). Each plan is checked by `gait_planner.verify.verify_result`
 (discrete checks, physical checks, the continuous-dynamics certificate). DMOCC plans as the
 product does: a converged plan that misses the certificate is planned again on a grid twice
@@ -57,6 +58,13 @@ def cases(scene) -> list[Case]:
         Case("fine grid (24 per phase)", {"intervals_per_phase": 24}),
         Case("nearly stretched knee [0, 5] deg", {"joint_limits": {**declared, **knees}}),
         Case("torque-squared cost", {"cost": "torque_squared"}),
+        Case("ramp up 10 deg", {"slope": 10.0}),
+        Case("ramp down 10 deg", {"slope": -10.0}),
+        Case("stairs up 0.15 m", {"step_height": 0.15}),
+        Case("stairs down 0.15 m", {"step_height": -0.15}),
+        Case("speed 1.2 m/s", {"speed": 1.2}),
+        Case("speed 1.6 m/s", {"speed": 1.6}),
+        Case("speed 0.8 m/s at step 0.45 m", {"speed": 0.8, "step_length": 0.45}),
     ]
 
 
@@ -79,8 +87,8 @@ def methods() -> dict[str, Callable]:
         return out
 
     def collocation(scene, settings, guess):
-        if guess != "kinematic":  # the baseline starts from the kinematic guess only
-            return None
+        if guess != "kinematic" or settings.slope or settings.step_height:
+            return None  # the baseline starts from the kinematic guess, on level ground
         return plan_collocation(scene, settings)
 
     out["collocation"] = collocation

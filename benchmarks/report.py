@@ -316,10 +316,71 @@ def walk(doc) -> list[str]:
         ("self-test: walked (feedback)", "selftest", ""), ("why it stopped", "stopped", "")]) + [""]
 
 
+def _monotone(values: list[float]) -> str:
+    """"rises", "falls" or "not monotone" for a series in order."""
+    d = np.diff(values)
+    return "rises" if np.all(d > 0) else "falls" if np.all(d < 0) else "not monotone"
+
+
+def gait_trends(doc) -> list[str]:
+    out = ["## 8. Work, torques and powers over slope and speed, against human trends", ""]
+    if doc is None:
+        return out + ["Not measured.", ""]
+    rows = doc["rows"]
+    out += [provenance(doc), "",
+            "`gait_trends.py`: one certified cold plan per row (slope at the scene's step and "
+            "free durations; speed on level ground at the scene's step; 0.8 m/s at a 0.45 m "
+            "step). Work and powers from the published efforts conjugate to the joint angles "
+            "over one half cycle; W+/(m g s) the mechanical cost of transport; the stance "
+            "knee's peak flexion in single support. Sources of the human trends: the "
+            "script's docstring. Figure: [gait_trends.png](gait_trends.png).", ""]
+    shown = [dict(r, **({} if not r.get("success") else {
+        "torques": " / ".join(f"{r[f'{j}_peak_torque_Nm']:.0f}" for j in ("hip", "knee", "ankle")),
+        "powers": " / ".join(f"{r[f'{j}_peak_power_W']:.0f}" for j in ("hip", "knee", "ankle"))}))
+        for r in rows]
+    out += table(shown, [
+        ("scene", "scene", ""), ("series", "series", ""), ("value", "value", "g"),
+        ("certified", "certified", ""), ("J", "cost", ".3f"), ("speed m/s", "speed_m_s", ".3f"),
+        ("W+ J", "positive_work_J", ".1f"), ("W- J", "negative_work_J", ".1f"),
+        ("m g rise J", "rise_work_J", ".1f"), ("W+/(m g s)", "mechanical_cost_of_transport", ".3f"),
+        ("hip / knee / ankle peak torque N m", "torques", ""),
+        ("hip / knee / ankle peak power W", "powers", ""),
+        ("stance knee deg", "stance_knee_flexion_deg", ".1f"), ("wall s", "wall_s", ".0f")])
+    out += ["", "Against the human trends (computed from the rows above):", ""]
+    for scene in sorted({r["scene"] for r in rows}):
+        slope = sorted((r for r in rows if r["scene"] == scene and r["series"] == "slope"
+                        and r.get("success")), key=lambda r: r["value"])
+        speed = sorted((r for r in rows if r["scene"] == scene and r["series"] == "speed"
+                        and r.get("success")), key=lambda r: r["value"])
+        if len(slope) > 1:
+            out.append(f"* {scene}, slope {slope[0]['value']:g} to {slope[-1]['value']:g} deg: "
+                       f"W+ {_monotone([r['positive_work_J'] for r in slope])} (humans: rises), "
+                       f"|W-| {_monotone([-r['negative_work_J'] for r in slope])} (humans: "
+                       f"falls); hip peak power {_monotone([r['hip_peak_power_W'] for r in slope])}"
+                       f" (humans: rises); knee peak torque "
+                       f"{_monotone([r['knee_peak_torque_Nm'] for r in slope])}.")
+        if len(speed) > 1:
+            out.append(f"* {scene}, speed {speed[0]['value']:g} to {speed[-1]['value']:g} m/s: "
+                       f"stance knee flexion "
+                       f"{_monotone([r['stance_knee_flexion_deg'] for r in speed])} (humans: "
+                       f"rises); peak torques hip "
+                       f"{_monotone([r['hip_peak_torque_Nm'] for r in speed])}, knee "
+                       f"{_monotone([r['knee_peak_torque_Nm'] for r in speed])}, ankle "
+                       f"{_monotone([r['ankle_peak_torque_Nm'] for r in speed])} (humans: "
+                       f"rise); walks above 2.07 m/s (the human walk-run transition): "
+                       f"{sum(r['value'] > 2.07 for r in speed)} planned, no human counterpart.")
+    failed = [r for r in rows if not r.get("success")]
+    if failed:
+        out.append("* Not planned: " + "; ".join(
+            f"{r['scene']} {r['series']} {r['value']:g}: {r['message']}" for r in failed))
+    return out + [""]
+
+
 def main() -> None:
     docs = {name: load(name) for name in ("work_precision", "integrators", "model_size",
                                          "model_size_compiled", "hard_cases", "cold_solve",
-                                         "node_latency_walker3d", "request_sweep", "walk")}
+                                         "node_latency_walker3d", "request_sweep", "walk",
+                                         "gait_trends")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
              "`benchmarks/results/*.json`; every number below is in those files with the "
@@ -334,6 +395,7 @@ def main() -> None:
     lines += speed(docs["cold_solve"], docs["node_latency_walker3d"])
     lines += request_sweep(docs["request_sweep"])
     lines += walk(docs["walk"])
+    lines += gait_trends(docs["gait_trends"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")

@@ -16,7 +16,7 @@ from typing import Callable
 
 import numpy as np
 
-from gait_planner.model.loader import SceneError, available_scenes, load_scene
+from gait_planner.model.loader import SceneError, available_scenes, load_scene, with_gait
 from gait_planner.ocp.refine import refined_settings
 from gait_planner.ocp.request_ranges import RangeError, check_request
 from gait_planner.model.scene import Scene
@@ -71,7 +71,7 @@ def request_settings(request: PlanRequest, scenes: SceneLookup = load_scene,
     request = checked(request)
     try:
         try:
-            scene = scenes(request.scene)
+            scene = with_gait(scenes(request.scene), request.gait)
         except OSError as err:  # a name the file system refuses, e.g. one too long
             raise SceneError(f"scene {request.scene!r} cannot be looked up ({err.strerror}); "
                              f"available scenes: {', '.join(available_scenes())}") from None
@@ -86,7 +86,9 @@ def request_settings(request: PlanRequest, scenes: SceneLookup = load_scene,
             max_solve_time=request.max_solve_time,
             **({"compiled": True} if request.compiled else {}),
             **({"posture": request.posture} if request.posture else {}),
-            **({"speed": request.speed} if request.speed else {}))
+            **({"speed": request.speed} if request.speed else {}),
+            **({"slope": request.slope} if request.slope else {}),
+            **({"step_height": request.step_height} if request.step_height else {}))
     except (SceneError, SettingsError, RangeError) as err:
         raise RequestError(str(err)) from None
     return scene, settings

@@ -4,7 +4,8 @@ the action, ``gait-planner call`` before sending, ``gait-planner plan``).
 The fields are those of ``msg_defs/srv/PlanGait.srv``. 0 or an empty string means the
 default: the scene's (step_length, cost, friction_coefficient, intervals_per_phase,
 posture), the node's (scene, max_solve_time; ``plan``: GaitSettings' time limit), 1
-(steps) or free phase durations (speed). A negative, NaN or infinite number is refused
+(steps), free phase durations (speed) or level ground (slope, step_height, which may be
+negative: downhill, stairs down). Otherwise a negative, NaN or infinite number is refused
 with `RequestError` naming the field, its value and what is allowed, e.g. "step_length
 must be > 0 m, or 0 for the scene's default, got -0.5". Numbers that pass this rule still
 meet the scene's ranges (`gait_planner.ocp.request_ranges`; a speed: the half-cycle
@@ -24,7 +25,8 @@ from typing import Any
 MAX_STEPS = 100  # half cycles one request may join (60 s of walking for walker3d)
 # the request's fields (PlanGait.srv), in its order
 FIELDS = ("scene", "step_length", "cost", "friction_coefficient", "intervals_per_phase",
-          "max_solve_time", "output_name", "cold_start", "steps", "posture", "speed")
+          "max_solve_time", "output_name", "cold_start", "steps", "posture", "speed", "slope",
+          "step_height", "gait")
 # numeric field -> (unit, what 0 stands for)
 _NUMBERS = {
     "step_length": (" m", "the scene's default"),
@@ -32,6 +34,11 @@ _NUMBERS = {
     "intervals_per_phase": ("", "the scene's default"),
     "max_solve_time": (" s", "the default limit"),
     "speed": (" m/s", "free phase durations"),
+}
+# signed numeric field -> (unit, what 0 stands for): any finite number
+_SIGNED = {
+    "slope": (" deg", "level ground"),
+    "step_height": (" m", "no stairs"),
 }
 
 
@@ -56,6 +63,9 @@ class PlanRequest:
     steps: int = 1  # half cycles in the result, joined by the mirror (`ocp.walk_on`)
     posture: str = ""  # "paper" or "human" (`model.posture`); empty = the scene's
     speed: float | None = None  # m/s, step_length / half cycle (GaitSettings.speed); None: free
+    slope: float = 0.0  # deg, uphill positive (GaitSettings.slope); 0: level
+    step_height: float = 0.0  # m per step, stairs up (> 0) or down (GaitSettings.step_height)
+    gait: str = ""  # a gait of the scene ("walk", "run", ...; `model.loader.with_gait`); "": walk
 
 
 def _refuse(name: str, value: Any, allowed: str) -> RequestError:
@@ -81,10 +91,20 @@ def checked(request: PlanRequest) -> PlanRequest:
     """`request` with its 0 fields as None (the defaults) and 0 steps as 1; RequestError for
     the first field that breaks the rule of the module docstring."""
     numbers = {name: _number(name, getattr(request, name)) for name in _NUMBERS}
+    for name, (unit, zero) in _SIGNED.items():
+        value = getattr(request, name)
+        if value is None:
+            numbers[name] = 0.0
+        elif isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value):
+            raise _refuse(name, value, f"a finite number{unit}, or 0 for {zero}")
+        else:
+            numbers[name] = float(value)
     steps = request.steps or 1
     if isinstance(steps, bool) or not isinstance(steps, Integral) or not 1 <= steps <= MAX_STEPS:
         raise _refuse("steps", request.steps,
                       f"a whole number of half cycles from 1 to {MAX_STEPS}, or 0 for 1")
+    if not isinstance(request.gait, str):
+        raise _refuse("gait", request.gait, "a gait's name, or empty for the scene's walk")
     return dataclasses.replace(request, **numbers, steps=steps, cost=request.cost or None)
 
 

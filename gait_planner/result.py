@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.model.scene import Scene
 
 
@@ -57,8 +58,9 @@ class PlanResult:
         contact_forces: contact name -> (N+1, 3) ground force on the body, N, world frame;
             zero where the contact is not active.
         roll_moments: body name -> (N+1,) N m, the moment of the ground about the heel-toe
-            line of a body in 3D full contact, acting as M (d2 x e_z) (`ocp.contacts`),
-            which two point forces on that line cannot carry; zero elsewhere.
+            line of a body in 3D full contact, acting as M (d2 x n), n the ground's normal
+            (`ocp.contacts`), which two point forces on that line cannot carry; zero
+            elsewhere.
         generalized_force: (N+1, k) f+_{n-1} + f-_n (N s: discrete forces are impulses
             over half intervals; director form, zero on phi).
         kinetic_energy, potential_energy: (N+1,) J.
@@ -91,6 +93,7 @@ class PlanResult:
     duration: float
     stats: SolverStats
     settings: dict[str, str] = field(default_factory=dict)  # extra metadata, strings
+    ground: Ground = LEVEL  # what the plan stands on (`gait_planner.model.ground`)
 
     @property
     def n_nodes(self) -> int:

@@ -40,6 +40,8 @@ REFUSED = [
     ("step_length", "0.5", f"step_length must be > 0 m, or 0 for {SCENE_DEFAULT}, got '0.5'"),
     ("speed", -1.0, "speed must be > 0 m/s, or 0 for free phase durations, got -1.0"),
     ("speed", math.nan, "speed must be > 0 m/s, or 0 for free phase durations, got nan"),
+    ("slope", math.inf, "slope must be a finite number deg, or 0 for level ground, got inf"),
+    ("step_height", "0.1", "step_height must be a finite number m, or 0 for no stairs, got '0.1'"),
 ]
 
 
@@ -56,7 +58,8 @@ def test_a_bad_number_is_refused_the_same_way_everywhere(name, value, message):
 def test_zero_and_empty_fields_are_the_defaults():
     message = SimpleNamespace(scene="", step_length=0.0, cost="", friction_coefficient=0.0,
                               intervals_per_phase=0, max_solve_time=0.0, output_name="",
-                              cold_start=False, steps=0, posture="", speed=0.0)
+                              cold_start=False, steps=0, posture="", speed=0.0, slope=0.0,
+                              step_height=0.0)
     assert set(vars(message)) == set(FIELDS)
     request = plan_request(message, default_scene="walker2d", default_max_solve_time=60.0,
                            compiled=True)

@@ -22,7 +22,8 @@ from importlib import metadata
 from typing import Callable, NoReturn, Sequence
 
 from gait_planner.cli.errors import CliError
-from gait_planner.cli.ros_commands import SPEED_HELP, add_call_parser, add_node_parser
+from gait_planner.cli.ros_commands import (GAIT_HELP, SLOPE_HELP, SPEED_HELP, STEP_HEIGHT_HELP,
+                                          add_call_parser, add_node_parser)
 from gait_planner.cli.simulate import add_simulate_parser
 from gait_planner.cli.walk import add_walk_parser
 
@@ -61,6 +62,10 @@ def _add_plan_options(parser: argparse.ArgumentParser, scene_default: str | None
                         metavar="NAME|FILE.yaml", help=SCENE_HELP)
     parser.add_argument("--step-length", type=float, help="m (default: the scene's)")
     parser.add_argument("--speed", type=float, metavar="M/S", help=SPEED_HELP)
+    parser.add_argument("--slope", type=float, default=0.0, metavar="DEG", help=SLOPE_HELP)
+    parser.add_argument("--gait", default="", metavar="NAME", help=GAIT_HELP)
+    parser.add_argument("--step-height", type=float, default=0.0, metavar="M",
+                        help=STEP_HEIGHT_HELP)
     parser.add_argument("--cost", help="kinetic_energy | torque_squared (default: the scene's)")
     # the request's field names (as `call` has them), and the short names of earlier releases
     parser.add_argument("--intervals-per-phase", "--intervals", dest="intervals", type=int,
@@ -133,7 +138,8 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
                           friction_coefficient=args.mu, intervals_per_phase=args.intervals,
                           max_solve_time=args.max_time, output_name=target.stem,
                           compiled=args.compile, steps=args.steps, posture=args.posture,
-                          speed=args.speed)
+                          speed=args.speed, slope=args.slope, step_height=args.step_height,
+                          gait=args.gait)
     print(f"planning {args.scene} ...", file=sys.stderr, flush=True)
     try:  # a compile cache miss is announced by the stage "compiling (...)"
         outcome = plan_and_record(Planner(progress=_progress, stage=_stage), request,

@@ -21,6 +21,17 @@ SPEED_HELP = ("mean forward speed of the half cycle, m/s: step length / duration
               "its range")
 
 
+# `plan`, `run` and `call` --slope and --step-height (gait_planner.model.ground)
+SLOPE_HELP = ("ramp along the walking direction, degrees, uphill positive (default 0: level); "
+              "refused if tan |slope| exceeds the friction coefficient")
+STEP_HEIGHT_HELP = ("stairs: the rise per step, m, up (> 0) or down (< 0), treads as deep as "
+                    "the step length (default 0: none); refused beyond the legs' reach")
+
+
+GAIT_HELP = ("a gait the scene declares: walk (default) or one of its gaits: (walker2d, "
+             "walker3d: run)")
+
+
 def add_node_parser(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "node", help="run the ROS 2 node (service and action /gait_planner/plan_gait)",
@@ -122,6 +133,10 @@ def add_call_parser(commands: argparse._SubParsersAction) -> None:
                         help="paper: the scene's ranges; human: also a stance knee of at most "
                         "20 deg in single support (default: the scene's)")
     parser.add_argument("--speed", type=float, default=0.0, metavar="M/S", help=SPEED_HELP)
+    parser.add_argument("--slope", type=float, default=0.0, metavar="DEG", help=SLOPE_HELP)
+    parser.add_argument("--gait", default="", metavar="NAME", help=GAIT_HELP)
+    parser.add_argument("--step-height", type=float, default=0.0, metavar="M",
+                        help=STEP_HEIGHT_HELP)
     parser.add_argument("--action", action="store_true",
                         help="use the action: print feedback, Ctrl-C cancels")
     parser.add_argument("--timeout", type=float, default=900.0, metavar="S",

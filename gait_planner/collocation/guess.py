@@ -39,6 +39,7 @@ from scipy.interpolate import CubicSpline
 
 from gait_planner.collocation.transcription import ACCELERATION_SCALE, CollocationTranscription
 from gait_planner.model.multibody import Multibody
+from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.ocp.contacts import BodyContact, body_contacts
 from gait_planner.ocp.guess import initial_multipliers, kinematic_guess
 
@@ -54,6 +55,7 @@ class DmoccGrid:
     phase_of_interval: np.ndarray
     contacts: list[tuple[BodyContact, ...]]
     lam_nodes: range
+    ground: Ground = LEVEL  # the baseline plans on level ground only
 
 
 def initial_guess(tr: CollocationTranscription, step: float,

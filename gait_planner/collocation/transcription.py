@@ -60,7 +60,7 @@ from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_
 from gait_planner.ocp.mirror import torque_mirror
 from gait_planner.ocp.posture import (joint_limit_margins, joint_margin_constants,
                                       joint_speed_margins, twist_squares)
-from gait_planner.ocp.settings import GaitSettings
+from gait_planner.ocp.settings import GaitSettings, SettingsError, ground_of
 from gait_planner.ocp.transcription import (FORCE_SCALE, TORQUE_SCALE, relaxed_lower_bounds,
                                            speed_row)
 
@@ -94,6 +94,10 @@ class CollocationTranscription:
     def __init__(self, model: MinimalModel, settings: GaitSettings, mesh: Mesh):
         self.model, self.mb, self.settings, self.mesh = model, model.mb, settings, mesh
         mb, s, scene, n = model.mb, settings, model.scene, model.n
+        if not ground_of(scene, s).level:
+            raise SettingsError(
+                f"the collocation baseline plans on level ground only; slope {s.slope:g} deg "
+                f"and step_height {s.step_height:g} m need the DMOCC planner")
         self.step, self.mu = ca.MX.sym("step_length"), ca.MX.sym("mu")
         V = self.variables = _Variables()
         self.sigma = V.add("sigma", scene.gait.n_scalings)
@@ -175,7 +179,7 @@ class CollocationTranscription:
         touch = []
         for j, before, after in switches:
             held = {p for bc in before for p in bc.points}
-            E = establishing_rows(mb, before, after)
+            E, _ = establishing_rows(mb, before, after)
             if E.shape[0]:
                 touch.append(ca.mtimes(ca.DM(E), self.q[j]))
             if all(p in held for bc in after for p in bc.points):

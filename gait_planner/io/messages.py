@@ -246,9 +246,12 @@ def foot_wrenches(result: PlanResult, node: int) -> list[tuple[str, np.ndarray, 
     """Per body with an active contact at `node`, in scene body order: (body, reference
     point r, force F, moment M about r, centre of pressure), world frame, m, N, N m.
     r is the mean of the body's active points; F and M sum the point forces and their
-    moments about r plus the full contact's roll moment M_roll (d2 x e_z); the centre of
-    pressure is r + (-M_y, M_x, 0) / F_z (r itself where F_z <= 0)."""
+    moments about r plus the full contact's roll moment M_roll (d2 x n, n the ground's
+    normal: e_z on level ground, `gait_planner.ocp.contacts`); the centre of pressure is
+    r + (n x M) / (n . F) (on level ground r + (-M_y, M_x, 0) / F_z; r itself where
+    n . F <= 0)."""
     scene = result.scene
+    normal = result.ground.normal
     names = list(result.active_contacts[node])
     points = dict(zip(names, contact_points(result, node, names)))
     frames = _frames(np.asarray(result.q[node], dtype=float), len(scene.bodies))
@@ -264,8 +267,9 @@ def foot_wrenches(result: PlanResult, node: int) -> list[tuple[str, np.ndarray, 
         roll = result.roll_moments.get(body)
         if roll is not None:
             d2 = frames[scene.body_index(body)][1][:, 1]
-            M = M + float(roll[node]) * np.cross(d2, [0.0, 0.0, 1.0])
-        cop = r + (np.array([-M[1], M[0], 0.0]) / F[2] if F[2] > 0 else 0.0)
+            M = M + float(roll[node]) * np.cross(d2, normal)
+        pressing = float(normal @ F)
+        cop = r + (np.cross(normal, M) / pressing if pressing > 0 else 0.0)
         out.append((body, r, F, M, cop))
     return out
 

@@ -1,7 +1,9 @@
 """Drawing a walker in rerun (rerun-sdk 0.41), shared by a plan's view
 (`gait_planner.io.rerun_view`) and a walk's (`gait_planner.walk.rerun_walk`).
 
-* `log_ground`: ``world`` z up and a grid on z = 0 (``world/ground``);
+* `log_ground`: ``world`` z up and a grid on the ground a plan was made for (``world/ground``:
+  z = 0, the tilted plane of a ramp, the treads of stairs, with the treads' boxes at
+  ``world/ground/treads``);
 * `log_bodies` and `log_poses`: each body's drawing primitive (`gait_planner.io.urdf.body_shapes`,
   box or cylinder, in body coordinates, partly transparent) at ``<root>/<body>``, moved by a
   Transform3D per time (the COM phi and the directors [d1 d2 d3]);
@@ -20,7 +22,8 @@ import rerun as rr
 
 from gait_planner.io.messages import quaternion_msg
 from gait_planner.io.rerun_series import BOUNDARY_COLOR, PlotGroup
-from gait_planner.io.urdf import body_shapes
+from gait_planner.io.urdf import body_shapes, ground_boxes
+from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.model.scene import Scene
 
 __all__ = ["Columns", "log_boundaries", "log_bodies", "log_ground", "log_poses",
@@ -28,22 +31,35 @@ __all__ = ["Columns", "log_boundaries", "log_bodies", "log_ground", "log_poses",
 
 _GROUND_HALF_SIZE, _GROUND_STEP = 1.5, 0.25  # m
 _BODY_ALPHA = 150  # the bodies let the arrows, trails and skeleton inside them show
+_GROUND_COLOR, _TREAD_COLOR = (150, 150, 150), (190, 190, 180, 70)
 
 
 def _rgb(color) -> tuple[int, int, int]:
     return tuple(int(round(255 * c)) for c in color[:3])  # type: ignore[return-value]
 
 
-def log_ground(rec: rr.RecordingStream, x_end: float = _GROUND_HALF_SIZE) -> None:
-    """``world`` z up and its ground grid ``world/ground`` (z = 0, x from -1.5 m to `x_end`
-    m, y within +-1.5 m, 0.25 m squares), static."""
+def log_ground(rec: rr.RecordingStream, x_end: float = _GROUND_HALF_SIZE,
+               ground: Ground = LEVEL) -> None:
+    """``world`` z up and its ground grid ``world/ground`` (x from -1.5 m to `x_end` m, y
+    within +-1.5 m, 0.25 m squares) on `ground` (`gait_planner.model.ground`): on z = 0,
+    on a ramp's plane, or on the treads of stairs, whose boxes (`ground_boxes`) are drawn
+    at ``world/ground/treads``; static."""
     rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     h = _GROUND_HALF_SIZE
     xs = np.arange(-h, max(x_end, h) + _GROUND_STEP - 1e-9, _GROUND_STEP)
     ys = np.arange(-h, h + 1e-9, _GROUND_STEP)
-    lines = [[[x, -h, 0.0], [x, h, 0.0]] for x in xs] + [[[-h, y, 0.0], [xs[-1], y, 0.0]]
-                                                           for y in ys]
-    rec.log("world/ground", rr.LineStrips3D(lines, radii=0.001, colors=(150, 150, 150)),
+    zs = ground.height(xs) + 0.0  # + 0.0: 0.0, not -0.0, on level ground
+    profile = [(-h, zs[0]), (xs[-1], zs[-1])]  # the ground's section along x (x, z)
+    if ground.stairs:
+        boxes = ground_boxes(ground, -h, xs[-1])
+        profile = [(float(np.clip(b.centre[0] + side * b.size[0] / 2, -h, xs[-1])),
+                    b.centre[2] + b.size[2] / 2) for b in boxes for side in (-1, 1)]
+        rec.log("world/ground/treads", rr.Boxes3D(
+            centers=[b.centre for b in boxes], sizes=[b.size for b in boxes],
+            colors=_TREAD_COLOR, fill_mode="solid"), static=True)
+    lines = [[[x, -h, z], [x, h, z]] for x, z in zip(xs, zs)]
+    lines += [[[x, y, z] for x, z in profile] for y in ys]
+    rec.log("world/ground", rr.LineStrips3D(lines, radii=0.001, colors=_GROUND_COLOR),
             static=True)
 
 

@@ -3,15 +3,17 @@
 Entities (timeline ``time``: s from the start of the half cycle, duration type; timeline
 ``node``: the node index):
 
-* ``world``: z up; ``world/ground``: a grid on z = 0.
+* ``world``: z up; ``world/ground``: a grid on the ground the plan was made for
+  (`PlanResult.ground`: z = 0, a ramp's tilted plane, or stairs, whose treads are boxes at
+  ``world/ground/treads``), over the plan's x range (level ground: -1.5 to 1.5 m).
 * ``world/walker/<body>``: the body's drawing primitive (`gait_planner.io.urdf.body_shapes`,
   box or cylinder, in body coordinates, partly transparent), placed per node by a
   Transform3D (the COM phi and the directors [d1 d2 d3] from q); ``world/skeleton``: line
   segments COM -> joint point -> COM along every joint and heel -> forefoot on every foot;
   ``world/com``: body COMs; ``world/com_total``: the whole-body centre of mass.
 * ``world/trails/<contact>``: each contact point's path up to the node (right foot red,
-  left blue); ``world/trails/com``: the whole-body centre of mass's path and its projection
-  on the ground.
+  left blue); ``world/trails/com``: the whole-body centre of mass's path and its vertical
+  projection on the ground.
 * ``world/contacts/points`` and ``world/contacts/forces``: the active contact points and
   the ground forces on them as arrows, `FORCE_SCALE` m per N (1.5 mm/N);
   ``world/contacts/wrenches`` and ``world/contacts/centers_of_pressure``: per foot in
@@ -58,7 +60,11 @@ _SIDE_COLORS = {"right": (200, 60, 60), "left": (50, 90, 200)}
 
 
 def _log_static(result: PlanResult, rec: rr.RecordingStream) -> None:
-    log_ground(rec)
+    if result.ground.level:
+        log_ground(rec)
+    else:  # over the plan's x range (a joined plan climbs a tread per half cycle)
+        phi, _ = poses(result.q)
+        log_ground(rec, float(phi[..., 0].max()) + 1.0, result.ground)
     log_bodies(rec, result.scene, "world/walker")
     stats = result.stats
     sigma = ", ".join(f"{s:.4f}" for s in result.phase_scaling)
@@ -108,6 +114,8 @@ def _log_motion(result: PlanResult, rec: rr.RecordingStream) -> None:
     faster per recording of walker3d (615 log calls)."""
     phi, D = poses(result.q)
     com = whole_body_com(result, phi)
+    below = com * [1.0, 1.0, 0.0]  # the centre of mass on the ground, 2 mm above the grid
+    below[:, 2] += result.ground.height(com[:, 0]) + 0.002
     trails = _trail_points(result)
     side = {c.name: side_of(c.body) for c in result.scene.contacts}
     t = np.asarray(result.times, dtype=float) - float(result.times[0])
@@ -121,8 +129,7 @@ def _log_motion(result: PlanResult, rec: rr.RecordingStream) -> None:
         columns["skeleton"].add(strips=skeleton(result.scene, phi[n], D[n]))
         columns["com"].add(positions=list(phi[n]), labels=list(result.body_names))
         columns["com_total"].add(positions=[com[n]], labels=["centre of mass"])
-        ground = com[: n + 1] * [1.0, 1.0, 0.0] + [0.0, 0.0, 0.002]  # above the grid
-        columns["trail_com"].add(strips=[com[: n + 1], ground])
+        columns["trail_com"].add(strips=[com[: n + 1], below[: n + 1]])
         for name, path in trails.items():
             columns[name].add(strips=[path[: n + 1]])
         c = _contact_rows(result, n)

@@ -2,7 +2,10 @@
 
 `scene_to_urdf(scene)` writes a URDF with primitive geometry; `kinematic_tree(scene)` is the
 single description of its links and joints, used by `gait_planner.io.messages` to fill /tf
-and /tf_static, so the URDF and the transforms can never disagree.
+and /tf_static, so the URDF and the transforms can never disagree. `ground_boxes(ground, ...)`
+is the solid ground a plan was made for (a slab under a ramp, a box per stair tread):
+`ground_to_urdf` writes it as a URDF of its own, the MuJoCo walk and the rerun view build
+their stairs from it.
 
 Frame scheme (world x forward, y left, z up):
 
@@ -59,11 +62,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from gait_planner.model.angles import configuration
+from gait_planner.model.ground import Ground
 from gait_planner.model.scene import Body, JointType, Scene
 
-__all__ = ["BodyShape", "KinematicJoint", "KinematicTree", "body_shapes", "kinematic_tree",
-           "realisable_inertia", "scene_to_urdf", "FOOT_BREADTH", "FRAME_LINK_INERTIA",
-           "FRAME_LINK_MASS", "WORLD_FRAME"]
+__all__ = ["BodyShape", "GroundBox", "KinematicJoint", "KinematicTree", "body_shapes",
+           "ground_boxes", "ground_to_urdf", "kinematic_tree", "realisable_inertia",
+           "scene_to_urdf", "FOOT_BREADTH", "FRAME_LINK_INERTIA", "FRAME_LINK_MASS",
+           "GROUND_HALF_WIDTH", "GROUND_THICKNESS", "WORLD_FRAME"]
 
 WORLD_FRAME = "world"
 FOOT_BREADTH = 0.0915  # m, paper Table 2; drawing only (the scenes carry no breadth)
@@ -78,6 +83,9 @@ FRAME_LINK_INERTIA = 1e-12  # kg m^2, each principal moment
 _MUJOCO_COMPILER = {"fusestatic": "false", "discardvisual": "false", "inertiafromgeom": "false"}
 _COLORS = {"right": (0.85, 0.25, 0.2, 1.0), "left": (0.2, 0.4, 0.85, 1.0),
            "centre": (0.6, 0.6, 0.6, 1.0)}
+GROUND_HALF_WIDTH = 1.5  # m, the ground's extent either side of y = 0 (as rerun's grid)
+GROUND_THICKNESS = 0.05  # m, of a ramp's slab and below the lowest tread
+_GROUND_COLOR = (0.75, 0.75, 0.72, 1.0)
 
 
 @dataclass(frozen=True)
@@ -349,5 +357,73 @@ def scene_to_urdf(scene: Scene, *, foot_breadth: float = FOOT_BREADTH) -> str:
         _origin(element, joint.origin)
         if not joint.fixed:
             ET.SubElement(element, "axis", xyz=_xyz(joint.axis))
+    ET.indent(robot, space="  ")
+    return '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode") + "\n"
+
+
+# ---------------------------------------------------------------------------- the ground
+
+
+@dataclass(frozen=True)
+class GroundBox:
+    """One box of the ground's geometry, world frame: full extents `size` (m) along its own
+    axes, centred at `centre` (m), turned by `pitch` (rad) about the world y axis (its x
+    axis (cos pitch, 0, -sin pitch); along a ramp of slope a, pitch = -a)."""
+
+    centre: tuple[float, float, float]
+    size: tuple[float, float, float]
+    pitch: float = 0.0
+
+    @property
+    def quaternion(self) -> tuple[float, float, float, float]:
+        """(w, x, y, z) of the box's rotation (MuJoCo's order)."""
+        return (math.cos(0.5 * self.pitch), 0.0, math.sin(0.5 * self.pitch), 0.0)
+
+
+def ground_boxes(ground: Ground, x_start: float, x_end: float) -> tuple[GroundBox, ...]:
+    """The solid ground under x in [x_start, x_end] m and |y| <= `GROUND_HALF_WIDTH`, its
+    top the ground's surface (`gait_planner.model.ground`). Level ground or a ramp: one slab
+    `GROUND_THICKNESS` thick under the plane. Stairs: one box per tread the range touches
+    (tread j spans x in [riser + (j - 1) tread, riser + j tread) at height j step_height),
+    each from its tread down to `GROUND_THICKNESS` below the lowest of them: a solid flight
+    whose risers are the boxes' faces."""
+    width = 2.0 * GROUND_HALF_WIDTH
+    if not ground.stairs:
+        middle = 0.5 * (x_start + x_end)
+        centre = (np.array([middle, 0.0, float(ground.height(middle))])
+                  - 0.5 * GROUND_THICKNESS * ground.normal)
+        length = (x_end - x_start) / math.cos(math.radians(ground.slope))
+        return (GroundBox(_vec(centre), (length, width, GROUND_THICKNESS),
+                          -math.radians(ground.slope)),)
+    depth = ground.tread
+    first = math.floor((x_start - ground.riser) / depth) + 1
+    last = math.floor((x_end - ground.riser) / depth) + 1
+    tops = {j: ground.tread_height(j) for j in range(first, last + 1)}
+    bottom = min(tops.values()) - GROUND_THICKNESS
+    return tuple(GroundBox((ground.riser + (j - 0.5) * depth, 0.0, 0.5 * (top + bottom)),
+                           (depth, width, top - bottom)) for j, top in tops.items())
+
+
+def ground_to_urdf(ground: Ground, x_start: float, x_end: float) -> str:
+    """The URDF (XML text) of the ground alone: robot "ground", one link "ground" whose
+    frame is the world frame (`WORLD_FRAME`), the `ground_boxes` of x in [x_start, x_end] m
+    as its visual and collision boxes. A model of its own: the walker's URDF floats (its
+    root hangs from the world frame by /tf) and a URDF is a single tree, so a viewer or
+    simulator loads this one beside it (MuJoCo: `gait_planner.walk.mujoco_model` builds the
+    same boxes into its world body)."""
+    robot = ET.Element("robot", name="ground")
+    robot.append(ET.Comment(
+        f" generated by gait_planner.io.urdf: the ground a gait was planned on (slope "
+        f"{ground.slope:g} deg, step_height {ground.step_height:g} m), x from {x_start:g} to "
+        f"{x_end:g} m; the link's frame is frame {WORLD_FRAME!r} "))
+    link = ET.SubElement(robot, "link", name="ground")
+    for box in ground_boxes(ground, x_start, x_end):
+        for kind in ("visual", "collision"):
+            element = ET.SubElement(link, kind)
+            ET.SubElement(element, "origin", xyz=_xyz(box.centre), rpy=_xyz((0, box.pitch, 0)))
+            ET.SubElement(ET.SubElement(element, "geometry"), "box", size=_xyz(box.size))
+            if kind == "visual":
+                material = ET.SubElement(element, "material", name="ground")
+                ET.SubElement(material, "color", rgba=_xyz(_GROUND_COLOR))
     ET.indent(robot, space="  ")
     return '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode") + "\n"

@@ -267,10 +267,12 @@ def check_gait(c: Checker, value: Any, bodies: tuple[Body, ...], contacts) -> Ga
     cost = c.name(g.get("cost", "kinetic_energy"), join(key, "cost"))
     options = c.free_value(c.mapping(g.get("options", {}), join(key, "options")),
                            join(key, "options"))
+    phases, mirror = _phases(c, g["phases"], contacts), _mirror(c, g.get("mirror", {}), bodies)
+    _check_periodic_phases(c, phases, mirror, contacts)
     return Gait(
-        phases=_phases(c, g["phases"], contacts),
+        phases=phases,
         step_length=c.number(g["step_length"], join(key, "step_length"), positive=True),
-        mirror=_mirror(c, g.get("mirror", {}), bodies),
+        mirror=mirror,
         base_time_step=c.number(g["base_time_step"], join(key, "base_time_step"), positive=True),
         scaling_bounds=(lower, upper),
         friction_coefficient=c.number(
@@ -309,6 +311,26 @@ def _phases(c: Checker, value: Any, contacts) -> tuple[Phase, ...]:
             c.fail(key, f"the phase scaling indices must use every index from 0 to {max(used)}; "
                         f"index {index} is unused")
     return tuple(phases)
+
+
+def _check_periodic_phases(c: Checker, phases: tuple[Phase, ...], mirror, contacts) -> None:
+    """The half cycle's last interval is the mirror image of its first (docs/design.md
+    section 5): the last phase must hold the mirror images of the first phase's contacts
+    and share its scaling (a walk's left_full after right_full; a run's left stance after
+    right stance and flight)."""
+    where = {(x.body, x.point): x.name for x in contacts}
+    by_name = {x.name: x for x in contacts}
+    first, last = phases[0], phases[-1]
+    images = sorted(where.get((mirror.get(by_name[n].body, by_name[n].body), by_name[n].point),
+                              f"(no mirror image of {n})") for n in first.contacts)
+    key = join("gait", "phases")
+    if sorted(last.contacts) != images:
+        c.fail(key, f"the last phase {last.name!r} must hold the mirror images of the first "
+                    f"phase's contacts, {images} (its last interval is the mirror image of "
+                    f"the first), got {sorted(last.contacts)}")
+    if last.scaling != first.scaling:
+        c.fail(key, f"the last phase {last.name!r} must share the first phase's scaling "
+                    f"{first.scaling} (one phase across the half cycle's end), got {last.scaling}")
 
 
 def _mirror(c: Checker, value: Any, bodies: tuple[Body, ...]) -> MappingProxyType:

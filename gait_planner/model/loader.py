@@ -42,6 +42,10 @@ YAML layout (exactly these keys; unknown keys are errors)::
       options: {}                     # optional; passed through to the optimiser, but its
                                       # posture entries (joint_limits, torso_lean_max, in
                                       # degrees) are checked here (gait_planner.model.posture)
+    gaits:                            # optional: other gaits, each a change of `gait:`
+      run:                            # a request's gait "run" (`gait:` is "walk")
+        phases: [...]                 # keys given replace the gait block's; options are
+        options: {...}                # merged entry by entry (`with_gait`)
 
 Planar scenes (root type planar) move in the x-z plane: every joint is revolute about
 (0, 1, 0), and the initial root angles have yaw = roll = 0.
@@ -56,6 +60,8 @@ import re
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Sequence
+
+import yaml
 
 from gait_planner.model._validate import Checker, SceneError, check_gait, join, parse_yaml
 from gait_planner.model.posture import PostureError, check_posture
@@ -78,6 +84,10 @@ _log = logging.getLogger("gait_planner.model")
 
 SCENE_PATH_ENV = "GAIT_PLANNER_SCENE_PATH"
 SCENE_NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")
+DEFAULT_GAIT = "walk"  # the name of a scene's `gait:` block (`with_gait`)
+# what a gait of `gaits:` may change of the `gait:` block (the mirror pairs stay)
+_GAIT_CHANGES = ("phases", "step_length", "base_time_step", "scaling_bounds",
+                 "friction_coefficient", "cost", "options")
 _SPHERICAL_ANGLES = ("pitch", "roll", "yaw")  # the order of gait_planner.model.angles
 _MIN_AXIS_NORM = 1e-9
 _PLANAR_AXIS = (0.0, 1.0, 0.0)
@@ -211,7 +221,7 @@ def _build_scene(data: Any, file: str, source: str) -> Scene:
         data,
         "",
         required=("name", "root", "bodies", "joints", "contacts", "initial_pose"),
-        optional=("description", "gravity", "allow_nonphysical_inertia", "gait"),
+        optional=("description", "gravity", "allow_nonphysical_inertia", "gait", "gaits"),
     )
     name = c.string(top["name"], "name")
     if not SCENE_NAME_PATTERN.fullmatch(name):  # it starts the file names of recordings
@@ -240,6 +250,7 @@ def _build_scene(data: Any, file: str, source: str) -> Scene:
         gait=gait,
         description=description,
         source=source,
+        gaits=_other_gaits(c, data, file),
     )
     if gait is not None:
         try:
@@ -252,6 +263,63 @@ def _build_scene(data: Any, file: str, source: str) -> Scene:
                 _warned.add(message)
                 _log.log(level, "%s", message)
     return scene
+
+
+def _other_gaits(c: Checker, data: dict, file: str) -> tuple[str, ...]:
+    """The names of the scene's `gaits:` (each validated as the scene it makes,
+    `with_gait`); () without them."""
+    if "gaits" not in data:
+        return ()
+    if "gait" not in data:
+        c.fail("gaits", "needs a gait block to change: declare `gait:` first")
+    names = c.mapping(data["gaits"], "gaits")
+    for name in names:
+        if not isinstance(name, str) or not SCENE_NAME_PATTERN.fullmatch(name) \
+                or name == DEFAULT_GAIT:
+            c.fail(join("gaits", str(name)), f"a gait's name is letters, digits, '_' and '-', "
+                   f"not {DEFAULT_GAIT!r} (the `gait:` block's)")
+        c.mapping(names[name], join("gaits", name), optional=_GAIT_CHANGES)
+        _build_scene(_gait_data(data, name), f"{file} (gait {name})", "")
+    return tuple(names)
+
+
+def _gait_data(data: dict, gait: str) -> dict:
+    """The scene `data` with its `gait:` block changed by `gaits: {gait: ...}`: each key
+    given replaces the block's, `options` entry by entry; named "<name>_<gait>", without
+    `gaits:`."""
+    change = data["gaits"][gait]
+    block = dict(data["gait"])
+    for key, value in change.items():
+        block[key] = ({**(block.get("options") or {}), **(value or {})} if key == "options"
+                      else value)
+    out = {key: value for key, value in data.items() if key != "gaits"}
+    out.update(name=f"{data['name']}_{gait}", gait=block)
+    return out
+
+
+def with_gait(scene: Scene, gait: str) -> Scene:
+    """`scene` with its gait `gait`: itself for "" or "walk" (its `gait:` block), else the
+    scene its `gaits: {gait: ...}` make (`_gait_data`), whose source is that scene's YAML
+    (what a recording of it carries). SceneError naming the scene's gaits otherwise."""
+    if gait in ("", DEFAULT_GAIT):
+        return scene
+    if gait not in scene.gaits:
+        raise SceneError(f"scene {scene.name!r} has no gait {gait!r}; its gaits: "
+                         f"{', '.join((DEFAULT_GAIT,) + scene.gaits)}")
+    data = _gait_data(parse_yaml(scene.source, scene.name), gait)
+    source = (f"# scene {scene.name!r} with its gait {gait!r} "
+              f"(gait_planner.model.loader.with_gait)\n"
+              + yaml.safe_dump(_plain(data), sort_keys=False, width=100))
+    return _build_scene(data, f"{scene.name} (gait {gait})", source)
+
+
+def _plain(value: Any) -> Any:
+    """Parsed YAML as plain dicts and lists (the loader's mappings track duplicates)."""
+    if isinstance(value, dict):
+        return {key: _plain(v) for key, v in value.items()}
+    if isinstance(value, list):
+        return [_plain(v) for v in value]
+    return value
 
 
 def _bodies(c: Checker, value: Any, allow_nonphysical: bool) -> tuple[Body, ...]:

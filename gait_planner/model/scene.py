@@ -188,6 +188,7 @@ class Scene:
     gait: Gait | None = None
     description: str = ""
     source: str = ""  # the scene file's text, kept for recordings
+    gaits: tuple[str, ...] = ()  # its other gaits (`gaits:`), `model.loader.with_gait`
 
     def body(self, name: str) -> Body:
         return next(b for b in self.bodies if b.name == name)

@@ -29,6 +29,12 @@ a simulated walker's feedback doubled (`gait-planner walk`). `strike_speed_max` 
 bounds the striking point's mean horizontal speed over the interval that ends at its
 strike (`strike_schedule`, `strike_rows`): the foot comes down rather than in.
 
+On a ramp or stairs (`gait_planner.model.ground`) a height is measured from the ground
+the scene stands on: along the ramp's normal, or above the tread under the point, each
+stair edge a smooth step moved `EDGE_MARGIN` towards the lower tread so that the segment
+between two nodes clears the edge's corner (`ground_heights`); a strike's speed is its
+speed along the ground.
+
 Used by both transcriptions (`gait_planner.ocp.transcription`,
 `gait_planner.collocation.transcription`), so the two solve the same problem.
 """
@@ -41,6 +47,7 @@ from typing import Callable, Sequence
 import casadi as ca
 import numpy as np
 
+from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.mirror import contact_partners
@@ -105,16 +112,19 @@ def strike_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]]
     return out
 
 
-def strike_rows(mb: Multibody, points: Sequence[str]) -> ca.Function:
+def strike_rows(mb: Multibody, points: Sequence[str], ground: Ground = LEVEL) -> ca.Function:
     """CasADi Function (q_n, q_{n+1}, h_n, c) -> one margin (>= 0) per striking point:
-    ((v h_n)^2 - |x_{n+1} - x_n|_xy^2) / (v c0)^2, c = (base time step s, v = strike speed
-    bound m/s): the point's mean horizontal speed over the interval below v (the row is
-    smooth, and O(1) at sigma = 1). In planar scenes x only."""
+    ((v h_n)^2 - |d|^2) / (v c0)^2, c = (base time step s, v = strike speed bound m/s),
+    d = x_{n+1} - x_n less its component along the ground's normal n: the point's mean
+    speed along the ground over the interval below v (horizontal on level ground and
+    stairs; the row is smooth, and O(1) at sigma = 1). In planar scenes in the x-z plane."""
     q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
         ca.SX.sym("c", 2)
+    tangential = np.eye(3) - np.outer(ground.normal, ground.normal)
     rows = []
     for point in points:
-        G = ca.DM(mb.contact_rows(point)[:-1])  # the horizontal rows
+        contact = mb.scene.contact(point)
+        G = ca.DM(tangential @ mb.point_matrix(contact.body, contact.point))
         step = ca.mtimes(G, q1 - q0)
         rows.append(((c[1] * h) ** 2 - ca.sumsqr(step)) / (c[1] * c[0]) ** 2)
     return ca.Function("strike_speed_" + "_".join(points), [q0, q1, h, c],
@@ -131,38 +141,66 @@ def clearance_schedule(scene: Scene, held: Sequence[set[str]], settings: GaitSet
                                settings.swing_clearance_ramp / node_spacing)
 
 
-def edge_heights(mb: Multibody, point: str, half_width: float) -> np.ndarray:
-    """Constant rows (r, k): heights (m) z = row @ q of what must clear the ground for a
-    swing contact point: its two foot edges z_C -+ half_width d2_z (r = 2) in a 3D scene
-    with half_width > 0, else the point itself (r = 1)."""
-    z = mb.contact_rows(point)[-1:]
+def edge_heights(mb: Multibody, point: str, half_width: float,
+                 ground: Ground = LEVEL) -> tuple[np.ndarray, np.ndarray]:
+    """Constant rows (Z, X), each (r, k), of what must clear the ground for a swing contact
+    point: its two foot edges p_C -+ half_width d2 (r = 2) in a 3D scene with half_width
+    > 0, else the point itself (r = 1). Z q is their height along the ground's normal n
+    (n . p: above a ramp's plane; z on level ground and stairs), X q their x (m)."""
+    c = mb.scene.contact(point)
+    P = mb.point_matrix(c.body, c.point)
     if mb.scene.planar or half_width <= 0:
-        return z
-    d2z = np.zeros((1, mb.k))
-    d2z[0, mb.block(mb.scene.contact(point).body).start + 8] = half_width
-    return np.vstack([z - d2z, z + d2z])
+        edges = [P]
+    else:
+        d2 = np.zeros((3, mb.k))
+        start = mb.block(c.body).start + 6
+        d2[:, start : start + 3] = half_width * np.eye(3)
+        edges = [P - d2, P + d2]
+    return (np.array([ground.normal @ E for E in edges]), np.array([E[0] for E in edges]))
+
+
+def ground_heights(mb: Multibody, points: Sequence[str], half_width: float,
+                   ground: Ground = LEVEL) -> ca.Function:
+    """CasADi Function "ground_heights" q (k,) -> (r,) m: the heights above the ground of
+    the `edge_heights` of `points`, in order: Z q on level ground and ramps; on stairs
+    Z q - `Ground.clearance_height`(X q), the height above the treads with each edge a
+    smooth step moved towards the lower tread (`gait_planner.model.ground`)."""
+    q = ca.SX.sym("q", mb.k)
+    blocks = [edge_heights(mb, name, half_width, ground) for name in points]
+    Z = ca.DM(np.vstack([z for z, _ in blocks]))
+    height = ca.mtimes(Z, q)
+    if ground.stairs:
+        X = ca.DM(np.vstack([x for _, x in blocks]))
+        height = height - ground.clearance_height(ca.mtimes(X, q), _logistic)
+    return ca.Function("ground_heights_" + "_".join(points), [q], [height], ["q"], ["z"])
+
+
+def _logistic(x):
+    """1 / (1 + e^-x), elementwise on a CasADi expression."""
+    return 1.0 / (1.0 + ca.exp(-x))
 
 
 def schedule_heights(mb: Multibody, points: dict[str, float], half_width: float
-                     ) -> tuple[np.ndarray, list[float]]:
-    """(rows (r, k) of `edge_heights` of every point of one node of a `clearance_schedule`,
-    their required heights (r,) m)."""
-    blocks = [edge_heights(mb, name, half_width) for name in points]
-    heights = [h for b, h in zip(blocks, points.values()) for _ in range(b.shape[0])]
-    return np.vstack(blocks), heights
+                     ) -> list[float]:
+    """The required heights (m) of the `edge_heights` rows of every point of one node of a
+    `clearance_schedule`, in row order."""
+    edges = 1 if mb.scene.planar or half_width <= 0 else 2
+    return [h for h in points.values() for _ in range(edges)]
 
 
 def clearance_rows(mb: Multibody, q_at: Callable[[int], ca.MX],
-                   schedule: dict[int, dict[str, float]], half_width: float
-                   ) -> tuple[list, list[float]]:
-    """The "ground_clearance" rows z - height >= 0 of every swing point of `schedule`
-    (`clearance_schedule`; q_at(n) the configuration (k,) of node n), at its two foot edges
-    (`edge_heights`, half_width m), and their heights (m), in row order."""
+                   schedule: dict[int, dict[str, float]], half_width: float,
+                   ground: Ground = LEVEL) -> tuple[list, list[float]]:
+    """The "ground_clearance" rows height - required >= 0 of every swing point of
+    `schedule` (`clearance_schedule`; q_at(n) the configuration (k,) of node n), at its two
+    foot edges (`ground_heights`, half_width m), and their required heights (m), in row
+    order."""
     rows: list = []
     heights: list[float] = []
     for n, points in schedule.items():
         if points:
-            C, h = schedule_heights(mb, points, half_width)
-            rows.append(ca.mtimes(ca.DM(C), q_at(n)) - ca.DM(h))
+            h = schedule_heights(mb, points, half_width)
+            rows.append(ground_heights(mb, tuple(points), half_width, ground)(q_at(n))
+                        - ca.DM(h))
             heights += h
     return rows, heights

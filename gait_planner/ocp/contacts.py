@@ -14,7 +14,9 @@ Rows per body (3D; planar scenes drop the y rows and the roll row):
   full  (a = first, b = second point in scene order):
                        a_x, a_y, a_z, b_y, b_z, d2_z  lambda = (F_a, F_b,y, F_b,z, M_roll)
 where M_roll (N m) is the generalised force on d2_z: a moment d2 x e_z M_roll about the
-heel-toe line, which two point forces cannot carry. The net ground force on the body is
+heel-toe line, which two point forces cannot carry. On a ramp (`gait_planner.model.ground`)
+the roll row is n . d2 (n the ramp's normal; the foot flat on the ramp), and M_roll is the
+moment about the heel-toe line of a foot flat on it (n . (e x d2) = 1). The net ground force on the body is
 F_a + F_b with F_b = (0, F_b,y, F_b,z).
 
 A full contact has one more multiplier, s (N), that no row sees: equal and opposite forces
@@ -22,6 +24,9 @@ along the heel-toe line e = (x_b - x_a)/|x_b - x_a| change neither the net force
 moment, so the two points' share of the along-line force is free. The point forces are
 F_a - s e and F_b + s e; each point's friction cone is imposed on them, and they are what
 is published (`point_forces`).
+
+Friction cones and the roll moment's bound are about the ground's normal n (e_z on level
+ground and on stairs): the normal force is n . F, the tangential force F - (n . F) n.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.model.multibody import Multibody
 
 
@@ -44,6 +50,7 @@ class BodyContact:
     planar: bool
     span: np.ndarray | None = None  # (3, k): x_b - x_a = span @ q (full contact)
     span_length: float = 0.0  # |x_b - x_a| (m), constant on a rigid body
+    normal: tuple[float, float, float] = (0.0, 0.0, 1.0)  # the ground's unit normal
 
     @property
     def full(self) -> bool:
@@ -75,15 +82,20 @@ class BodyContact:
         return [[a - s * e for a, e in zip(first, d)], [b + s * e for b, e in zip(second, d)]]
 
     def cone_rows(self, lam, q, mu, smoothing, half_width) -> list:
-        """Friction cone (>= 0) of every point's ground force, mu F_z - sqrt(F_x^2 + F_y^2
-        + smoothing^2), which makes it push; for a 3D full contact also the roll moment's
-        bound (centre of pressure within the foot's half width (m)). lam, q as for
-        `force_components`, as CasADi expressions."""
-        out = [mu * f[2] - ca.sqrt(f[0] ** 2 + f[1] ** 2 + smoothing**2)
-               for f in self.force_components(lam, q)]
-        if self.full and not self.planar:
-            fz = lam[2] + lam[4]
-            out += [half_width * fz - lam[5], half_width * fz + lam[5]]
+        """Friction cone (>= 0) of every point's ground force F about the ground's normal n,
+        mu F_n - sqrt(|F_t|^2 + smoothing^2) with F_n = n . F and F_t = F - F_n n, which
+        makes it push; for a 3D full contact also the roll moment's bound (centre of
+        pressure within the foot's half width (m)). lam, q as for `force_components`, as
+        CasADi expressions."""
+        n = self.normal
+        out = []
+        for f in self.force_components(lam, q):
+            normal = sum(a * b for a, b in zip(n, f) if a != 0.0)
+            tangential = [fi - normal * ni for fi, ni in zip(f, n)]
+            out.append(mu * normal - ca.sqrt(sum(t**2 for t in tangential) + smoothing**2))
+        if self.full and not self.planar:  # net force F_a + F_b = (lam0, lam1+lam3, lam2+lam4)
+            fn = n[0] * lam[0] + n[2] * (lam[2] + lam[4])
+            out += [half_width * fn - lam[5], half_width * fn + lam[5]]
         return out
 
     def point_forces(self, lam: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
@@ -98,9 +110,12 @@ class BodyContact:
         return float(lam[5]) if self.full and not self.planar else 0.0
 
 
-def body_contacts(mb: Multibody, contact_names) -> tuple[BodyContact, ...]:
-    """Group held contact points by body, in scene body order, with their rows."""
+def body_contacts(mb: Multibody, contact_names, ground: Ground = LEVEL
+                  ) -> tuple[BodyContact, ...]:
+    """Group held contact points by body, in scene body order, with their rows (a full
+    contact's roll row n . d2 with n the ground's normal)."""
     scene = mb.scene
+    normal = tuple(float(v) for v in ground.normal)
     by_body: dict[str, list[str]] = {}
     for c in scene.contacts:
         if c.name in contact_names:
@@ -114,18 +129,19 @@ def body_contacts(mb: Multibody, contact_names) -> tuple[BodyContact, ...]:
             raise ValueError(f"body {body!r} holds {len(names)} contact points; at most 2")
         first = mb.contact_rows(names[0])
         if len(names) == 1:
-            out.append(BodyContact(body, tuple(names), first, scene.planar))
+            out.append(BodyContact(body, tuple(names), first, scene.planar, normal=normal))
             continue
         second = mb.contact_rows(names[1])
         roll = np.zeros((1, mb.k))
-        roll[0, mb.block(body).start + 6 + 2] = 1.0  # z component of d2
+        d2 = mb.block(body).start + 6
+        roll[0, d2 : d2 + 3] = normal  # n . d2
         rows = (np.vstack([first, second[1:]]) if scene.planar
                 else np.vstack([first, second[1:], roll]))
         a, b = (scene.contact(n) for n in names)
         span = mb.point_matrix(body, b.point) - mb.point_matrix(body, a.point)
         length = float(np.linalg.norm(np.subtract(scene.body(body).points[b.point],
                                                   scene.body(body).points[a.point])))
-        out.append(BodyContact(body, tuple(names), rows, scene.planar, span, length))
+        out.append(BodyContact(body, tuple(names), rows, scene.planar, span, length, normal))
     return tuple(out)
 
 
@@ -135,16 +151,23 @@ def stacked_rows(contacts: tuple[BodyContact, ...], k: int) -> np.ndarray:
 
 
 def establishing_rows(mb: Multibody, before: tuple[BodyContact, ...],
-                      after: tuple[BodyContact, ...]) -> np.ndarray:
-    """Rows that must vanish at the node where `after` starts: the height of every point
-    that touches down there, and, for a body whose full contact is completed there, its
-    roll (d2_z = 0: foot flat). Returns (r, k) with r possibly 0."""
+                      after: tuple[BodyContact, ...], ground: Ground = LEVEL,
+                      landing: frozenset[str] = frozenset()) -> tuple[np.ndarray, np.ndarray]:
+    """Rows E (r, k) and heights e (r,) m with E q = e at the node where `after` starts:
+    the height above the ground of every point that touches down there, n . p = its
+    tread's height (n the ground's normal; on stairs tread 1 for the points of
+    `landing`, the contact points not held at the half cycle's start, else tread 0), and,
+    for a body whose full contact is completed there, its roll n . d2 = 0 (foot flat on
+    the ground). r may be 0."""
     held = {p for c in before for p in c.points}
-    rows = []
+    rows, heights = [], []
     for c in after:
         new = [p for p in c.points if p not in held]
         for p in new:
-            rows.append(mb.contact_rows(p)[-1])  # z row
+            point = mb.scene.contact(p)
+            rows.append(ground.normal @ mb.point_matrix(point.body, point.point))
+            heights.append(ground.tread_height(1 if p in landing else 0))
         if new and c.full and not c.planar:
             rows.append(c.rows[-1])  # roll row
-    return np.array(rows) if rows else np.zeros((0, mb.k))
+            heights.append(0.0)
+    return (np.array(rows) if rows else np.zeros((0, mb.k))), np.array(heights)

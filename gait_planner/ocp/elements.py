@@ -51,10 +51,10 @@ class Layout:
 
     def __init__(self, mb: Multibody, N: int, lam_sizes: list[int], n_scalings: int,
                  scaling_of_interval: np.ndarray, A: np.ndarray, shift: np.ndarray,
-                 B: np.ndarray, M: np.ndarray | None):
+                 lift: np.ndarray, B: np.ndarray, M: np.ndarray | None):
         self.mb, self.N, self.lam_sizes = mb, N, list(lam_sizes)
         self.scaling_of_interval = scaling_of_interval
-        self.A, self.shift, self.B, self.M = A, shift, B, M
+        self.A, self.shift, self.lift, self.B, self.M = A, shift, lift, B, M
         self.n_u, self.n_tau = mb.ndof * (N - 1), mb.nt * (N - 1)
         self.n_lam = int(sum(self.lam_sizes))
         self.nx = self.n_u + self.n_tau + self.n_lam + n_scalings
@@ -122,8 +122,9 @@ class Layout:
         """The mirror images the elements of nodes N-1 and N read, None if they mirror
         their configurations themselves (`M` None). Images of x: M u_0, M u_1, B T_0,
         entry i being x_sign[i] x[x_source[i]] (signed permutations); images of p: the
-        references A qref_0 + s e and A qref_1 + s e (s the step length), entry i being
-        p_sign[i] p[p_source[i]] + p_shift[i] s."""
+        references A qref_0 + s e + c and A qref_1 + s e + c (s the step length, e and c
+        the shift and lift of `ocp.mirror.configuration_mirror`), entry i being
+        p_sign[i] p[p_source[i]] + p_shift[i] s + p_lift[i]."""
         if self.M is None:
             return None
         nd, k = self.mb.ndof, self.mb.k
@@ -138,7 +139,7 @@ class Layout:
                 "x_sign": np.concatenate([b for _, b in parts]),
                 "p_source": np.concatenate([a for a, _ in refs]),
                 "p_sign": np.concatenate([b for _, b in refs]),
-                "p_shift": np.tile(self.shift, 2)}
+                "p_shift": np.tile(self.shift, 2), "p_lift": np.tile(self.lift, 2)}
 
     def element_inputs(self, x, p):
         """(xe, pe): x and p (numbers or CasADi expressions) followed by their mirror
@@ -149,14 +150,15 @@ class Layout:
         step = p[self.step_index]
         if isinstance(x, np.ndarray):
             return (np.concatenate([x, im["x_sign"] * x[im["x_source"]]]),
-                    np.concatenate([p, im["p_sign"] * p[im["p_source"]] + im["p_shift"] * step]))
+                    np.concatenate([p, im["p_sign"] * p[im["p_source"]] + im["p_shift"] * step
+                                    + im["p_lift"]]))
         return (ca.vertcat(x, ca.DM(im["x_sign"]) * x[im["x_source"].tolist()]),
                 ca.vertcat(p, ca.DM(im["p_sign"]) * p[im["p_source"].tolist()]
-                           + ca.DM(im["p_shift"]) * step))
+                           + ca.DM(im["p_shift"]) * step + ca.DM(im["p_lift"])))
 
     def image(self, q, step):
-        """The mirror image A q + step e of a configuration (SX)."""
-        return ca.mtimes(ca.DM(self.A), q) + step * ca.DM(self.shift)
+        """The mirror image A q + step e + c of a configuration (SX; `images`)."""
+        return ca.mtimes(ca.DM(self.A), q) + step * ca.DM(self.shift) + ca.DM(self.lift)
 
     # ---- element Functions --------------------------------------------------------------
 

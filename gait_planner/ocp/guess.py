@@ -22,7 +22,7 @@ from gait_planner.model.angles import configuration
 from gait_planner.ocp.mirror import contact_partners
 from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
 
-LIFT = 0.05  # m, swing lift of a free contact point at the middle of its gap
+LIFT = 0.05  # m, swing lift of a free contact point at the middle of its gap (plus a stair's height)
 DIP = 0.07  # m, root lowered below the scene pose (legs must span a step)
 _W_CONTACT, _W_ROOT, _W_UPRIGHT, _W_SMALL = 1.0, 0.1, 0.3, 1e-3
 
@@ -34,11 +34,13 @@ def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[
     held = {c.name: [n for n in range(N) if c.name in
                      {p for bc in tr.contacts[tr.phase_of_interval[n]] for p in bc.points}]
             for c in mb.scene.contacts}
-    ground = {}
+    ground, G = {}, tr.ground
+    advance = np.array([step, 0.0, G.rise(step)])  # one half cycle further
     for c in mb.scene.contacts:
         x = mb.point_matrix(c.body, c.point) @ q_pose
-        x[2] = 0.0
-        ground[c.name] = x + (0 if 0 in held[c.name] else step) * np.array([1.0, 0, 0])
+        x[2] = x[0] * G.rise_per_step  # on the ground (`gait_planner.model.ground`)
+        ground[c.name] = x + (0 if 0 in held[c.name] else 1) * advance
+    lift = LIFT + abs(G.step_height)
 
     partner = contact_partners(mb.scene)
     samples = {}
@@ -46,17 +48,22 @@ def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[
         own = {}
         for n in held[c.name]:
             own[n] = own[n + 1] = ground[c.name]
+            for turns in (-2, 2):  # a full cycle away (a run's foot lands once per cycle)
+                own[n + turns * (N - 1)] = own[n + 1 + turns * (N - 1)] = \
+                    ground[c.name] + turns * advance
         other = partner[c.name]
         for n in held[other]:
             image = S @ ground[other]
             for m in (n, n + 1):
-                own[m - (N - 1)] = image - step * np.array([1.0, 0, 0])
-                own[m + (N - 1)] = image + step * np.array([1.0, 0, 0])
+                own[m - (N - 1)] = image - advance
+                own[m + (N - 1)] = image + advance
         samples[c.name] = own
 
     targets = {}
     for c in mb.scene.contacts:
         own = samples[c.name]
+        if not own:  # never held (a runner's heel): placed with a held point of its body
+            continue
         nodes = np.array(sorted(own))
         siblings = [d.name for d in mb.scene.contacts if d.body == c.body and d.name != c.name]
         body_nodes = np.array(sorted(set(nodes).union(*(samples[d] for d in siblings))))
@@ -70,13 +77,22 @@ def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[
                 # next to where this point left (or will touch) the ground
                 on_ground_since = all(m in body_nodes for m in range(before, n))
                 nearest = before if on_ground_since else after
-                path[n] = own[nearest] + np.array([0.0, 0.0, 0.5 * LIFT])
+                path[n] = own[nearest] + np.array([0.0, 0.0, 0.5 * lift])
                 continue
             a, b = body_nodes[body_nodes < n].max(), body_nodes[body_nodes > n].min()
             frac = (n - a) / (b - a)
             path[n] = (1 - frac) * own[before] + frac * own[after]
-            path[n, 2] += LIFT * np.sin(np.pi * frac)
+            path[n, 2] += lift * np.sin(np.pi * frac)
         targets[c.name] = path
+    for c in mb.scene.contacts:
+        if c.name not in targets:
+            sibling = next((d for d in mb.scene.contacts if d.body == c.body and d.name in targets),
+                           None)
+            if sibling is None:
+                raise ValueError(f"contact point {c.name!r} is never held and no point of its "
+                                 f"body is: the kinematic guess cannot place body {c.body!r}")
+            offset = (mb.point_matrix(c.body, c.point) - mb.point_matrix(c.body, sibling.point)) @ q_pose
+            targets[c.name] = targets[sibling.name] + offset
     return targets
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import JointType, RootType, Scene
 
@@ -29,20 +30,25 @@ def contact_partners(scene: Scene) -> dict[str, str]:
             for c in scene.contacts}
 
 
-def configuration_mirror(mb: Multibody) -> tuple[np.ndarray, np.ndarray]:
-    """(A, e) with mirror(q) + s e_x = A q + s e: A (k, k), e (k,) the x-shift pattern."""
+def configuration_mirror(mb: Multibody, ground: Ground = LEVEL
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A, e, c): the next half cycle's configuration of the half cycle's q is
+    mirror(q) + s e + c = A q + s e + c for step length s: A (k, k); e (k,) the shift per
+    metre of step, 1 at each body's position x and tan(slope) at its z (the ground rises
+    along a ramp, `gait_planner.model.ground`); c (k,) the constant lift, step_height at
+    each body's z (stairs)."""
     gait = mb.scene.gait
     mirror = dict(gait.mirror) if gait else {}
     A = np.zeros((mb.k, mb.k))
-    shift = np.zeros(mb.k)
+    shift, lift = np.zeros(mb.k), np.zeros(mb.k)
     for name in mb.body_names:
         partner = mirror.get(name, name)
         src, dst = mb.block(name).start, mb.block(partner).start
         signs = (1.0, 1.0, -1.0, 1.0)  # phi, d1, d2, d3
         for j, sign in enumerate(signs):
             A[dst + 3 * j : dst + 3 * j + 3, src + 3 * j : src + 3 * j + 3] = sign * _S
-        shift[dst] = 1.0
-    return A, shift
+        shift[dst], shift[dst + 2], lift[dst + 2] = 1.0, ground.rise_per_step, ground.step_height
+    return A, shift, lift
 
 
 def torque_mirror(mb: Multibody) -> np.ndarray:

@@ -10,6 +10,9 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import numpy as np
+
+from gait_planner.model.ground import Ground, GroundError
 from gait_planner.model.scene import Scene
 from gait_planner.model.posture import (PostureError, check_joint_limits, check_phase_joint_limits,
                                        check_posture, check_torso_lean_max, human_phase_limits)
@@ -48,7 +51,10 @@ class GaitSettings:
     over an interval stays below joint_speed_max * h_n; speed m/s (0 = free durations):
     the half cycle's mean forward speed step_length / (t_{N-1} - t_0), held by one
     equality row on sigma (`gait_planner.ocp.transcription.speed_row`); `settings_for`
-    refuses a speed outside `speed_range`;
+    refuses a speed outside `speed_range`; slope deg (uphill positive) and step_height m
+    (stairs, per step; negative: down): the ground (`gait_planner.model.ground`,
+    `ground_of`); `settings_for` refuses a ground the scene cannot stand on or reach
+    (`check_ground`);
     phase_joint_limits: ((phase, ((angle, lo rad, hi rad), ...)), ...) from the option
     ``phase_joint_limits: {phase: {angle: [lo, hi]}}`` in degrees, ranges at the nodes that
     start an interval of that phase only; posture "paper" (the scene's declared ranges) or
@@ -86,6 +92,8 @@ class GaitSettings:
     strike_speed_max: float = 0.0
     joint_speed_max: float = 0.0
     speed: float = 0.0
+    slope: float = 0.0
+    step_height: float = 0.0
     twist_regularisation: float = 0.0
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
@@ -237,4 +245,65 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
         **options,
     )
     check_speed(settings, scene.name)
+    check_ground(settings, scene)
     return settings
+
+
+def ground_of(scene: Scene, s: GaitSettings) -> Ground:
+    """The ground of `s` on `scene` (`gait_planner.model.ground`): a stair's first edge
+    midway between the front of the foot that stands at the start of the half cycle (the
+    largest heel-to-toe reach, along the body's d1, from the pinned contact point: the
+    first contact of the first phase's first body, `ocp.transcription`) and the back of
+    the landing foot (at x = step_length)."""
+    gait = scene.gait
+    held = [c for c in scene.contacts if c.name in gait.phases[0].contacts]
+    pinned = held[0] if held else scene.contacts[0]
+    body = scene.body(pinned.body)
+    reach = max(body.points[c.point][0] - body.points[pinned.point][0]
+                for c in scene.contacts if c.body == pinned.body)
+    return Ground(slope=s.slope, step_height=s.step_height,
+                  riser=0.5 * (reach + s.step_length), tread=s.step_length)
+
+
+def leg_length(scene: Scene, contact: str) -> float:
+    """Length (m) of the chain of segments from the root body to a contact point: per body
+    the distance between where it hangs from its parent and where the next body (or the
+    point) hangs from it (walker3d: 0.908 m from the hip to the heel, 1.048 m to the
+    forefoot)."""
+    c = scene.contact(contact)
+    body, point, total = c.body, np.asarray(scene.body(c.body).points[c.point]), 0.0
+    by_child = {j.child: j for j in scene.joints}
+    while body in by_child:
+        joint = by_child[body]
+        total += float(np.linalg.norm(np.asarray(scene.body(body).points[joint.child_point])
+                                      - point))
+        body, point = joint.parent, np.asarray(scene.body(joint.parent).points[joint.parent_point])
+    return total
+
+
+def check_ground(s: GaitSettings, scene: Scene) -> None:
+    """SettingsError, before anything is built, for a ground the scene cannot plan on:
+    a slope steeper than friction can hold (tan |slope| > friction_coefficient: a foot at
+    rest on it would slide), or a stair whose next tread lies beyond the legs' reach (the
+    two footholds (0, 0) and (step_length, step_height) farther apart than twice the
+    longest `leg_length`); a Ground that cannot be built (`Ground.__post_init__`)."""
+    try:
+        ground = ground_of(scene, s)
+    except GroundError as err:
+        raise SettingsError(str(err)) from None
+    mu = s.friction_coefficient
+    steepest = math.degrees(math.atan(mu))
+    if abs(s.slope) > steepest:
+        raise SettingsError(
+            f"slope = {s.slope:g} deg is steeper than friction can hold on scene "
+            f"{scene.name!r}: tan |slope| = {math.tan(math.radians(abs(s.slope))):.4g} > "
+            f"friction_coefficient {mu:g}; slopes within [-{steepest:.4g}, {steepest:.4g}] deg")
+    if ground.stairs:
+        reach = 2.0 * max(leg_length(scene, c.name) for c in scene.contacts)
+        highest = math.sqrt(max(reach**2 - s.step_length**2, 0.0))
+        if abs(s.step_height) > highest:
+            raise SettingsError(
+                f"step_height = {s.step_height:g} m is beyond the legs' reach on scene "
+                f"{scene.name!r} at step_length {s.step_length:g} m: footholds "
+                f"{math.hypot(s.step_length, s.step_height):.4g} m apart, the legs reach "
+                f"{reach:.4g} m; step heights within [-{highest:.4g}, {highest:.4g}] m")

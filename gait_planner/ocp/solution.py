@@ -58,7 +58,7 @@ def _extractor(tr: Transcription) -> ca.Function:
 def _mirror_forces(tr: Transcription, forces: dict[str, np.ndarray],
                    rolls: dict[str, np.ndarray], src: int, dst: int):
     """Forces at node dst = mirror images of those at node src on the partner points; roll
-    moments change sign (the mirror turns d2 into -S d2, so M (d2 x e_z) into -S times it
+    moments change sign (the mirror turns d2 into -S d2, so M (d2 x n) into -S times it
     with -M)."""
     scene = tr.mb.scene
     mirror = dict(scene.gait.mirror)
@@ -73,12 +73,12 @@ def joint_rates(tr: Transcription, q: np.ndarray, times: np.ndarray,
                 step: float) -> tuple[np.ndarray, np.ndarray]:
     """Joint-angle velocities and accelerations (N+1, na), rad/s and rad/s^2, of a half
     cycle: `central_rates` with the periodic continuation as the outer neighbours of nodes
-    0 and N: q_{-1} = A (q_{N-2} - s e) and q_{N+1} = A q_2 + s e (the mirror of
+    0 and N: q_{-1} = A (q_{N-2} - s e - c) and q_{N+1} = A q_2 + s e + c (the mirror of
     `ocp.mirror`, eqs. 7-9), h_{-1} = h_{N-2}, h_N = h_1."""
     N = tr.N
     h = np.diff(times)
-    before = tr.A @ (q[N - 2] - step * tr.shift)
-    after = tr.A @ q[2] + step * tr.shift
+    before = tr.A @ (q[N - 2] - step * tr.shift - tr.lift)
+    after = tr.A @ q[2] + step * tr.shift + tr.lift
     return central_rates(tr.mb.scene, np.vstack([before, q, after]),
                          np.concatenate([[times[0] - h[N - 2]], times, [times[-1] + h[1]]]))
 
@@ -157,7 +157,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
         phases=tuple(phases[k].name for k in node_phase), active_contacts=active,
         contact_forces=forces, roll_moments=rolls, generalized_force=gen, kinetic_energy=T_node,
         potential_energy=q @ mech.gravity_gradient, phase_scaling=x[-int(tr.S.shape[0]):].copy(),
-        duration=float(times[N - 1] - times[0]), stats=stats,
+        duration=float(times[N - 1] - times[0]), stats=stats, ground=tr.ground,
         settings={
             "periodicity": "nodes N-1, N mirror nodes 0, 1 (paper eqs. 7-9)",
             "initial_guess": origin,
@@ -168,6 +168,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
             "foot_half_width": repr(s.foot_half_width),
             "strike_speed_max": repr(s.strike_speed_max),
             "speed": repr(s.speed),
+            **tr.ground.metadata(),
             "joint_limits_deg": ",".join(f"{name}:{np.degrees(lo):.6g}:{np.degrees(hi):.6g}"
                                          for name, lo, hi in s.joint_limits),
             "torque_squared": repr(float(torque.item())),

@@ -45,14 +45,14 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
-from gait_planner.ocp.clearance import (clearance_rows, clearance_schedule, schedule_heights,
-                                        strike_rows, strike_schedule)
+from gait_planner.ocp.clearance import (clearance_rows, clearance_schedule, ground_heights,
+                                        schedule_heights, strike_rows, strike_schedule)
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.elements import ElementGroup, Layout
 from gait_planner.ocp.mirror import configuration_mirror, increment_mirror, torque_mirror
 from gait_planner.ocp.posture import (JOINT_RANGE_ROW_UPPER, joint_limit_constants,
                                       joint_limit_rows, joint_speed_margins, twist_squares)
-from gait_planner.ocp.settings import GaitSettings
+from gait_planner.ocp.settings import GaitSettings, ground_of
 
 TORQUE_SCALE = 100.0  # N m
 FORCE_SCALE = 1000.0  # N
@@ -75,9 +75,10 @@ class Transcription:
         self.N = N = int(self.phase_of_interval.size)
         if N < 3:
             raise ValueError(f"a half cycle needs at least 3 intervals, got {N}")
-        self.contacts = [body_contacts(mb, p.contacts) for p in phases]
+        self.ground = ground_of(scene, settings)
+        self.contacts = [body_contacts(mb, p.contacts, self.ground) for p in phases]
         self.rows = [stacked_rows(c, mb.k) for c in self.contacts]
-        self.A, self.shift = configuration_mirror(mb)
+        self.A, self.shift, self.lift = configuration_mirror(mb, self.ground)
         self.B = torque_mirror(mb)
         # Nodes N-1 and N are mirror images of nodes 0 and 1. Where the mirror commutes with
         # the reparametrisation (`increment_mirror`), their elements are the regular ones
@@ -96,7 +97,7 @@ class Transcription:
         self.L = ca.MX.sym("lambda", int(sum(self.lam_sizes)))
         self.layout = Layout(mb, N, self.lam_sizes, nsig,
                              np.array([phases[k].scaling for k in self.phase_of_interval]),
-                             self.A, self.shift, self.B, self.M)
+                             self.A, self.shift, self.lift, self.B, self.M)
         self.Qref = ca.MX.sym("qref", mb.k, N - 1)
         self.step, self.mu = ca.MX.sym("step_length"), ca.MX.sym("mu")
 
@@ -239,12 +240,15 @@ class Transcription:
         self._eq.append(("contact_hold", ca.vertcat(*chain)))
         self._without_elements["contact_hold"] = ca.MX(sum(int(c.shape[0]) for c in chain), 1)
         est = []
+        landing = frozenset(c.name for c in mb.scene.contacts) - frozenset(
+            p for bc in self.contacts[0] for p in bc.points)
         for n in range(1, N):
             k_prev, k = self.phase_of_interval[n - 1], self.phase_of_interval[n]
             if k != k_prev:
-                E = establishing_rows(mb, self.contacts[k_prev], self.contacts[k])
+                E, e = establishing_rows(mb, self.contacts[k_prev], self.contacts[k],
+                                         self.ground, landing)
                 if E.shape[0]:
-                    est.append(ca.mtimes(ca.DM(E), self.Q[:, n]))
+                    est.append(ca.mtimes(ca.DM(E), self.Q[:, n]) - ca.DM(e))
         if est:
             self._eq.append(("contact_establish", ca.vertcat(*est)))
         first = self.contacts[0][0].points[0]
@@ -299,7 +303,7 @@ class Transcription:
                 for k in self.phase_of_interval[: N - 1]]  # interval N-1: the image of 0
         schedule = clearance_schedule(mb.scene, held, s, s.base_time_step)
         ground, self.clearances = clearance_rows(mb, lambda n: self.Q[:, n], schedule,
-                                                 s.foot_half_width)
+                                                 s.foot_half_width, self.ground)
         if ground:
             first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
             self._clearance_elements(schedule, first_row)
@@ -354,14 +358,14 @@ class Transcription:
         half_width = self.settings.foot_half_width
         for n, points in schedule.items():
             if points:
-                size = len(schedule_heights(self.mb, points, half_width)[1])
+                size = len(schedule_heights(self.mb, points, half_width))
                 nodes.setdefault((tuple(points), self.layout.mirrored(n == self.N - 1)), []).append(
                     (n, row + np.arange(size)))
                 row += size
         q, c = ca.SX.sym("q", self.mb.k), ca.SX.sym("c", 1)
         for (points, mirrored), chosen in nodes.items():
-            C, _ = schedule_heights(self.mb, dict.fromkeys(points, 0.0), half_width)
-            fn = ca.Function("clearance_" + "_".join(points), [q, c], [ca.mtimes(ca.DM(C), q)],
+            heights = ground_heights(self.mb, points, half_width, self.ground)
+            fn = ca.Function("clearance_" + "_".join(points), [q, c], [heights(q)],
                              ["q", "c"], ["z"])
             self.elements.append(ElementGroup(
                 self.layout.node_element(fn, mirrored),
@@ -380,11 +384,12 @@ class Transcription:
             groups.setdefault((points, self.layout.mirrored(n == self.N - 2)), []).append(
                 (n, row + np.arange(len(points))))
             row += len(points)
-            out.append(strike_rows(self.mb, points)(self.Q[:, n], self.Q[:, n + 1], self.h[n],
-                                                    ca.DM(c)))
+            out.append(strike_rows(self.mb, points, self.ground)(
+                self.Q[:, n], self.Q[:, n + 1], self.h[n], ca.DM(c)))
         for (points, next_mirrored), chosen in groups.items():
             self.elements.append(ElementGroup(
-                self.layout.interval_element(strike_rows(self.mb, points), next_mirrored),
+                self.layout.interval_element(strike_rows(self.mb, points, self.ground),
+                                             next_mirrored),
                 np.stack([self.layout.interval_z_index(n) for n, _ in chosen], 1),
                 np.stack([self.layout.interval_p_index(n) for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), c))

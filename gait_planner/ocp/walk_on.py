@@ -1,7 +1,8 @@
 """Walking on: a planned half cycle joined to its mirror images, K half cycles in one result.
 
 The half cycle spans nodes 0 .. N-1, and nodes N-1, N are the mirror images of nodes 0, 1
-shifted by the step length (paper eqs. 7-9). Half cycle k (k = 0 .. K-1) is the plan
+shifted by the step length (and up by the ground's rise, `gait_planner.model.ground`;
+paper eqs. 7-9). Half cycle k (k = 0 .. K-1) is the plan
 mirrored k times (`ocp.mirror`: left and right bodies swapped, lateral components
 negated), k step lengths further along x and k half-cycle durations later. Neighbouring
 half cycles share their boundary nodes (kept with the earlier half cycle's forces, which
@@ -39,7 +40,8 @@ def walk_on(result: PlanResult, steps: int) -> PlanResult:
     scene, N, s = result.scene, result.n_nodes - 1, result.step_length
     M = N - 1  # intervals per half cycle
     mb = Multibody(scene)
-    A, shift = configuration_mirror(mb)
+    A, shift, lift = configuration_mirror(mb, result.ground)
+    climb = sum(b.mass for b in scene.bodies) * scene.gravity * result.ground.rise(s)  # J
     B = torque_mirror(mb)
     mirror = dict(scene.gait.mirror)
     partner = contact_partners(scene)
@@ -58,7 +60,7 @@ def walk_on(result: PlanResult, steps: int) -> PlanResult:
         for key, values in (("q", q_k), ("tau", tau_k), ("gen", gen_k),
                             ("times", result.times + k * period),
                             ("kinetic", result.kinetic_energy),
-                            ("potential", result.potential_energy),
+                            ("potential", result.potential_energy + k * climb),
                             ("active", active_k), ("phases", result.phases)):
             parts[key].append(values[keep])
         for c in forces:
@@ -66,7 +68,7 @@ def walk_on(result: PlanResult, steps: int) -> PlanResult:
         for b in rolls:
             rolls[b].append(rolls_k[b][keep])
         # the next half cycle: the mirror image of this one, one step further
-        q_k = q_k @ A.T + s * shift
+        q_k = q_k @ A.T + s * shift + lift
         tau_k, gen_k = tau_k @ B.T, gen_k @ A.T
         forces_k = {partner[c]: f * _S for c, f in forces_k.items()}
         rolls_k = {mirror.get(b, b): -r for b, r in rolls_k.items()}
@@ -74,7 +76,7 @@ def walk_on(result: PlanResult, steps: int) -> PlanResult:
 
     q, times = np.vstack(parts["q"]), np.concatenate(parts["times"])
     h = np.diff(result.times)
-    before = A @ (result.q[N - 2] - s * shift)  # as in `ocp.solution.joint_rates`
+    before = A @ (result.q[N - 2] - s * shift - lift)  # as in `ocp.solution.joint_rates`
     velocities, accelerations = central_rates(
         scene, np.vstack([before, q, q_k[2]]),
         np.concatenate([[times[0] - h[N - 2]], times, [times[-1] + h[1]]]))

@@ -13,10 +13,18 @@ every check passed, 1 if one failed, 2 if the file cannot be read).
 
 Conventions (docs/design.md section 7, the planner's documented conventions):
 nodes 0..N, interval n from t_n to t_{n+1}, h_n = t_{n+1} - t_n. ``active_contacts[n]``
-(n < N) are the points held on interval n: they do not move from q_n to q_{n+1}, sit at
-z = 0, and their published forces (ground on foot, N, world) act in the equation of node n.
-Nodes N-1, N are the mirror images of nodes 0, 1 about y = 0 shifted by ``step_length`` in
-x; duration and cost span t_0 .. t_{N-1}.
+(n < N) are the points held on interval n: they do not move from q_n to q_{n+1}, sit on
+the ground, and their published forces (ground on foot, N, world) act in the equation of
+node n. Nodes N-1, N are the mirror images of nodes 0, 1 about y = 0 shifted by
+``step_length`` s in x and by the ground's rise s tan(slope) + step_height in z; duration and
+cost span t_0 .. t_{N-1}.
+
+The ground is the one the metadata names (`gait_planner.verify.ground`, written again here
+from docs/design.md section 13; absent entries: level): a ramp (``slope`` deg, the plane
+z = x tan(slope), normal n = (-sin, 0, cos)) or stairs (``step_height``, ``stair_riser``,
+``stair_tread``; n = e_z); gravity is vertical on every ground. "On the ground" is
+n . p = 0 on a ramp and z = the height of the tread under the point on stairs; "normal
+force" is n . F, "tangential" F - (n . F) n; the report names the ground.
 
 Checks and method (limits in `LIMITS`):
 
@@ -24,9 +32,9 @@ Checks and method (limits in `LIMITS`):
   joints (spherical: 3 gap rows; revolute: gap + 2 alignment rows n_p.(D_c a),
   n_p.(D_c b) with a, b completing the axis n to an orthonormal basis), planar root
   (phi_y = y0 of the scene's initial pose, d2.e_x = d2.e_z = 0).
-* Contacts: over every held interval a held point does not move and sits at z = 0; a
+* Contacts: over every held interval a held point does not move and sits on the ground; a
   body in full contact (both its points held) does not move at all and, in 3D, lies flat
-  (d2_z = 0); the published contact points equal phi + X_i d_i; no contact point of the
+  on it (n . d2 = 0); the published contact points equal phi + X_i d_i; no contact point of the
   scene is below the ground at any node (not a failure for scenes whose gait options set
   ``ground_clearance: false``, e.g. the rigid-legged compass, which must scuff: reported).
 * Discrete Euler-Lagrange equations at nodes n = 1..N-1, in full (k rows), with the
@@ -36,11 +44,12 @@ Checks and method (limits in `LIMITS`):
   where a ground force F on body point X adds F to the body's phi rows and X_i F to its
   d_i rows. Unknown: the internal/joint/planar multipliers, and for every 3D full contact
   the moment about the heel-toe line, which two point forces cannot carry and which is not
-  published; the planner applies it as a generalised force on the z-component of the
-  foot's d2 (w_n e_{d2z} M_roll). These unknowns are fitted by linear least squares,
+  published; the planner applies it as a generalised force along the foot's roll row
+  n . d2 (w_n E M_roll, E = n in the foot's d2 entries: its z-component on level ground).
+  These unknowns are fitted by linear least squares,
   b + w_n E M_roll = G^T(q_n) y, and the residual is judged relative to
   max(|D2 L_d|, |D1 L_d|, |gen_n|, |contact term|) (2-norms). M_roll is reported, with the
-  lateral centre-of-pressure offset |M_roll| / F_z it implies.
+  lateral centre-of-pressure offset |M_roll| / n . F it implies.
 * Actuation is internal and made of joint couples: generalized_force is zero on phi and of
   the pure-couple form f_{d_i} = 1/2 m_b x d_i with m_b = sum_i d_i x f_{d_i} (the body's
   couple); the body couples sum to zero (no net moment). Joint couples are recovered
@@ -54,17 +63,19 @@ Checks and method (limits in `LIMITS`):
   child's d3 (yaw), so the world couple follows from a 3x3 solve at q_n. Torques are
   node values (linear between nodes, trapezoidal virtual work), and the check is
   m_j(n) = w_n D_p(q_n) tau_n, w_n = (h_{n-1} + h_n)/2 (node 0 and N: one half interval).
-* Contact forces push (F_z of every point >= 0) and lie in the Coulomb cone
-  sqrt(F_x^2 + F_y^2) <= mu F_z of the body's net force (full contact: heel + forefoot),
+* Contact forces push (n . F of every point >= 0) and lie in the Coulomb cone about n,
+  |F - (n . F) n| <= mu n . F, of the body's net force (full contact: heel + forefoot),
   mu = metadata ``friction_coefficient``.
 * Periodicity: q_{N-1}, q_N equal the mirror images of q_0, q_1 shifted by the step
-  length (phi' = S phi, d1' = S d1, d2' = -S d2, d3' = S d3 in the partner body,
+  length and the rise (phi' = S phi, d1' = S d1, d2' = -S d2, d3' = S d3 in the partner body,
   S = diag(1, -1, 1)); the contact forces of nodes 0, N are the mirror images (S F) of
   those of nodes N-1, 1; the joint couples of nodes N-1, N are the mirror images of those
   of nodes 0, 1 (a couple m mirrors to -S m, or to +S m when the mirror swaps the joint's
-  parent and child).
+  parent and child). On stairs the tread depth is the step length (each half cycle lands
+  a tread further).
 * Physical plausibility (`gait_planner.verify.physical`): per-point friction cones, no
-  swing point at ground height, joint speeds, no torque zigzag away from contact switches.
+  swing point at ground height, on stairs no swing segment through the stairs, strike
+  speed along the ground, joint speeds, no torque zigzag away from contact switches.
 * Continuous dynamics (`gait_planner.verify.continuous`): Pinocchio's inverse dynamics of
   the continuous model at every inner node from the recorded motion and foot wrenches,
   against the published efforts (torque error within 0.2 % of the peak away from contact

@@ -11,6 +11,7 @@ from gait_planner.verify.mechanics import MIRROR, Mechanics, SceneData, parse_sc
 from gait_planner.verify.actuation import (effort_couples, effort_slots, joint_couples,
                                            periodic_torque_error)
 from gait_planner.verify.continuous import certificate_of_recording
+from gait_planner.verify.ground import RecordedGround
 from gait_planner.verify.joined import verify_joined
 from gait_planner.verify.physical import check_physical
 from gait_planner.verify.report import LIMITS, VerificationReport
@@ -39,6 +40,8 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
     scene = parse_scene(rec.scene_text)
     mech = Mechanics(scene)
     meta = rec.metadata
+    ground = RecordedGround.of(meta)
+    normal = ground.normal
     failures: list[str] = []
     notes: list[str] = []
     L = LIMITS
@@ -98,9 +101,10 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
             x0, x1 = C[c] @ q[n], C[c] @ q[n + 1]
             if _norm(x1 - x0) > drift:
                 drift, drift_at = _norm(x1 - x0), (c, n)
-            for node, x in ((n, x0), (n + 1, x1)):
-                if abs(x[2]) > height:
-                    height, height_at = abs(x[2]), (c, node)
+            for node, x in ((n, x0), (n + 1, x1)):  # on the ground: its height is 0
+                off = abs(float(ground.above(x)))
+                if off > height:
+                    height, height_at = off, (c, node)
         for body, points in bodies_points.items():
             if len(points) < 2:
                 continue
@@ -109,9 +113,10 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
             if move > drift:
                 drift, drift_at = move, (f"{body} (full contact)", n)
             if not scene.planar:
-                for node in (n, n + 1):
-                    if abs(q[node, s + 8]) > roll:
-                        roll, roll_at = abs(q[node, s + 8]), (body, node)
+                for node in (n, n + 1):  # n . d2 = 0: flat on the ground
+                    tilt = abs(float(normal @ q[node, s + 6:s + 9]))
+                    if tilt > roll:
+                        roll, roll_at = tilt, (body, node)
     if drift > L["contact"]:
         fail(f"held contact {drift_at[0]} moves by {drift:.3e} m over interval {drift_at[1]} "
              f"(limit {L['contact']:.0e} m)")
@@ -119,8 +124,8 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         fail(f"held contact {height_at[0]} is {height:.3e} m off the ground at node "
              f"{height_at[1]} (limit {L['contact']:.0e} m)")
     if roll > L["contact"]:
-        fail(f"{roll_at[0]} in full contact is not flat at node {roll_at[1]}: d2_z = {roll:.3e} "
-             f"(limit {L['contact']:.0e})")
+        fail(f"{roll_at[0]} in full contact is not flat at node {roll_at[1]}: n . d2 = "
+             f"{roll:.3e} (limit {L['contact']:.0e})")
     point_error = 0.0
     for n in range(n_nodes):
         names = tuple(rec.contact_names[n])
@@ -131,7 +136,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
             point_error = max(point_error, _norm(x - C[c] @ q[n]))
     if point_error > L["contact"]:
         fail(f"published contact points differ from phi + X_i d_i by {point_error:.3e} m")
-    z_all = np.array([[(C[c] @ q[n])[2] for c in C] for n in range(n_nodes)])
+    z_all = np.array([[ground.above(C[c] @ q[n]) for c in C] for n in range(n_nodes)])
     lowest = float(z_all.min())
     if lowest < -L["ground"]:
         n, i = np.unravel_index(int(z_all.argmin()), z_all.shape)
@@ -150,21 +155,22 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
     for n in range(n_nodes):
         net: dict[str, np.ndarray] = {}
         for c, F in forces[n].items():
-            if F[2] < min_fz:
-                min_fz = float(F[2])
-            if F[2] < -L["force"] * max(1.0, _norm(F)) and force_fail is None:
-                force_fail = f"contact {c} pulls on the ground at node {n}: F_z = {F[2]:.6g} N"
+            fn = float(normal @ F)
+            if fn < min_fz:
+                min_fz = fn
+            if fn < -L["force"] * max(1.0, _norm(F)) and force_fail is None:
+                force_fail = f"contact {c} pulls on the ground at node {n}: n . F = {fn:.6g} N"
             body = scene.contacts[c][0]
             net[body] = net.get(body, np.zeros(3)) + F
-        for body, F in net.items():
-            tangential = math.hypot(F[0], F[1])
-            ratio = max(ratio, _safe_ratio(tangential, mu * F[2]) if F[2] > 0 else
+        for body, F in net.items():  # the cone about the ground's normal n
+            fn, tangential = float(normal @ F), float(ground.tangential(F))
+            ratio = max(ratio, _safe_ratio(tangential, mu * fn) if fn > 0 else
                         (math.inf if tangential > 0 else 0.0))
-            over = tangential - mu * F[2]
+            over = tangential - mu * fn
             excess = max(excess, over)
             if over > L["force"] * max(1.0, _norm(F)):
                 fail(f"the ground force on {body} at node {n} leaves the friction cone: "
-                     f"|F_t| = {tangential:.6g} N > mu F_z = {mu * F[2]:.6g} N (mu = {mu:g})")
+                     f"|F_t| = {tangential:.6g} N > mu n . F = {mu * fn:.6g} N (mu = {mu:g})")
     if force_fail:
         fail(force_fail)
     if min_fz == math.inf:
@@ -186,8 +192,8 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         full = [b for b, pts in per_body.items() if len(pts) == 2 and not scene.planar]
         roll_bodies.append(full)
         E = np.zeros((mech.k, len(full)))
-        for i, body in enumerate(full):
-            E[mech.start(body) + 8, i] = 1.0  # z component of d2
+        for i, body in enumerate(full):  # the roll row n . d2 (e_z . d2 on level ground)
+            E[mech.start(body) + 6:mech.start(body) + 9, i] = normal
         b = d2 + d1 + gen[n] + contact
         A = np.hstack([mech.constraint_jacobian(q[n]).T, -w * E])
         x, *_ = np.linalg.lstsq(A, b, rcond=None)
@@ -201,7 +207,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         worst_abs = max(worst_abs, _norm(res))
         for body, m_roll in zip(full, moments):
             max_roll = max(max_roll, abs(float(m_roll)))
-            fz = sum(forces[n][c][2] for c in per_body[body])
+            fz = sum(float(normal @ forces[n][c]) for c in per_body[body])
             max_offset = max(max_offset, _safe_ratio(abs(float(m_roll)), fz))
     if worst_res > L["dynamics"]:
         fail(f"the discrete Euler-Lagrange equation of node {worst_node} has a relative "
@@ -278,11 +284,17 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         notes.append(f"the recording declares periodicity {meta['periodicity']!r}; these "
                      f"checks pair nodes N-1, N with 0, 1 (paper eqs. 7-9)")
     step = _metadata_float(meta, "step_length")
-    period = max(float(np.abs(q[N - 1] - mech.mirror(q[0], step)).max()),
-                 float(np.abs(q[N] - mech.mirror(q[1], step)).max()))
+    rise = ground.rise(step)
+    if ground.stairs and not abs(ground.tread - step) <= L["time"] * step:
+        fail(f"the stairs' tread depth {ground.tread!r} m (metadata stair_tread) differs from "
+             f"the step length {step!r} m: the mirror images would not land a tread further "
+             f"on each half cycle")
+    period = max(float(np.abs(q[N - 1] - mech.mirror(q[0], step, rise)).max()),
+                 float(np.abs(q[N] - mech.mirror(q[1], step, rise)).max()))
     if not period <= L["periodicity"]:
         fail(f"nodes N-1, N are not the mirror images of nodes 0, 1 shifted by the step "
-             f"length {step:g} m: off by {period:.3e} m (limit {L['periodicity']:.0e} m)")
+             f"length {step:g} m and the rise {rise:g} m ({ground.describe()}): off by "
+             f"{period:.3e} m (limit {L['periodicity']:.0e} m)")
     partner = {c: next(d for d, (bd, pd) in scene.contacts.items()
                        if bd == scene.mirror[bc] and pd == pc)
                for c, (bc, pc) in scene.contacts.items()}
@@ -351,8 +363,8 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
     failures += [f"continuous dynamics: {f}" for f in continuous.failures]
 
     return VerificationReport(
-        path=str(rec.path), scene=scene.name, cost_name=cost_name, n_nodes=n_nodes,
-        planner_success=planner_success,
+        path=str(rec.path), scene=scene.name, ground=ground.describe(), cost_name=cost_name,
+        n_nodes=n_nodes, planner_success=planner_success,
         max_internal_violation=internal, max_joint_violation=joint,
         max_planar_violation=planar, max_contact_drift=drift, max_contact_height=height,
         max_full_contact_roll=roll, max_contact_point_error=point_error,

@@ -3,10 +3,11 @@
 
 The first half cycle, nodes 0 .. H-1, gets every check of a single plan (`checks`), its
 periodic continuation included. Half cycle k (nodes k (H-2) .. k (H-2) + H-1) must then be
-the first one mirrored k times: configurations (mirror about y = 0, k step lengths along x),
-contact forces (partner points, y negated), efforts (partner joints; pitch and revolute
-angles keep their sign, roll and yaw change it, a joint whose mirror swaps parent and child
-changes it too) and times (k half-cycle durations later). Since the first half cycle
+the first one mirrored k times: configurations (mirror about y = 0, k step lengths along x
+and k rises of the ground up, `gait_planner.verify.ground`), contact forces (partner points,
+y negated), efforts (partner joints; pitch and revolute angles keep their sign, roll and yaw
+change it, a joint whose mirror swaps parent and child changes it too) and times (k
+half-cycle durations later). Since the first half cycle
 satisfies the discrete equations with its mirrored neighbours, so does every join. The
 physical checks and the continuous-dynamics certificate run on the whole joined motion.
 """
@@ -18,6 +19,7 @@ import dataclasses
 import numpy as np
 
 from gait_planner.verify.continuous import certificate_of_recording
+from gait_planner.verify.ground import RecordedGround
 from gait_planner.verify.mechanics import MIRROR, Mechanics, SceneData, parse_scene
 from gait_planner.verify.physical import check_physical
 from gait_planner.verify.report import LIMITS, VerificationReport
@@ -75,6 +77,7 @@ def verify_joined(rec, verify_plan) -> VerificationReport:
     scene = parse_scene(rec.scene_text)
     mech = Mechanics(scene)
     step = float(meta["step_length"])
+    rise = RecordedGround.of(meta).rise(step)
     P = angle_mirror(scene, rec.joint_names)
     partner = {c: next(d for d, (bd, pd) in scene.contacts.items()
                        if bd == scene.mirror[bc] and pd == pc)
@@ -86,7 +89,7 @@ def verify_joined(rec, verify_plan) -> VerificationReport:
     errors = {"configuration": 0.0, "effort": 0.0, "force": 0.0, "time": 0.0}
     q_k, effort_k, forces_k = q0, effort0, forces0
     for k in range(1, steps):
-        q_k = np.array([mech.mirror(row, step) for row in q_k])
+        q_k = np.array([mech.mirror(row, step, rise) for row in q_k])
         effort_k = effort_k @ P.T
         forces_k = [{partner[c]: MIRROR * f for c, f in node.items()} for node in forces_k]
         nodes = range(k * M, k * M + H)

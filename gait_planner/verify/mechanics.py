@@ -245,14 +245,17 @@ class Mechanics:
         return q @ self.gravity_gradient
 
     # mirror
-    def mirror(self, q: np.ndarray, step: float) -> np.ndarray:
-        """mirror(q) + step e_x: each body's image in its partner body."""
+    def mirror(self, q: np.ndarray, step: float, rise: float = 0.0) -> np.ndarray:
+        """mirror(q) + step e_x + rise e_z (m): each body's image in its partner body, its
+        position shifted by the step and by the ground's rise over it (ramp: step tan(slope),
+        stairs: the step height; `gait_planner.verify.ground`)."""
         out = np.zeros_like(q)
         for b in self.scene.bodies:
             src, dst = self.start(b.name), self.start(self.scene.mirror[b.name])
             for j, sign in enumerate((1.0, 1.0, -1.0, 1.0)):
                 out[dst + 3 * j:dst + 3 * j + 3] = sign * MIRROR * q[src + 3 * j:src + 3 * j + 3]
             out[dst] += step
+            out[dst + 2] += rise
         return out
 
 

@@ -1,18 +1,31 @@
 """Is a recorded plan a motion a real body and a robot can make? Checks beyond the discrete
 equations it was solved with (issue: a physical plan), on what the recording publishes.
 
+The ground is the recording's (`gait_planner.verify.ground`: level, a ramp or stairs, from
+the metadata); n its normal, a point's height its `RecordedGround.above` (level: z; ramp:
+n . p; stairs: z less the height of the tread under the point).
+
 * Per-point friction: every published point force (full contacts included) lies in its
-  own Coulomb cone, sqrt(F_x^2 + F_y^2) <= mu F_z, not only each foot's net force.
-* Swing clearance: a contact point is at ground height (z < `GROUND_BAND`) only where it is
-  held (listed at the node), or at the node where it is released (listed at the node
+  own Coulomb cone about n, |F - (n . F) n| <= mu n . F, not only each foot's net force.
+* Swing clearance: a contact point is at ground height (height < `GROUND_BAND`) only where
+  it is held (listed at the node), or at the node where it is released (listed at the node
   before). Anywhere else it is a swing point sliding along the ground at zero force, which
   a real foot would catch on: a scuff. In 3D, with the metadata's ``foot_half_width`` w,
-  the point's two foot edges z -+ w d2_z (d2 its body's lateral director) are checked too:
+  the point's two foot edges p -+ w d2 (d2 its body's lateral director) are checked too:
   the foot is as wide as the full contact's roll moment assumes.
-* Strike speed: a contact point's mean horizontal speed over the interval that ends where
-  it is first held again, against the metadata's ``strike_speed_max`` (0 or absent: noted
-  only).
-* Joint speed: the published JointTrajectory velocities stay below `JOINT_SPEED_MAX`.
+* Scuffs against the stairs: on stairs the straight segment between consecutive nodes of
+  every point that is not held over the interval (and of its foot edges) must not pass
+  through the stairs (below a tread's height where x is over that tread). Its ends are
+  judged above (swing clearance) and by the contact checks; between them it can enter the
+  stairs only where it crosses an edge: its height there above the higher tread
+  (`RecordedGround.edge_clearance`) must not be negative. The lowest such crossing and
+  where it is, (point, node n of the segment n -> n + 1), are reported.
+* Strike speed: a contact point's mean speed along the ground (the part of its motion
+  normal to n removed: horizontal on level ground and stairs) over the interval that ends
+  where it is first held again, against the metadata's ``strike_speed_max`` (0 or absent:
+  noted only).
+* Joint speed: the published JointTrajectory velocities stay below `JOINT_SPEED_MAX`, or
+  the scene's higher joint_speed_max option (`joint_speed_limit`).
 * Torque smoothness: away from contact switches (a node whose held contacts differ from its
   neighbour's, and the nodes next to it), no joint's published effort zigzags: three
   consecutive first differences alternating in sign, each larger than `ZIGZAG_STEP` of the
@@ -29,24 +42,29 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gait_planner.verify.ground import RecordedGround
 from gait_planner.verify.mechanics import Mechanics, SceneData
 
 GROUND_BAND = 1e-3  # m: a point lower than this is at ground height
 JOINT_SPEED_MAX = 600.0  # deg/s
 ZIGZAG_STEP = 0.02  # of the peak effort: first differences smaller than this are noise
 FRICTION_TOLERANCE = 1e-9  # relative to max(1 N, |F|)
+SOLID_TOLERANCE = 1e-9  # m: a segment this little below a stair edge's corner only touches it
 
 
 @dataclass(frozen=True)
 class PhysicalReport:
     """Measured physical properties of one recording (units in the field comments)."""
 
-    max_point_friction_ratio: float  # max over points sqrt(Fx^2 + Fy^2) / (mu Fz)
+    max_point_friction_ratio: float  # max over points |F - (n . F) n| / (mu n . F)
     min_swing_height: float  # m, lowest swing point (or foot edge, 3D) neither held nor released
     scuffs: tuple[tuple[str, int], ...]  # (point, node) at ground height while swinging
-    max_strike_speed: float  # m/s, horizontal, over the interval before a strike
+    min_edge_clearance: float  # m, lowest crossing of a stair edge (NaN: no stairs; inf: none)
+    edge_clearance_at: tuple[str, int] | None  # (point or foot edge, node n of segment n -> n + 1)
+    max_strike_speed: float  # m/s, along the ground, over the interval before a strike
     strike_speed_bound: float  # m/s, the metadata's strike_speed_max (0: none)
     max_joint_speed: float  # deg/s, published velocities
+    joint_speed_bound: float  # deg/s, `joint_speed_limit`
     fastest_joint: str
     max_torque_second_difference: float  # relative to the peak effort, away from switches
     zigzags: tuple[tuple[str, int], ...]  # (joint angle, node) where the effort zigzags
@@ -56,6 +74,13 @@ class PhysicalReport:
     @property
     def ok(self) -> bool:
         return not self.failures
+
+
+def joint_speed_limit(scene: SceneData) -> float:
+    """deg/s: `JOINT_SPEED_MAX`, or the recorded scene's option joint_speed_max where it
+    declares a higher one (a run's joints turn faster than a walk's)."""
+    declared = scene.options.get("joint_speed_max", 0.0)
+    return max(JOINT_SPEED_MAX, float(declared) if isinstance(declared, (int, float)) else 0.0)
 
 
 def switch_nodes(active: tuple[tuple[str, ...], ...]) -> tuple[int, ...]:
@@ -72,60 +97,79 @@ def near_switch(n_nodes: int, switches: tuple[int, ...]) -> np.ndarray:
 
 
 def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
-    """The checks of the module docstring on a decoded recording (`RecordedPlan`)."""
+    """The checks of the module docstring on a decoded recording (`RecordedPlan`), on the
+    ground its metadata names (ValueError if it names none that can be built)."""
     failures: list[str] = []
     mech = Mechanics(scene)
+    ground = RecordedGround.of(rec.metadata)
+    normal = ground.normal
     q, n_nodes = np.asarray(rec.q, dtype=float), rec.n_nodes
     active = tuple(tuple(a) for a in rec.active_contacts)
+    scuffing_fails = scene.options.get("ground_clearance", True) is not False
 
     ratio, worst = 0.0, None
     for n in range(n_nodes):
         for name, F in zip(rec.contact_names[n], np.asarray(rec.contact_force_vectors[n])):
-            tangential = float(np.hypot(F[0], F[1]))
-            excess = tangential - mu * F[2]
-            r = tangential / (mu * F[2]) if F[2] > 0 else (np.inf if tangential > 0 else 0.0)
+            fn, tangential = float(normal @ F), float(ground.tangential(F))
+            excess = tangential - mu * fn
+            r = tangential / (mu * fn) if fn > 0 else (np.inf if tangential > 0 else 0.0)
             if r > ratio:
                 ratio = r
             if excess > FRICTION_TOLERANCE * max(1.0, float(np.linalg.norm(F))):
                 worst = worst or (name, n, r)
     if worst:
         failures.append(f"the force on {worst[0]} at node {worst[1]} leaves its own friction "
-                        f"cone: |F_t| / (mu F_z) = {worst[2]:.3g}")
+                        f"cone: |F_t| / (mu F_n) = {worst[2]:.3g}")
 
     lowest, scuffs = np.inf, []
+    crossing, crossing_at = (np.inf if ground.stairs else np.nan), None
     half_width = 0.0 if scene.planar else float(rec.metadata.get("foot_half_width", 0.0))
     for name in scene.contacts:
-        C = mech.contact_matrix(name)
-        body = scene.contacts[name][0]
+        labels, edges = _edges(mech, q, name, half_width)  # (n_nodes, e, 3)
+        heights = ground.above(edges).min(axis=1)
         for n in range(n_nodes):
             if name in active[n] or (n > 0 and name in active[n - 1]):
                 continue
-            z = float((C @ q[n])[2]) - half_width * abs(float(mech.director(q[n], body, 1)[2]))
-            lowest = min(lowest, z)
-            if z < GROUND_BAND:
+            lowest = min(lowest, float(heights[n]))
+            if heights[n] < GROUND_BAND:
                 scuffs.append((name, n))
-    if scuffs and scene.options.get("ground_clearance", True) is not False:
+        if not ground.stairs:  # above a plane a segment is lowest at an end: a node
+            continue
+        for n in range(n_nodes - 1):
+            if name in active[n]:  # held over interval n
+                continue
+            for label, e0, e1 in zip(labels, edges[n], edges[n + 1]):
+                clearance = ground.edge_clearance(e0, e1)
+                if clearance < crossing:
+                    crossing, crossing_at = clearance, (label, n)
+    if scuffs and scuffing_fails:
         failures.append(f"swing contact points at ground height without force (scuffing), "
                         f"(point, node): {scuffs[:6]}{' ...' if len(scuffs) > 6 else ''}")
+    if crossing < -SOLID_TOLERANCE and scuffing_fails:
+        point, n = crossing_at
+        failures.append(f"{point} passes {-crossing:.3g} m through the stairs between nodes "
+                        f"{n} and {n + 1} (scuffs against the stairs)")
 
     strike, times = 0.0, np.asarray(rec.times, dtype=float)
+    along = np.eye(3) - np.outer(normal, normal)  # drops the motion along n
     for name in scene.contacts:
-        C = mech.contact_matrix(name)[:2]
+        C = along @ mech.contact_matrix(name)
         for n in range(1, n_nodes):
             if name in active[n] and name not in active[n - 1]:
                 step = float(np.linalg.norm(C @ (q[n] - q[n - 1])))
                 strike = max(strike, step / (times[n] - times[n - 1]))
     bound = float(rec.metadata.get("strike_speed_max", 0.0))
     if bound > 0 and strike > bound * (1 + 1e-6):
-        failures.append(f"a contact point strikes at {strike:.4g} m/s horizontally "
+        failures.append(f"a contact point strikes at {strike:.4g} m/s along the ground "
                         f"(strike_speed_max {bound:g} m/s)")
 
     speed = np.degrees(np.abs(np.asarray(rec.velocities, dtype=float)))
     fastest = np.unravel_index(int(speed.argmax()), speed.shape) if speed.size else (0, 0)
     max_speed = float(speed.max()) if speed.size else 0.0
-    if max_speed > JOINT_SPEED_MAX:
+    speed_limit = joint_speed_limit(scene)
+    if max_speed > speed_limit:
         failures.append(f"joint {rec.joint_names[fastest[1]]} turns at {max_speed:.0f} deg/s "
-                        f"at node {fastest[0]} (limit {JOINT_SPEED_MAX:.0f} deg/s)")
+                        f"at node {fastest[0]} (limit {speed_limit:.0f} deg/s)")
 
     switches = switch_nodes(active)
     second, zigzags = _torque_roughness(np.asarray(rec.effort, dtype=float),
@@ -135,10 +179,25 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
                         f"(angle, node): {zigzags[:6]}{' ...' if len(zigzags) > 6 else ''}")
     return PhysicalReport(
         max_point_friction_ratio=ratio, min_swing_height=float(lowest), scuffs=tuple(scuffs),
+        min_edge_clearance=float(crossing), edge_clearance_at=crossing_at,
         max_strike_speed=strike, strike_speed_bound=bound,
-        max_joint_speed=max_speed, fastest_joint=rec.joint_names[fastest[1]] if speed.size else "",
+        max_joint_speed=max_speed, joint_speed_bound=speed_limit, fastest_joint=rec.joint_names[fastest[1]] if speed.size else "",
         max_torque_second_difference=second, zigzags=tuple(zigzags),
         switch_nodes=switches, failures=tuple(failures))
+
+
+def _edges(mech: Mechanics, q: np.ndarray, name: str, half_width: float
+           ) -> tuple[tuple[str, ...], np.ndarray]:
+    """(labels, points (N+1, e, 3) m): contact point `name` at every node of q (N+1, k)
+    (e = 1), or with half_width w > 0 its foot's two edges p + w d2 (left) and p - w d2
+    (right), d2 its body's lateral director."""
+    C = mech.contact_matrix(name)
+    p = np.array([C @ row for row in q])
+    if half_width == 0.0:
+        return (name,), p[:, None, :]
+    d2 = mech.director(q, mech.scene.contacts[name][0], 1)
+    return ((f"{name} left edge", f"{name} right edge"),
+            np.stack([p + half_width * d2, p - half_width * d2], axis=1))
 
 
 def effort_zigzags(effort: np.ndarray, active, names) -> list[tuple[str, int]]:

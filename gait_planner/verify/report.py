@@ -36,6 +36,7 @@ class VerificationReport:
 
     path: str
     scene: str
+    ground: str  # the ground checked against (`RecordedGround.describe`: "ramp 10 deg up")
     cost_name: str
     n_nodes: int
     planner_success: bool
@@ -43,10 +44,10 @@ class VerificationReport:
     max_joint_violation: float
     max_planar_violation: float
     max_contact_drift: float  # held point (and full-contact body) motion over an interval
-    max_contact_height: float  # |z| of held points
-    max_full_contact_roll: float  # |d2_z| of bodies in 3D full contact
+    max_contact_height: float  # held points' distance from the ground (RecordedGround.above)
+    max_full_contact_roll: float  # |n . d2| of bodies in 3D full contact (n: ground normal)
     max_contact_point_error: float  # published points vs phi + X_i d_i
-    min_contact_point_height: float  # lowest contact point, any node
+    min_contact_point_height: float  # lowest contact point above the ground, any node
     max_dynamics_residual: float  # relative
     worst_dynamics_node: int
     max_dynamics_residual_absolute: float  # N s
@@ -57,9 +58,9 @@ class VerificationReport:
     max_net_moment: float  # relative
     max_revolute_off_axis: float  # relative
     max_effort_mismatch: float  # relative
-    min_normal_force: float  # N, smallest F_z of an active point
-    max_friction_ratio: float  # max sqrt(Fx^2 + Fy^2) / (mu F_z)
-    max_friction_excess: float  # N, max sqrt(Fx^2 + Fy^2) - mu F_z
+    min_normal_force: float  # N, smallest n . F of an active point
+    max_friction_ratio: float  # max |F - (n . F) n| / (mu n . F) of each foot's net force
+    max_friction_excess: float  # N, max |F - (n . F) n| - mu n . F
     friction_coefficient: float
     max_periodicity_error: float  # m
     max_periodic_force_error: float  # relative

@@ -1,8 +1,9 @@
 """The text of a `VerificationReport` (`gait-planner report`, ``python -m gait_planner.verify``).
 
-`report_lines(report)` groups the measured numbers by what they test (constraints, contacts,
-ground forces, discrete dynamics, actuation, periodicity, time and cost, physical
-plausibility, continuous dynamics), one line per number::
+`report_lines(report)` opens with the scene and the ground checked against ("ground: ramp 10
+deg up", `gait_planner.verify.ground`), then groups the measured numbers by what they test
+(constraints, contacts, ground forces, discrete dynamics, actuation, periodicity, time and
+cost, physical plausibility, continuous dynamics), one line per number::
 
     held points: drift over an interval      2.1e-13 m      limit 1e-09 m       ok
 
@@ -10,8 +11,9 @@ value and unit, then the limit and a mark: ``ok``, ``FAILED``, ``noted`` (outsid
 but the scene allows it: reported, not a failure) or nothing (measured, not judged). Then the
 notes, the failures' sentences and, last, the verdict, which is the verifier's (`failures`):
 a mark is computed from the printed value and limit, and for the few checks whose tolerance
-scales with a quantity that is not printed (normal force, friction, scuffing, zigzags) from
-the failure sentence of that check.
+scales with a quantity that is not printed or that a scene may exempt (normal force,
+friction, scuffing, segments through the stairs, zigzags) from the failure sentence of that
+check.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from __future__ import annotations
 import math
 
 from gait_planner.verify.continuous import LIMITS as CONTINUOUS_LIMITS, MOMENT_ARM
-from gait_planner.verify.physical import GROUND_BAND, JOINT_SPEED_MAX
+from gait_planner.verify.physical import GROUND_BAND, SOLID_TOLERANCE
 from gait_planner.verify.report import LIMITS
 
 __all__ = ["report_lines"]
@@ -77,7 +79,8 @@ def _contacts(r, rows: _Rows, planar: bool) -> None:
     rows.within("held points: drift over an interval", r.max_contact_drift, "m", limit)
     rows.within("held points: height above the ground", r.max_contact_height, "m", limit)
     if not planar:
-        rows.within("feet in full contact: tilt |d2_z|", r.max_full_contact_roll, "rel.", limit)
+        rows.within("feet in full contact: tilt |n . d2|", r.max_full_contact_roll, "rel.",
+                    limit)
     rows.within("published points vs phi + X_i d_i", r.max_contact_point_error, "m", limit)
     lowest = r.min_contact_point_height
     below = lowest < -LIMITS["ground"]
@@ -89,9 +92,9 @@ def _contacts(r, rows: _Rows, planar: bool) -> None:
 
 def _forces(r, rows: _Rows) -> None:
     rows.group(f"ground forces (friction coefficient mu = {r.friction_coefficient:g})")
-    rows.row("smallest normal force F_z", _number(r.min_normal_force, "N"),
+    rows.row("smallest normal force n . F", _number(r.min_normal_force, "N"),
              "limit >= 0 N", "FAILED" if rows.failed("pulls on the ground") else "ok")
-    rows.row("friction of each foot's force |F_t| / (mu F_z)",
+    rows.row("friction of each foot's force |F_t| / (mu F_n)",
              _number(r.max_friction_ratio, "rel.", 4), "limit <= 1 rel.",
              "FAILED" if rows.failed("leaves the friction cone") else "ok")
     if r.physical is not None:
@@ -121,7 +124,7 @@ def _actuation(r, rows: _Rows) -> None:
 
 
 def _periodicity(r, rows: _Rows) -> None:
-    rows.group("periodicity (nodes N-1, N = mirrored nodes 0, 1 shifted by the step)")
+    rows.group("periodicity (nodes N-1, N = mirrored nodes 0, 1 shifted by the step and rise)")
     rows.within("configuration", r.max_periodicity_error, "m", LIMITS["periodicity"])
     rows.within("contact forces", r.max_periodic_force_error, "rel.", LIMITS["periodic_force"])
     rows.within("joint couples", r.max_periodic_torque_error, "rel.", LIMITS["actuation"])
@@ -151,14 +154,20 @@ def _physical(p, rows: _Rows) -> None:
         rows.row("lowest swing point or foot edge (not held)",
                  _number(p.min_swing_height, "m"), f"limit >= {GROUND_BAND:g} m",
                  ("FAILED" if rows.failed("scuffing") else "noted") if scuffing else "ok")
-    label = "fastest strike (horizontal, interval before)"
+    if p.edge_clearance_at is not None:  # stairs, and a swing segment crosses an edge
+        point, node = p.edge_clearance_at
+        rows.row(f"lowest stair-edge crossing ({point}, {node}-{node + 1})",
+                 _number(p.min_edge_clearance, "m"), f"limit >= -{SOLID_TOLERANCE:g} m",
+                 "FAILED" if rows.failed("through the stairs") else
+                 ("noted" if p.min_edge_clearance < -SOLID_TOLERANCE else "ok"))
+    label = "fastest strike (along the ground, interval before)"
     if p.strike_speed_bound > 0:
         rows.row(label, _number(p.max_strike_speed, "m/s"), f"limit {p.strike_speed_bound:g} m/s",
                  "FAILED" if rows.failed("strikes at") else "ok")
     else:
         rows.row(label, _number(p.max_strike_speed, "m/s"), "no bound (strike_speed_max)")
     rows.within(f"fastest joint ({p.fastest_joint})", p.max_joint_speed, "deg/s",
-                JOINT_SPEED_MAX)
+                p.joint_speed_bound)
     rows.row("torque 2nd difference away from switches", _number(
         p.max_torque_second_difference, "of peak"), "no zigzag",
         "FAILED" if rows.failed("zigzag") else "ok")
@@ -189,7 +198,8 @@ def report_lines(r) -> list[str]:
     """The lines of `r` (a `VerificationReport`), in the order of the module docstring."""
     rows = _Rows(r.failures)
     planar = bool(r.continuous.planar) if r.continuous is not None else r.max_planar_violation > 0
-    rows.lines.append(f"{r.path}: scene {r.scene}, cost {r.cost_name}, {r.n_nodes} nodes")
+    rows.lines.append(f"{r.path}: scene {r.scene}, cost {r.cost_name}, {r.n_nodes} nodes, "
+                      f"ground: {r.ground}")
     rows.row("planner", "converged" if r.planner_success else "reported failure", "",
              "ok" if r.planner_success else "FAILED")
     _constraints(r, rows, planar)

@@ -17,10 +17,10 @@ reset=...)` is the API.
   and a velocity from one-sided second-order differences inside the segment, on the
   configuration group at q_s (xi_i = difference(q_s, q_{s+i}) / offsets, the derivative at
   t_s of the quadratic through 0, xi_1, xi_2; nodes past N from the periodic continuation
-  q_{N-1+j} = mirror(q_j)), then projected on the held contacts. One-sided because the
-  velocity jumps at an impact and the acceleration at a release; second order like the
-  plan (a segment of a single interval takes node s - 1 instead when interval s - 1 holds
-  the same contacts, else the two-point difference).
+  q_{N-1+j} = mirror(q_j), shifted by the step and the ground's rise), then projected on the
+  held contacts. One-sided because the velocity jumps at an impact and the acceleration at
+  a release; second order like the plan (a segment of a single interval takes node s - 1
+  instead when interval s - 1 holds the same contacts, else the two-point difference).
 * reset="node": every interval starts from the plan's state at its first node: the drift
   after one interval is the plan's local error against the continuous dynamics (O(h^3) for
   a second-order plan where the motion is smooth), free of any growth.
@@ -34,7 +34,7 @@ reset=...)` is the API.
   plan's point forces on it (nodes away from contact switches only, `physical.near_switch`
   with the switches' periodic images: the plan's node force at a switch holds the impact),
   and the periodicity gap: the configuration at node N-1 against the mirrored start
-  (mirror(q_0) + step length e_x), over body centres of mass and contact points.
+  (mirror(q_0) + step length e_x + rise e_z), over body centres of mass and contact points.
 * A failed integration (blow-up: a velocity above `SPEED_LIMIT`, a singular constraint
   matrix, overflow, a step size underflow or more than `MAX_RHS` evaluations) ends its
   segment with a reason in `failure`; nodes after it are not measured (NaN).
@@ -63,6 +63,7 @@ from gait_planner.model.angles import joint_angles
 from gait_planner.result import PlanResult
 from gait_planner.verify.constrained import ConstrainedModel
 from gait_planner.verify.continuous import effort_names, pin_configuration
+from gait_planner.verify.ground import RecordedGround
 from gait_planner.verify.mechanics import Mechanics, parse_scene
 from gait_planner.verify.physical import near_switch, switch_nodes
 
@@ -153,6 +154,8 @@ class PlanSimulation:
         self.scene = parse_scene(result.scene.source)
         self.cm = ConstrainedModel(self.scene)
         self.mech = Mechanics(self.scene)
+        # the next half cycle's rise (ramp, stairs), from the ground the result's metadata names
+        self.rise = RecordedGround.of(result.settings).rise(result.step_length)
         self.times = np.asarray(result.times, float)
         self.N = len(self.times) - 1
         names = list(result.joint_angle_names)
@@ -184,11 +187,12 @@ class PlanSimulation:
 
     def _extended(self, n: int) -> tuple[float, np.ndarray, frozenset]:
         """(t_n, Pinocchio q_n, contacts of interval n) for n up to 2N - 1, from N on by the
-        periodic continuation q_{N-1+j} = mirror(q_j) + step e_x."""
+        periodic continuation q_{N-1+j} = mirror(q_j) + step e_x + rise e_z."""
         if n < self.N:
             return self.times[n], self.configs[n], self.active[n]
         j = n - (self.N - 1)
-        q = self.mech.mirror(np.asarray(self.result.q[j], float), self.result.step_length)
+        q = self.mech.mirror(np.asarray(self.result.q[j], float), self.result.step_length,
+                             self.rise)
         return (self.times[j] + self.times[self.N - 1] - self.times[0],
                 pin_configuration(self.scene, self.cm.model, q),
                 frozenset(self.partner[c] for c in self.active[j]))
@@ -309,7 +313,8 @@ def physics_error(result: PlanResult, *, reset: str = "phase", rtol: float = 1e-
     root = mech.start(scene.root)
     gap_mm = gap_deg = float("nan")
     if N - 1 in nodes:
-        end, image = q_sim[nodes.index(N - 1)], mech.mirror(q_plan[0], result.step_length)
+        end = q_sim[nodes.index(N - 1)]
+        image = mech.mirror(q_plan[0], result.step_length, sim.rise)
         pieces = [mech.point_matrix(b.name, np.zeros(3)) for b in scene.bodies]
         gap_mm = max(1e3 * float(np.linalg.norm(C @ (end - image)))
                      for C in pieces + list(points.values()))

@@ -3,15 +3,19 @@
 `build_model(rec, scene, settings)` loads the URDF (`gait_planner.io.urdf`: links on the
 directors, the root link's origin at its centre of mass), gives the root the scene's
 freedom (free: a free joint; planar: slides along x and z and a hinge about y), adds the
-ground plane z = 0 and, at every planned contact point, two spheres at +-foot_half_width
-along the foot's d2, their lowest points on the contact point when the foot is level: a
-point contact as the plan assumes, and a foot that can carry the full-contact roll moment
-(up to the normal force times foot_half_width) the plan allows. The joint PD's damping
--kd v is the joints' MuJoCo damping (implicit: the feet's small inertias make an explicit
-kd unstable at any practical step); the controller adds kd v_ref. Every body gets the
-scene's principal moments after compiling (`set_inertia`): the URDF must carry a
-realisable tensor, the plan may use one that is not (the paper's torso), and the simulated
-walker is the planned one.
+ground the plan was made for (its metadata's ``slope``, ``step_height``, ``stair_riser``,
+``stair_tread``, `gait_planner.model.ground`; absent: level): the plane z = 0, a ramp's
+plane through the origin turned about y by the slope, or stairs as the boxes of
+`gait_planner.io.urdf.ground_boxes` from `STAIRS_BEHIND` m behind the origin to
+`STAIR_TREADS` treads ahead, and, at every planned contact point, two spheres at
++-foot_half_width along the foot's d2, their lowest points on the contact point when the
+foot is level: a point contact as the plan assumes, and a foot that can carry the
+full-contact roll moment (up to the normal force times foot_half_width) the plan allows.
+The joint PD's damping -kd v is the joints' MuJoCo damping (implicit: the feet's small
+inertias make an explicit kd unstable at any practical step); the controller adds kd v_ref.
+Every body gets the scene's principal moments after compiling (`set_inertia`): the URDF
+must carry a realisable tensor, the plan may use one that is not (the paper's torso), and
+the simulated walker is the planned one.
 """
 
 from __future__ import annotations
@@ -23,9 +27,15 @@ from typing import Mapping
 import numpy as np
 
 from gait_planner.io.mcap_reader import RecordedPlan
+from gait_planner.io.urdf import ground_boxes
+from gait_planner.model.ground import Ground, GroundError
 from gait_planner.model.scene import Scene
 
-__all__ = ["WalkModel", "build_model", "plan_qpos", "set_inertia"]
+__all__ = ["STAIRS_BEHIND", "STAIR_TREADS", "WalkModel", "build_model", "plan_qpos",
+           "recorded_ground", "set_inertia"]
+
+STAIRS_BEHIND = 2.0  # m of stairs behind x = 0
+STAIR_TREADS = 24  # treads ahead of the first edge (the default walk takes 10 half cycles)
 
 
 @dataclass(frozen=True)
@@ -58,8 +68,20 @@ def build_model(rec: RecordedPlan, scene: Scene, half_width: float, radius: floa
         root.add_freejoint()
     spec.option.timestep = time_step
     mu = float(rec.metadata.get("friction_coefficient", 0.8))
-    spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 1],
-                            friction=[mu, 0.005, 0.0001], solref=[time_constant, 1.0], contype=0, conaffinity=1)
+    ground = recorded_ground(rec)
+    surface = dict(friction=[mu, 0.005, 0.0001], solref=[time_constant, 1.0], contype=0,
+                   conaffinity=1)
+    if ground.stairs:
+        x_end = ground.riser + STAIR_TREADS * ground.tread
+        for i, box in enumerate(ground_boxes(ground, -STAIRS_BEHIND, x_end)):
+            spec.worldbody.add_geom(name=f"tread_{i}", type=mujoco.mjtGeom.mjGEOM_BOX,
+                                    size=[0.5 * v for v in box.size], pos=list(box.centre),
+                                    **surface)
+    else:  # the plane through the origin with normal (-sin a, 0, cos a): e_z turned about y
+        a = math.radians(ground.slope)
+        turn = {"quat": [math.cos(a / 2), 0.0, -math.sin(a / 2), 0.0]} if a else {}
+        spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 1],
+                                **turn, **surface)
     for contact in scene.contacts:
         body = spec.body(contact.name)
         if body is None:
@@ -82,6 +104,15 @@ def build_model(rec: RecordedPlan, scene: Scene, half_width: float, radius: floa
     qpos = np.array([model.joint(n).qposadr[0] for n in rec.joint_names])
     dof = np.array([model.joint(n).dofadr[0] for n in rec.joint_names])
     return WalkModel(model, qpos, dof, scene.root.body, planar)
+
+
+def recorded_ground(rec: RecordedPlan) -> Ground:
+    """The ground a recording's metadata names (`Ground.from_metadata`); ValueError naming
+    the recording if it names none."""
+    try:
+        return Ground.from_metadata(rec.metadata)
+    except GroundError as error:
+        raise ValueError(f"{rec.path}: the metadata names no ground to walk on: {error}") from None
 
 
 def plan_qpos(wm, root: int, q_row: np.ndarray, angles: np.ndarray) -> np.ndarray:

@@ -27,6 +27,7 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.mirror import configuration_mirror, contact_partners
 from gait_planner.verify.joined import half_cycle
+from gait_planner.walk.mujoco_model import recorded_ground
 
 __all__ = ["Reference", "scene_of"]
 
@@ -92,11 +93,16 @@ class Reference:
 
     @classmethod
     def from_recording(cls, rec: RecordedPlan, steps: int) -> "Reference":
+        if not recorded_ground(rec).level:
+            raise ValueError(f"{rec.path}: a plan on a ramp or stairs (slope "
+                             f"{rec.metadata.get('slope')} deg, step_height "
+                             f"{rec.metadata.get('step_height')} m) cannot be walked yet: the "
+                             f"reference controller stands on level ground only")
         rec = _first_half_cycle(rec)
         scene = scene_of(rec)
         N = rec.n_nodes - 1
         s = float(rec.metadata["step_length"])
-        A, shift = configuration_mirror(Multibody(scene))
+        A, shift, _ = configuration_mirror(Multibody(scene))
         partner = contact_partners(scene)
         angles0 = joint_angles(scene, rec.q)
         if np.abs(angles0 - rec.positions).max() > 1e-6:

@@ -78,7 +78,7 @@ def test_configuration_is_the_products(minimal, name):
 @pytest.mark.parametrize("name", SCENES)
 def test_mirror_is_the_products(minimal, name):
     mm = minimal(name)
-    A, shift = configuration_mirror(mm.mb)
+    A, shift, _ = configuration_mirror(mm.mb)
     rng = np.random.default_rng(3)
     for _ in range(5):
         theta, w, step = rng.uniform(-0.6, 0.6, mm.n), rng.normal(size=mm.n), rng.uniform(0.2, 1)

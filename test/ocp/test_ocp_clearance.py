@@ -109,12 +109,15 @@ def test_strikes_are_the_intervals_before_the_strike_nodes_counted_by_hand(walke
 
 @settings(max_examples=60, deadline=None)
 @given(pitch=st.floats(-0.6, 0.6), roll=st.floats(-0.6, 0.6), yaw=st.floats(-3.1, 3.1),
-       width=st.floats(0.0, 0.08))
-def test_edge_heights_are_the_lower_foot_edges(walker3d_held, pitch, roll, yaw, width):
-    """`edge_heights` of a swing point are the heights of the points +- width along its
-    foot's d2, for any foot attitude: the lower one is what clears the ground."""
+       width=st.floats(0.0, 0.08), slope=st.floats(-30.0, 30.0))
+def test_ground_heights_are_the_foot_edges_heights_above_the_ramp(walker3d_held, pitch, roll,
+                                                                   yaw, width, slope):
+    """`ground_heights` of a swing point are the heights above the ground (along a ramp's
+    normal) of the points +- width along its foot's d2, for any foot attitude and slope:
+    the lower one is what clears the ground."""
+    from gait_planner.model.ground import Ground
     from gait_planner.model.rotations import rot_x, rot_y, rot_z
-    from gait_planner.ocp.clearance import edge_heights
+    from gait_planner.ocp.clearance import ground_heights
 
     scene, _ = walker3d_held
     mb = Multibody(scene)
@@ -123,7 +126,40 @@ def test_edge_heights_are_the_lower_foot_edges(walker3d_held, pitch, roll, yaw, 
     D = rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
     q[block] = np.r_[0.1, 0.2, 0.3, D[:, 0], D[:, 1], D[:, 2]]
     point = mb.contact_rows("foot_l_heel") @ q
-    rows = edge_heights(mb, "foot_l_heel", width) @ q
-    edges = sorted((point + s * width * D[:, 1])[2] for s in (1.0, -1.0))
+    rows = np.array(ground_heights(mb, ("foot_l_heel",), width, Ground(slope=slope))(q)).ravel()
+    a = np.radians(slope)
+    normal = np.array([-np.sin(a), 0.0, np.cos(a)])
+    edges = sorted(normal @ (point + s * width * D[:, 1]) for s in (1.0, -1.0))
     assert rows.shape == ((2,) if width > 0 else (1,))
-    assert sorted(rows) == pytest.approx(edges if width > 0 else [point[2]], abs=1e-12)
+    assert sorted(rows) == pytest.approx(edges if width > 0 else [normal @ point], abs=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(x=st.floats(-0.8, 1.6), z=st.floats(-0.5, 0.5), rise=st.sampled_from([0.15, -0.15]))
+def test_stair_clearance_is_the_height_above_the_tread_with_edges_moved_to_the_lower_one(
+        walker3d_held, x, z, rise):
+    """On stairs a swing point's `ground_heights` row is its height above the tread under
+    it (treads -1 to 1, what a half cycle's swing foot passes over), except near an edge,
+    where it is measured from the higher tread (the edge's step moved EDGE_MARGIN
+    towards the lower tread)."""
+    from gait_planner.model.ground import EDGE_MARGIN, EDGE_WIDTH, Ground
+    from gait_planner.ocp.clearance import ground_heights
+
+    scene, _ = walker3d_held
+    mb = Multibody(scene)
+    ground = Ground(step_height=rise, riser=0.44, tread=0.63)
+    q = np.zeros(mb.k)
+    block = mb.block("foot_l")
+    q[block] = np.r_[0.0, 0.0, 0.0, np.eye(3).T.ravel()]
+    offset = mb.contact_rows("foot_l_heel") @ q
+    q[block.start : block.start + 3] = np.array([x, 0.0, z]) - offset
+    height = float(ground_heights(mb, ("foot_l_heel",), 0.0, ground)(q))
+    edges = ground.riser + ground.tread * np.arange(-1, 2)
+    distance = np.min(np.abs(x - edges))
+    if distance > EDGE_MARGIN + 10 * EDGE_WIDTH:  # away from every edge: the tread's height
+        assert height == pytest.approx(z - float(ground.height(x)), abs=1e-5)
+    near = np.abs(x - edges) <= EDGE_MARGIN / 2  # near an edge: at least the higher tread's
+    if near.any():
+        edge = edges[near][0]
+        top = max(ground.height(edge - 1e-9), ground.height(edge + 1e-9))
+        assert z - height >= top - 0.01 * abs(rise)

@@ -37,7 +37,7 @@ def test_the_mirror_of_a_turned_configuration_is_the_mirrored_turn(name, seed, s
     step length shift: the two sides agree to round-off."""
     mb, _, guess = WALKERS[name]
     rng = np.random.default_rng(seed)
-    A, e = configuration_mirror(mb)
+    A, e, _ = configuration_mirror(mb)
     M = increment_mirror(mb)
     q = guess[rng.integers(len(guess))]
     u = size * rng.uniform(-1.0, 1.0, mb.ndof)
@@ -78,7 +78,7 @@ def test_element_inputs_are_the_mirrored_unknowns_and_references():
     qref = guess[: tr.N - 1]
     p = np.concatenate([qref.reshape(-1), [0.7, 0.8]])
     xe, pe = tr.layout.element_inputs(x, p)
-    A, e = configuration_mirror(mb)
+    A, e, _ = configuration_mirror(mb)
     nd, nt = mb.ndof, mb.nt
     U = x[: nd * (tr.N - 1)].reshape(tr.N - 1, nd)
     T0 = x[nd * (tr.N - 1) : nd * (tr.N - 1) + nt]

@@ -1,0 +1,150 @@
+"""The ground a gait is planned on: level, a ramp, or stairs (docs/design.md section 13).
+
+World x forward (walking direction), y left, z up, as in `gait_planner.model.scene`. The
+half cycle's first held contact point is pinned at x = 0 (`ocp.transcription`), on the
+ground there.
+
+* Ramp: the plane z = x tan(slope) through the origin, slope in degrees, uphill positive.
+  Its unit normal n = (-sin a, 0, cos a); a point's height above it is n . p (measured
+  along the normal). The mirror image of a half cycle is shifted by the step length s
+  along x and by s tan a up.
+* Stairs: treads as deep as the step length s, each `step_height` h above the one behind
+  (h < 0: stairs down); tread 0 (height 0) holds the foot that stands at the start of the
+  half cycle, tread 1 (height h) the foot that lands. The edge between them, the
+  `riser`, lies at x = (f + s) / 2, midway between the front of the standing foot (f its
+  heel-to-toe reach from the pinned point) and the back of the landing foot (at x = s,
+  the mirror image of the pinned point); the next edges are s apart. The mirror image is
+  shifted by s along x and by h up. The normal is e_z.
+
+Slope and stairs together are not a ground this planner builds (`Ground.__post_init__`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+# A swing point must clear a stair edge's height this far (m) before the edge (stairs up)
+# or after it (stairs down). Where a node's point moves less than this along x per
+# interval, the straight segment between two nodes cannot cut the edge's corner: its node
+# on the lower tread's side lies within the margin, at the higher tread's height. Where it
+# moves farther, the verifier's segment check finds the cut: a walker2d toe moved 8 cm in
+# one 15 ms interval over a 0.15 m stair and passed 8 mm below the corner; the plan,
+# refined to 80 intervals for its certificate, clears every corner by the swing clearance
+# (docs/design.md section 13). A 10 cm margin left walker2d's 0.15 m stairs infeasible.
+EDGE_MARGIN = 0.05
+# Width (m) of the smooth step that stands for an edge in the clearance rows; its centre
+# lies another 5 widths towards the lower tread, so at EDGE_MARGIN from the edge the step
+# is 99.3 % up (1 mm short on a 0.15 m stair, within the swing clearance).
+EDGE_WIDTH = 0.005
+
+
+class GroundError(ValueError):
+    """A ground that cannot be planned on, with the reason."""
+
+
+@dataclass(frozen=True)
+class Ground:
+    """slope deg (uphill positive); step_height m per step (stairs; 0: none); riser m,
+    the x of the edge between tread 0 and tread 1; tread m, the depth of a tread (the
+    step length)."""
+
+    slope: float = 0.0
+    step_height: float = 0.0
+    riser: float = 0.0
+    tread: float = 0.0
+
+    def __post_init__(self):
+        for name in ("slope", "step_height", "riser", "tread"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise GroundError(f"{name} must be a finite number, got {value!r}")
+        if not -45.0 < self.slope < 45.0:
+            raise GroundError(f"slope must lie within (-45, 45) degrees, got {self.slope:g}")
+        if self.slope != 0.0 and self.step_height != 0.0:
+            raise GroundError(f"a ramp with stairs is not a ground this planner builds: "
+                              f"slope {self.slope:g} deg and step_height {self.step_height:g} m; "
+                              f"give one of them")
+        if self.stairs and self.tread <= 0:
+            raise GroundError(f"stairs need a positive tread depth (the step length), got "
+                              f"{self.tread:g} m")
+
+    @property
+    def level(self) -> bool:
+        return self.slope == 0.0 and self.step_height == 0.0
+
+    @property
+    def stairs(self) -> bool:
+        return self.step_height != 0.0
+
+    @property
+    def normal(self) -> np.ndarray:
+        """(3,) unit normal of the ramp (e_z on level ground and on treads)."""
+        a = math.radians(self.slope)
+        return np.array([-math.sin(a), 0.0, math.cos(a)])
+
+    @property
+    def tangent(self) -> np.ndarray:
+        """(3,) unit vector up the ramp in the walking direction (e_x on level ground)."""
+        a = math.radians(self.slope)
+        return np.array([math.cos(a), 0.0, math.sin(a)])
+
+    @property
+    def rise_per_step(self) -> float:
+        """Rise (m) of the mirror image per metre of step length: tan(slope)."""
+        return math.tan(math.radians(self.slope))
+
+    def rise(self, step: float) -> float:
+        """Height (m) the mirror image of a half cycle of step length `step` m is shifted
+        up: step tan(slope) + step_height."""
+        return step * self.rise_per_step + self.step_height
+
+    def tread_height(self, tread: int) -> float:
+        """Height (m) of tread `tread` (0: the standing foot's, 1: the landing foot's)."""
+        return tread * self.step_height
+
+    def height(self, x) -> np.ndarray:
+        """Ground height z (m) at x (m, array): x tan(slope) on a ramp, the tread's height on
+        stairs (an edge belongs to the tread ahead of it)."""
+        x = np.asarray(x, dtype=float)
+        if self.stairs:
+            return self.step_height * (np.floor((x - self.riser) / self.tread) + 1.0)
+        return x * self.rise_per_step
+
+    def clearance_height(self, x, sigmoid):
+        """Smooth ground height (m) at x that a swing point must clear (stairs only): the
+        treads' heights with each edge a smooth step of width `EDGE_WIDTH`, moved
+        `EDGE_MARGIN` and 5 widths towards the lower tread, for the edges -1, 0 and 1 (the three a half
+        cycle's swing foot passes over, from tread -1 to tread 1). sigmoid: the logistic
+        function of the caller's algebra (CasADi or numpy)."""
+        h = self.step_height
+        ahead = (EDGE_MARGIN + 5 * EDGE_WIDTH) * (1.0 if h > 0 else -1.0)
+        steps = sum(sigmoid((x - self.riser - j * self.tread + ahead) / EDGE_WIDTH)
+                    for j in (-1, 0, 1))
+        return h * (steps - 1.0)
+
+    def metadata(self) -> dict[str, str]:
+        """The recording's metadata entries that name this ground (`verify` reads them on
+        its own; `from_metadata` is the inverse)."""
+        return {key: repr(float(getattr(self, field))) for field, key in _METADATA.items()}
+
+    @classmethod
+    def from_metadata(cls, metadata) -> "Ground":
+        """The ground a recording's metadata (str -> str) names, absent entries 0 (level
+        ground); GroundError naming the entry that is not a number or not a ground."""
+        values = {}
+        for field, key in _METADATA.items():
+            try:
+                values[field] = float(metadata.get(key, 0.0))
+            except ValueError:
+                raise GroundError(f"metadata {key} = {metadata[key]!r} is not a number") from None
+        return cls(**values)
+
+
+_METADATA = {"slope": "slope", "step_height": "step_height", "riser": "stair_riser",
+             "tread": "stair_tread"}  # Ground field -> metadata entry
+
+
+LEVEL = Ground()

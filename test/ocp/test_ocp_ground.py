@@ -1,0 +1,119 @@
+"""Plans for the ground a request names (`gait_planner.model.ground`): a ramp's plan stands
+on the ramp and pushes within cones about the ramp's normal, a stair plan's next half cycle
+is one tread higher, and a ground the scene cannot stand on or reach is refused before
+anything is built.
+
+walker2d plans here use the compiled derivative elements (~20 s each with a warm cache,
+~35 s when a new ground's elements are compiled first); walker3d's are in the slow tests.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+import pytest
+
+from gait_planner.model.ground import Ground
+from gait_planner.model.loader import load_scene
+from gait_planner.model.multibody import Multibody
+from gait_planner.ocp.mirror import configuration_mirror
+from gait_planner.ocp.settings import ground_of, leg_length, settings_for
+from gait_planner.ocp.solve import Planner
+from gait_planner.pipeline import plan_certified, request_settings
+from gait_planner.request import PlanRequest, RequestError
+
+
+@functools.cache
+def _plan(name: str, slope: float = 0.0, step_height: float = 0.0):
+    scene = load_scene(name)
+    settings = settings_for(scene, slope=slope, step_height=step_height, compiled=True)
+    result, certificate = plan_certified(Planner(), scene, settings, warm_start=False)
+    return scene, settings, result, certificate
+
+
+def _points(result, name: str) -> np.ndarray:
+    """World positions (N+1, 3) of contact point `name` over the plan."""
+    mb = Multibody(result.scene)
+    c = result.scene.contact(name)
+    return result.q @ mb.point_matrix(c.body, c.point).T
+
+
+@pytest.mark.parametrize("fields, words", [
+    ({"slope": 40.0}, ["slope = 40 deg", "friction_coefficient 0.8", "[-38.66, 38.66] deg"]),
+    ({"slope": 20.0, "friction_coefficient": 0.3}, ["slope = 20 deg", "[-16.7, 16.7] deg"]),
+    ({"step_height": 2.5}, ["step_height = 2.5 m", "legs' reach", "[-1.998, 1.998] m"]),
+    ({"slope": 5.0, "step_height": 0.1}, ["a ramp with stairs", "give one of them"]),
+    ({"slope": 60.0, "friction_coefficient": 2.0}, ["slope must lie within (-45, 45)"]),
+])
+def test_a_ground_the_scene_cannot_plan_on_is_refused_with_its_range(fields, words):
+    """Refused by `request_settings`, which builds nothing (the node answers such a
+    request without a solver)."""
+    with pytest.raises(RequestError) as refused:
+        request_settings(PlanRequest(scene="walker3d", **fields))
+    for word in words:
+        assert word in str(refused.value)
+
+
+def test_the_legs_reach_is_the_chain_from_the_hip_to_the_heel():
+    scene = load_scene("walker3d")
+    foot = np.hypot(-0.0644 + 0.1030, 0.0502 + 0.0133)  # ankle to heel
+    assert leg_length(scene, "foot_r_heel") == pytest.approx(0.4582 + 0.3753 + foot, rel=1e-12)
+
+
+def test_a_stair_edge_lies_midway_between_the_standing_toe_and_the_landing_heel():
+    scene = load_scene("walker3d")
+    ground = ground_of(scene, settings_for(scene, step_height=0.15))
+    assert ground == Ground(step_height=0.15, riser=0.5 * (0.2433 + 0.6338), tread=0.6338)
+    assert ground.height([0.0, 0.2433, 0.6338, 0.6338 + 0.2433]).tolist() == \
+        pytest.approx([0.0, 0.0, 0.15, 0.15])
+
+
+@pytest.mark.parametrize("slope", [10.0, -10.0])
+def test_a_ramp_plan_stands_on_the_ramp_and_pushes_within_its_cones(slope):
+    """Every held point lies on the plane n . p = 0 and every point force in the cone about
+    the ramp's normal n; the next half cycle starts s tan(slope) higher; the plan meets
+    the continuous-dynamics certificate."""
+    scene, settings, result, certificate = _plan("walker2d", slope=slope)
+    assert result.success, result.message
+    assert certificate.ok, certificate.summary
+    normal = result.ground.normal
+    mu = settings.friction_coefficient
+    for c in scene.contacts:
+        p, F = _points(result, c.name), result.contact_forces[c.name]
+        for n, active in enumerate(result.active_contacts):
+            if c.name in active:
+                assert abs(normal @ p[n]) < 1e-9, (c.name, n)
+                fn = normal @ F[n]
+                assert np.linalg.norm(F[n] - fn * normal) <= mu * fn + 1e-6, (c.name, n)
+    A, shift, lift = configuration_mirror(Multibody(scene), result.ground)
+    N = result.n_nodes - 1
+    assert shift[2] == pytest.approx(math.tan(math.radians(slope)))
+    assert np.abs(result.q[N - 1] - (A @ result.q[0] + settings.step_length * shift)).max() < 1e-9
+    assert not lift.any()
+
+
+def test_a_stair_plan_lands_one_tread_up_and_clears_every_edge():
+    """The landing foot's points touch down at the stair's height, the next half cycle is
+    the mirror image one step ahead and one stair up, and no swing point's straight path
+    between two nodes passes below a tread it crosses."""
+    scene, settings, result, certificate = _plan("walker2d", step_height=0.15)
+    assert result.success, result.message
+    assert certificate.ok, certificate.summary
+    ground, N = result.ground, result.n_nodes - 1
+    for c in scene.contacts:
+        p = _points(result, c.name)
+        held = [n for n, active in enumerate(result.active_contacts) if c.name in active]
+        assert np.allclose(p[held, 2], ground.height(p[held, 0]), atol=1e-9), c.name
+        for n in range(N):
+            if n in held and n + 1 in held:
+                continue
+            xs = np.linspace(p[n, 0], p[n + 1, 0], 50)
+            zs = np.linspace(p[n, 2], p[n + 1, 2], 50)
+            assert np.all(zs >= ground.height(xs) - 1e-6), (c.name, n)
+    A, shift, lift = configuration_mirror(Multibody(scene), ground)
+    assert np.abs(result.q[N - 1] - (A @ result.q[0] + settings.step_length * shift + lift)
+                  ).max() < 1e-9
+    root = Multibody(scene).block(scene.root.body).start
+    assert result.q[N - 1, root + 2] - result.q[0, root + 2] == pytest.approx(0.15, abs=1e-9)
