@@ -10,7 +10,7 @@ mu = 0.2, narrow sigma bounds [0.9, 1.1], a cold start from the standing pose, a
 deliberately poor guess (the kinematic guess turned by random rotations of up to 0.3 rad at
 every node), very coarse (3) and very fine (24) grids, a nearly stretched knee (knees within
 [0, 5] deg), the torque-squared cost, ramps of +-10 deg, stairs of +-0.15 m, speeds of 1.2 and 1.6 m/s
-and 0.8 m/s at a 0.45 m step (issue #26); and the variational integrator's passive walker3d
+and 0.8 m/s at a 0.45 m step, a run at 3 m/s (issue #26; walker3d and walker2d); and the variational integrator's passive walker3d
 with a large step (dt = 0.05 s). Each plan is checked by `gait_planner.verify.verify_result`
 (discrete checks, physical checks, the continuous-dynamics certificate). DMOCC plans as the
 product does: a converged plan that misses the certificate is planned again on a grid twice
@@ -26,7 +26,7 @@ import time
 from typing import Callable
 
 
-from gait_planner.model.loader import load_scene
+from gait_planner.model.loader import load_scene, with_gait
 from gait_planner.ocp.settings import GaitSettings, settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.pipeline import plan_certified
@@ -41,6 +41,7 @@ class Case:
     overrides: dict = dataclasses.field(default_factory=dict)  # settings_for keywords
     replace: dict = dataclasses.field(default_factory=dict)  # GaitSettings fields
     guess: str = "kinematic"  # "kinematic", "standing", "poor"
+    gait: str = ""  # a gait of the scene (`model.loader.with_gait`), "" its walk
 
 
 def cases(scene) -> list[Case]:
@@ -65,6 +66,7 @@ def cases(scene) -> list[Case]:
         Case("speed 1.2 m/s", {"speed": 1.2}),
         Case("speed 1.6 m/s", {"speed": 1.6}),
         Case("speed 0.8 m/s at step 0.45 m", {"speed": 0.8, "step_length": 0.45}),
+        Case("run at 3 m/s", {"speed": 3.0}, gait="run"),
     ]
 
 
@@ -96,7 +98,7 @@ def methods() -> dict[str, Callable]:
 
 
 def row(method: str, scene_name: str, case: Case, plan: Callable, settings) -> dict | None:
-    scene = load_scene(scene_name)
+    scene = with_gait(load_scene(scene_name), case.gait)
     start = time.perf_counter()
     result = plan(scene, settings, case.guess)
     if result is None:
@@ -156,6 +158,10 @@ QUICK = ("step 0.3 m", "narrow sigma [0.9, 1.1]", "cold start from standing",
 # converge on walker3d's default request (benchmarks/REPORT.md, section 1), so its rows
 # there would only repeat the time limit.
 BOTH = ("step 0.3 m", "mu 0.2", "narrow sigma [0.9, 1.1]", "torque-squared cost")
+# The ground, the pace and the run (issue #26) on walker2d too, by DMOCC (the baseline
+# plans walks on level ground only)
+GROUND = ("ramp up 10 deg", "ramp down 10 deg", "stairs up 0.15 m", "stairs down 0.15 m",
+          "speed 1.2 m/s", "speed 1.6 m/s", "speed 0.8 m/s at step 0.45 m", "run at 3 m/s")
 
 
 def plan_rows(scene_name: str, names, method_names, time_limit: float) -> list[dict]:
@@ -163,7 +169,7 @@ def plan_rows(scene_name: str, names, method_names, time_limit: float) -> list[d
     for case in cases(scene):
         if case.name not in names:
             continue
-        settings = settings_of(scene, case, time_limit)
+        settings = settings_of(with_gait(scene, case.gait), case, time_limit)
         for method, plan in methods().items():
             if method in method_names:
                 r = row(method, scene_name, case, plan, settings)
@@ -179,6 +185,7 @@ def run(quick: bool = False, time_limit: float = TIME_LIMIT) -> list[dict]:
     rows = plan_rows("walker3d", [c.name for c in cases(load_scene("walker3d"))], ("dmocc",),
                      time_limit)
     rows += plan_rows("walker2d", BOTH, ("dmocc", "collocation"), time_limit)
+    rows += plan_rows("walker2d", GROUND, ("dmocc",), time_limit)
     rows.append(integrator_row())
     print_row(rows[-1])
     return rows

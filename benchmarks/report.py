@@ -369,6 +369,22 @@ def gait_trends(doc) -> list[str]:
                        f"{_monotone([r['ankle_peak_torque_Nm'] for r in speed])} (humans: "
                        f"rise); walks above 2.07 m/s (the human walk-run transition): "
                        f"{sum(r['value'] > 2.07 for r in speed)} planned, no human counterpart.")
+    planned = [r for r in rows if r.get("success")]
+    if planned:
+        knees = [r["stance_knee_flexion_deg"] for r in planned]
+        out.append(f"* Stance knee flexion in single support {min(knees):.0f} to {max(knees):.0f} "
+                   f"deg in every row, against about 15 to 25 deg in people (Lelas et al. "
+                   f"2003): the minimal-kinetic-energy walkers walk crouched; `posture: human` "
+                   f"bounds the stance knee to 20 deg (user guide).")
+    for scene in sorted({r["scene"] for r in planned}):
+        by = {r["value"]: r for r in planned if r["scene"] == scene and r["series"] == "slope"}
+        if 0.0 in by and max(by) > 0:
+            gains = {j: by[max(by)][f"{j}_peak_power_W"] - by[0.0][f"{j}_peak_power_W"]
+                     for j in ("hip", "knee", "ankle")}
+            most = max(gains, key=gains.get)
+            out.append(f"* {scene}, level to {max(by):g} deg uphill: the {most}'s peak power "
+                       f"rises most ({', '.join(f'{j} {g:+.0f} W' for j, g in gains.items())}); "
+                       f"in people the hip's does (Lay et al. 2006).")
     failed = [r for r in rows if not r.get("success")]
     if failed:
         out.append("* Not planned: " + "; ".join(

@@ -59,7 +59,7 @@ def test_zero_and_empty_fields_are_the_defaults():
     message = SimpleNamespace(scene="", step_length=0.0, cost="", friction_coefficient=0.0,
                               intervals_per_phase=0, max_solve_time=0.0, output_name="",
                               cold_start=False, steps=0, posture="", speed=0.0, slope=0.0,
-                              step_height=0.0)
+                              step_height=0.0, gait="")
     assert set(vars(message)) == set(FIELDS)
     request = plan_request(message, default_scene="walker2d", default_max_solve_time=60.0,
                            compiled=True)

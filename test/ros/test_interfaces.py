@@ -37,6 +37,9 @@ EXPECTED_FIELDS = {
         "steps": "int32",
         "posture": "string",
         "speed": "double",
+        "slope": "double",
+        "step_height": "double",
+        "gait": "string",
     },
     PlanGait.Response: {
         "success": "boolean",
