@@ -48,6 +48,7 @@ COMMANDS = {  # stored JSON -> the command that writes it (run from the reposito
     "work_precision": ".venv/bin/python benchmarks/work_precision.py",
     "request_sweep": ".venv/bin/python benchmarks/request_sweep.py",
     "walk": ".venv/bin/python benchmarks/walk.py",
+    "gait_trends": ".venv/bin/python benchmarks/gait_trends.py",
 }
 PAPER = {"cost": 41.2256, "duration": 0.5988, "sigma": "1.5000, 1.5000, 1.4889, 1.4724"}
 
@@ -158,6 +159,18 @@ def render_hard_cases() -> str:
             for r in load("hard_cases")["rows"] if r["method"] != "variational integrator"]
     return table(["method", "scene", "request", "outcome", "iterations", "s", "intervals"],
                  rows) + "\n" + source("hard_cases")
+
+
+def render_gait_trends() -> str:
+    rows = [[r["scene"], r["series"], f"{r['value']:g}", "yes" if r["certified"] else "no",
+             f"{r['cost']:.3f}", f"{r['positive_work_J']:.1f}", f"{r['negative_work_J']:.1f}",
+             " / ".join(f"{r[f'{j}_peak_torque_Nm']:.0f}" for j in ("hip", "knee", "ankle")),
+             " / ".join(f"{r[f'{j}_peak_power_W']:.0f}" for j in ("hip", "knee", "ankle")),
+             f"{r['stance_knee_flexion_deg']:.0f}"]
+            for r in load("gait_trends")["rows"] if r["success"]]
+    return table(["scene", "series", "value", "certified", "J", "W+ J", "W- J",
+                  "peak torque hip / knee / ankle N m", "peak power hip / knee / ankle W",
+                  "stance knee deg"], rows) + "\n" + source("gait_trends")
 
 
 def render_cold_solve() -> str:
