@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,7 +21,7 @@ from gait_planner.model.loader import SceneError, available_scenes, load_scene, 
 from gait_planner.ocp.refine import refined_settings
 from gait_planner.ocp.request_ranges import RangeError, check_request
 from gait_planner.model.scene import Scene
-from gait_planner.ocp.settings import GaitSettings, SettingsError, settings_for
+from gait_planner.ocp.settings import GaitSettings, SettingsError, free_step_range, settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.request import PlanRequest, RequestError, checked
@@ -87,6 +88,7 @@ def request_settings(request: PlanRequest, scenes: SceneLookup = load_scene,
             **({"compiled": True} if request.compiled else {}),
             **({"posture": request.posture} if request.posture else {}),
             **({"speed": request.speed} if request.speed else {}),
+            **({"step_length_free": True} if request.speed and not request.step_length else {}),
             **({"slope": request.slope} if request.slope else {}),
             **({"step_height": request.step_height} if request.step_height else {}))
     except (SceneError, SettingsError, RangeError) as err:
@@ -126,7 +128,8 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
     stem = output_stem(request, scene.name)
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    result, cert = plan_certified(planner, scene, settings, warm_start=not request.cold_start)
+    plan = plan_free_step if settings.step_length_free else plan_certified
+    result, cert = plan(planner, scene, settings, warm_start=not request.cold_start)
     if not result.success:
         return Outcome(result, None, None)
     if stage is not None:
@@ -203,6 +206,51 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
             message=f"{result.message} {grid} ({stats.iterations} iterations in all)")
     if notes:
         result.settings["refinement"] = " | ".join(notes)
+    return result, cert
+
+
+STEP_TOLERANCE = 0.005  # m: a free step length is found to within this
+
+
+def plan_free_step(planner: Planner, scene: Scene, settings: GaitSettings, *,
+                   warm_start: bool = True):
+    """The plan at settings.speed whose step length, within `ocp.settings.free_step_range`,
+    has the least cost per metre walked (J / step length): people choose the step of
+    least cost at a speed, and J over one half cycle alone would favour the shortest
+    steps. Golden-section search over the step length to `STEP_TOLERANCE` (each trial a
+    plan of the same built problem, warm-started from the last: the step length is a
+    parameter), then `plan_certified` at the best step. Returns (result, certificate) as
+    `plan_certified`; the result's settings["step_length_search"] says what was tried."""
+    low, high = free_step_range(settings)
+    tried: dict[float, float] = {}
+    start = time.perf_counter()
+
+    def cost_per_metre(step: float) -> float:
+        trial = planner.plan(scene, dataclasses.replace(settings, step_length=step),
+                             warm_start=warm_start or bool(tried))
+        tried[step] = trial.cost_value / step if trial.success else math.inf
+        return tried[step]
+
+    golden = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = low, high
+    c, d = b - golden * (b - a), a + golden * (b - a)
+    fc, fd = cost_per_metre(c), cost_per_metre(d)
+    while b - a > STEP_TOLERANCE:
+        if fc <= fd:
+            b, d, fd = d, c, fc
+            c = b - golden * (b - a)
+            fc = cost_per_metre(c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + golden * (b - a)
+            fd = cost_per_metre(d)
+    best = min(tried, key=tried.get)
+    result, cert = plan_certified(planner, scene, dataclasses.replace(settings, step_length=best),
+                                  warm_start=True)
+    result.settings["step_length_search"] = (
+        f"step length free at {settings.speed:g} m/s within [{low:.4f}, {high:.4f}] m: "
+        f"{len(tried)} plans in {time.perf_counter() - start:.1f} s, least J per metre at "
+        f"{best:.4f} m; J/m tried: " + ", ".join(f"{s:.4f} m: {j:.4f}" for s, j in sorted(tried.items())))
     return result, cert
 
 

@@ -251,7 +251,7 @@ def render_request_limits() -> str:
 
     from gait_planner.model.loader import load_scene_file
     from gait_planner.ocp import request_ranges as ranges
-    from gait_planner.ocp.settings import GaitSettings, settings_for, speed_range
+    from gait_planner.ocp.settings import GaitSettings, settings_for, speed_range, step_range
     from gait_planner.request import MAX_STEPS
 
     node = yaml.safe_load((ROOT / "config/gait_planner.yaml").read_text())
@@ -262,6 +262,11 @@ def render_request_limits() -> str:
         f"{path.stem} {lo:.3f} to {hi:.3f} m/s at its {st.step_length:g} m step"
         for path in sorted((ROOT / "config/scenes").glob("walker*.yaml"))
         for st in [settings_for(load_scene_file(path))] for lo, hi in [speed_range(st)])
+    free = ", ".join(
+        f"{path.stem} {lo:.3f} to {hi:.3f} m/s with steps of {a:g} to {b:g} m"
+        for path in sorted((ROOT / "config/scenes").glob("walker*.yaml"))
+        for st in [settings_for(load_scene_file(path), step_length_free=True)]
+        for lo, hi in [speed_range(st)] for a, b in [step_range(st)])
     (mu_lo, mu_hi), (n_lo, n_hi) = ranges.FRICTION_RANGE, ranges.INTERVALS_RANGE
     return (f"* `step_length`: at most the legs' reach ({reach});\n"
             f"* `friction_coefficient`: {mu_lo:g} to {mu_hi:g};\n"
@@ -270,8 +275,10 @@ def render_request_limits() -> str:
             f"`max_solve_time` ({limit:g} s in `config/gait_planner.yaml`), in `plan` the "
             f"scene's option `max_solve_time` (default {GaitSettings.max_solve_time:g} s);\n"
             f"* `steps`: 1 to {MAX_STEPS} half cycles;\n"
-            f"* `speed`: what the scene's σ bounds allow at the requested step length, "
-            f"step_length / longest to step_length / shortest half cycle ({speeds}).\n")
+            f"* `speed`: with a step length, what the scene's σ bounds allow at it, "
+            f"step_length / longest to step_length / shortest half cycle ({speeds}); "
+            f"alone, what they allow at any step within the scene's `step_length_bounds` "
+            f"({free}).\n")
 
 
 def render_parameters() -> str:

@@ -51,7 +51,11 @@ class GaitSettings:
     over an interval stays below joint_speed_max * h_n; speed m/s (0 = free durations):
     the half cycle's mean forward speed step_length / (t_{N-1} - t_0), held by one
     equality row on sigma (`gait_planner.ocp.transcription.speed_row`); `settings_for`
-    refuses a speed outside `speed_range`; slope deg (uphill positive) and step_height m
+    refuses a speed outside `speed_range`; step_length_free: with a speed, the step length
+    is the one of least cost per metre within `step_range` (`gait_planner.pipeline.
+    plan_free_step`; step_length is where the search starts); step_length_bounds m (lower,
+    upper): the scene's range of step lengths for such a search (empty: 0.5 to 1.5 times
+    the scene's step); slope deg (uphill positive) and step_height m
     (stairs, per step; negative: down): the ground (`gait_planner.model.ground`,
     `ground_of`); `settings_for` refuses a ground the scene cannot stand on or reach
     (`check_ground`);
@@ -92,6 +96,8 @@ class GaitSettings:
     strike_speed_max: float = 0.0
     joint_speed_max: float = 0.0
     speed: float = 0.0
+    step_length_free: bool = False
+    step_length_bounds: tuple[float, ...] = ()
     slope: float = 0.0
     step_height: float = 0.0
     twist_regularisation: float = 0.0
@@ -136,6 +142,14 @@ class GaitSettings:
             object.__setattr__(self, "torso_lean_max", check_torso_lean_max(self.torso_lean_max))
         except PostureError as err:
             raise SettingsError(str(err)) from None
+        bounds = self.step_length_bounds
+        if bounds != ():
+            if (not isinstance(bounds, (list, tuple)) or len(bounds) != 2
+                    or not all(isinstance(b, (int, float)) and math.isfinite(b) for b in bounds)
+                    or not 0 < bounds[0] <= bounds[1]):
+                bad("step_length_bounds", f"need [lower, upper] m with 0 < lower <= upper, got "
+                                          f"{bounds!r}")
+            object.__setattr__(self, "step_length_bounds", tuple(float(b) for b in bounds))
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
                      "joint_speed_max", "speed", "twist_regularisation"):
@@ -153,11 +167,29 @@ def duration_range(s: GaitSettings) -> tuple[float, float]:
     return lo * nominal, hi * nominal
 
 
+def step_range(s: GaitSettings) -> tuple[float, float]:
+    """(shortest, longest) step length (m) a free-step search may take: the scene's
+    step_length_bounds, or 0.5 to 1.5 times s.step_length."""
+    if s.step_length_bounds:
+        return float(s.step_length_bounds[0]), float(s.step_length_bounds[1])
+    return 0.5 * s.step_length, 1.5 * s.step_length
+
+
 def speed_range(s: GaitSettings) -> tuple[float, float]:
     """(slowest, fastest) mean forward speed (m/s) of a half cycle of s.step_length within
-    `duration_range` (walker2d/3d at their 0.6338 m step: 1.083 to 3.250 m/s)."""
+    `duration_range` (walker2d/3d at their 0.6338 m step: 1.083 to 3.250 m/s); with
+    step_length_free, of any step within `step_range` (walker2d/3d: 0.598 to 4.615 m/s)."""
     shortest, longest = duration_range(s)
-    return s.step_length / longest, s.step_length / shortest
+    low, high = step_range(s) if s.step_length_free else (s.step_length, s.step_length)
+    return low / longest, high / shortest
+
+
+def free_step_range(s: GaitSettings) -> tuple[float, float]:
+    """(shortest, longest) step length (m) within `step_range` whose half cycle reaches
+    s.speed within `duration_range`."""
+    shortest, longest = duration_range(s)
+    low, high = step_range(s)
+    return max(low, s.speed * shortest), min(high, s.speed * longest)
 
 
 def check_speed(s: GaitSettings, scene_name: str) -> None:
@@ -166,9 +198,12 @@ def check_speed(s: GaitSettings, scene_name: str) -> None:
     if s.speed > 0:
         (slow, fast), (shortest, longest) = speed_range(s), duration_range(s)
         if not slow <= s.speed <= fast:
+            low, high = step_range(s)
+            at = (f"step lengths within [{low:g}, {high:g}] m (the step free)"
+                  if s.step_length_free else f"step_length {s.step_length:g} m")
             raise SettingsError(
                 f"speed = {s.speed} m/s is outside the range scene {scene_name!r} allows at "
-                f"step_length {s.step_length:g} m: [{slow:.4f}, {fast:.4f}] m/s (a half cycle "
+                f"{at}: [{slow:.4f}, {fast:.4f}] m/s (a half cycle "
                 f"of {shortest:.4g} to {longest:.4g} s: sigma within scaling_bounds "
                 f"[{s.scaling_bounds[0]:g}, {s.scaling_bounds[1]:g}])")
 

@@ -85,3 +85,40 @@ def test_the_verifier_fails_a_recording_whose_speed_was_edited():
     assert failures[0].startswith("the half cycle's mean speed step_length / (t_(N-1) - t_0) = ")
     assert failures[0].endswith("m/s differs from the requested speed 0.76 m/s (metadata "
                                 "speed; relative limit 1e-09)")
+
+
+def test_a_speed_alone_takes_the_step_of_least_cost_per_metre():
+    """`plan_free_step`: at 1.2 m/s walker2d's step is chosen within the scene's bounds, and
+    planning 2 cm shorter or longer costs more per metre (the golden-section search's
+    5 mm tolerance is inside that)."""
+    from gait_planner.ocp.settings import free_step_range
+    from gait_planner.pipeline import plan_free_step, request_settings
+    from gait_planner.request import PlanRequest
+
+    scene, settings = request_settings(PlanRequest(scene="walker2d", speed=1.2, compiled=True))
+    assert settings.step_length_free and settings.step_length_bounds == (0.4, 0.9)
+    planner = Planner()
+    result, cert = plan_free_step(planner, scene, settings, warm_start=False)
+    assert result.success and cert.ok, result.message
+    low, high = free_step_range(settings)
+    assert low < result.step_length < high
+    assert result.duration == pytest.approx(result.step_length / 1.2, rel=1e-9)
+    assert "least J per metre" in result.settings["step_length_search"]
+    best = result.cost_value / result.step_length
+    for other in (result.step_length - 0.02, result.step_length + 0.02):
+        near = planner.plan(scene, dataclasses.replace(settings, step_length=other))
+        assert near.success and near.cost_value / other > best
+
+
+def test_a_speed_alone_reaches_what_any_step_within_the_bounds_reaches():
+    """0.8 m/s is refused at the default step (1.083 m/s is the slowest there) but planned
+    alone (a 0.4 m step reaches 0.684 m/s); below that it is refused naming the bounds."""
+    from gait_planner.pipeline import request_settings
+    from gait_planner.request import PlanRequest, RequestError
+
+    with pytest.raises(RequestError, match="at step_length 0.6338 m"):
+        request_settings(PlanRequest(scene="walker2d", speed=0.8, step_length=0.6338))
+    _, settings = request_settings(PlanRequest(scene="walker2d", speed=0.8))
+    assert speed_range(settings) == pytest.approx((0.4 / 0.585, 0.9 / 0.195), rel=1e-12)
+    with pytest.raises(RequestError, match=r"step lengths within \[0.4, 0.9\] m \(the step free\)"):
+        request_settings(PlanRequest(scene="walker2d", speed=0.5))
