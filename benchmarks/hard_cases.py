@@ -2,15 +2,17 @@
 clear reason; iterations, time, largest violations. DMOCC on walker3d, and DMOCC and the
 direct collocation baseline (`gait_planner.collocation`) on walker2d.
 
-    .venv/bin/python benchmarks/hard_cases.py            # walker3d, walker2d (~4 min on 2 cores)
+    .venv/bin/python benchmarks/hard_cases.py            # walker3d, walker2d (~12 min on 2 cores)
     .venv/bin/python benchmarks/hard_cases.py --quick    # four walker2d DMOCC rows (~20 s)
 
 Rows (the scene's default request changed in one way): step length 0.3 m and 0.9 m,
 mu = 0.2, narrow sigma bounds [0.9, 1.1], a cold start from the standing pose, a
 deliberately poor guess (the kinematic guess turned by random rotations of up to 0.3 rad at
 every node), very coarse (3) and very fine (24) grids, a nearly stretched knee (knees within
-[0, 5] deg), the torque-squared cost, ramps of +-10 deg, stairs of +-0.15 m, speeds of 1.2 and 1.6 m/s
-and 0.8 m/s at a 0.45 m step, a run at 3 m/s (issue #26; walker3d and walker2d); and the variational integrator's passive walker3d
+[0, 5] deg), the torque-squared cost; the ground, the pace and the run of issue #26 (ramps
+of +-10 deg, stairs of +-0.15 m, stairs down walked forefoot first, speeds of 1.2 and
+1.6 m/s, 0.8 m/s with the step free, a run at 3 m/s; walker3d and walker2d); and the
+variational integrator's passive walker3d
 with a large step (dt = 0.05 s). Each plan is checked by `gait_planner.verify.verify_result`
 (discrete checks, physical checks, the continuous-dynamics certificate). DMOCC plans as the
 product does: a converged plan that misses the certificate is planned again on a grid twice
@@ -29,7 +31,7 @@ from typing import Callable
 from gait_planner.model.loader import load_scene, with_gait
 from gait_planner.ocp.settings import GaitSettings, settings_for
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import plan_certified
+from gait_planner.pipeline import plan_certified, plan_free_step
 from gait_planner.verify import verify_result
 
 TIME_LIMIT = 120.0  # s per plan: a failure ends here with IPOPT's reason
@@ -65,7 +67,8 @@ def cases(scene) -> list[Case]:
         Case("stairs down 0.15 m", {"step_height": -0.15}),
         Case("speed 1.2 m/s", {"speed": 1.2}),
         Case("speed 1.6 m/s", {"speed": 1.6}),
-        Case("speed 0.8 m/s at step 0.45 m", {"speed": 0.8, "step_length": 0.45}),
+        Case("speed 0.8 m/s, step free", {"speed": 0.8, "step_length_free": True}),
+        Case("stairs down 0.15 m, forefoot first", {"step_height": -0.15}, gait="toe_first"),
         Case("run at 3 m/s", {"speed": 3.0}, gait="run"),
     ]
 
@@ -77,7 +80,10 @@ def settings_of(scene, case: Case, time_limit: float) -> GaitSettings:
 
 def dmocc(scene, settings: GaitSettings, guess: str):
     """The product's path: a plan that misses the continuous-dynamics certificate is
-    refined (`gait_planner.pipeline.plan_certified`, settings.refinements)."""
+    refined (`gait_planner.pipeline.plan_certified`, settings.refinements); a speed with
+    the step free searches the step (`plan_free_step`)."""
+    if settings.step_length_free:
+        return plan_free_step(Planner(), scene, settings, warm_start=False)[0]
     return plan_certified(Planner(), scene, settings, warm_start=False, guess=guess)[0]
 
 
@@ -161,7 +167,8 @@ BOTH = ("step 0.3 m", "mu 0.2", "narrow sigma [0.9, 1.1]", "torque-squared cost"
 # The ground, the pace and the run (issue #26) on walker2d too, by DMOCC (the baseline
 # plans walks on level ground only)
 GROUND = ("ramp up 10 deg", "ramp down 10 deg", "stairs up 0.15 m", "stairs down 0.15 m",
-          "speed 1.2 m/s", "speed 1.6 m/s", "speed 0.8 m/s at step 0.45 m", "run at 3 m/s")
+          "stairs down 0.15 m, forefoot first", "speed 1.2 m/s", "speed 1.6 m/s",
+          "speed 0.8 m/s, step free", "run at 3 m/s")
 
 
 def plan_rows(scene_name: str, names, method_names, time_limit: float) -> list[dict]:

@@ -93,22 +93,19 @@ class Reference:
 
     @classmethod
     def from_recording(cls, rec: RecordedPlan, steps: int) -> "Reference":
-        if not recorded_ground(rec).level:
-            raise ValueError(f"{rec.path}: a plan on a ramp or stairs (slope "
-                             f"{rec.metadata.get('slope')} deg, step_height "
-                             f"{rec.metadata.get('step_height')} m) cannot be walked yet: the "
-                             f"reference controller stands on level ground only")
+        ground = recorded_ground(rec)
         rec = _first_half_cycle(rec)
         scene = scene_of(rec)
         N = rec.n_nodes - 1
         s = float(rec.metadata["step_length"])
-        A, shift, _ = configuration_mirror(Multibody(scene))
+        A, shift, lift = configuration_mirror(Multibody(scene), ground)
         partner = contact_partners(scene)
         angles0 = joint_angles(scene, rec.q)
         if np.abs(angles0 - rec.positions).max() > 1e-6:
             raise ValueError(f"{rec.path}: the recorded joint positions are not the angles of "
                              f"the recorded configurations of scene {scene.name!r}")
-        P = _angle_mirror(angles0, joint_angles(scene, rec.q @ A.T + s * shift), rec.joint_names)
+        P = _angle_mirror(angles0, joint_angles(scene, rec.q @ A.T + s * shift + lift),
+                          rec.joint_names)
         period = float(rec.times[N - 1] - rec.times[0])
         parts = {k: [] for k in ("t", "q", "r", "e", "a")}
         q_k, r_k, e_k, a_k = rec.q, rec.velocities, rec.effort, rec.active_contacts
@@ -119,7 +116,7 @@ class Reference:
             parts["r"].append(r_k[keep])
             parts["e"].append(e_k[keep])
             parts["a"].extend(a_k[keep])
-            q_k, r_k, e_k = q_k @ A.T + s * shift, r_k @ P.T, e_k @ P.T
+            q_k, r_k, e_k = q_k @ A.T + s * shift + lift, r_k @ P.T, e_k @ P.T
             a_k = tuple(tuple(partner[c] for c in a) for a in a_k)
         q = np.vstack(parts["q"])
         # the root's rates at node 0: the mirror of the central difference at node N-1
