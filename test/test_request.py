@@ -110,7 +110,8 @@ def test_an_unreachable_speed_is_refused_with_its_range_before_anything_is_built
         speed, tmp_path):
     """walker2d's 0.6338 m step over a half cycle of 0.39 s times sigma in [0.5, 1.5]."""
     with pytest.raises(RequestError) as refused:
-        plan_and_record(_NoPlanner(), plan_request(scene="walker2d", speed=speed), tmp_path)
+        plan_and_record(_NoPlanner(), plan_request(scene="walker2d", speed=speed,
+                                                   step_length=0.6338), tmp_path)
     assert str(refused.value) == (f"speed = {speed} m/s is outside the range scene 'walker2d' "
                                   f"allows at step_length 0.6338 m: {WALKER2D_SPEEDS}")
     assert not any(tmp_path.iterdir())
@@ -118,6 +119,19 @@ def test_an_unreachable_speed_is_refused_with_its_range_before_anything_is_built
     _, settings = request_settings(plan_request(scene="walker2d", step_length=0.5, speed=1.0))
     assert settings.speed == 1.0 and speed_range(settings) == pytest.approx((0.5 / 0.585,
                                                                              0.5 / 0.195))
+
+
+@pytest.mark.parametrize("speed", [0.5, 5.0])
+def test_a_speed_alone_no_step_in_the_bounds_reaches_is_refused(speed, tmp_path):
+    """With the step free (no step_length), any step of the scene's step_length_bounds
+    [0.4, 0.9] m over the half cycles sigma allows: 0.684 to 4.615 m/s."""
+    with pytest.raises(RequestError) as refused:
+        plan_and_record(_NoPlanner(), plan_request(scene="walker2d", speed=speed), tmp_path)
+    assert str(refused.value) == (
+        f"speed = {speed} m/s is outside the range scene 'walker2d' allows at step lengths "
+        f"within [0.4, 0.9] m (the step free): [0.6838, 4.6154] m/s (a half cycle of 0.195 to "
+        f"0.585 s: sigma within scaling_bounds [0.5, 1.5])")
+    assert not any(tmp_path.iterdir())
 
 
 def test_a_speed_reaches_the_settings_and_0_leaves_the_durations_free():
