@@ -1,0 +1,37 @@
+"""A plan for a ramp or stairs walked in MuJoCo on that ground (`walk.mujoco_model` builds
+the turned plane or the treads; `walk.reference` joins half cycles one rise higher).
+
+Measured 2026-11-27 with config/walk.yaml: walker2d 10 deg down walks 4 of 10 half cycles,
+its first with 0.46 deg joint RMS (as the level plan's); 0.15 m stairs up 3 of 10. The
+level-ground controller then drifts; the first half cycle is what these tests hold: were
+the ground in MuJoCo not the plan's (a level plane under a ramp plan, treads a step off),
+the walker would leave the plan at once.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("mujoco")
+
+
+def _plan(folder: Path, *options: str) -> Path:
+    out = folder / "plan.mcap"
+    exe = Path(sys.executable).with_name("gait-planner")
+    subprocess.run([str(exe), "plan", "--scene", "walker2d", *options, "--out", str(out),
+                    "--no-rrd"], check=True, capture_output=True)
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("options", [("--slope", "-10"), ("--step-height", "0.15")])
+def test_the_first_half_cycle_on_the_planned_ground_follows_the_plan(tmp_path, options):
+    from gait_planner.walk.simulate import walk
+
+    summary = walk(_plan(tmp_path, *options), 2)
+    assert summary["half_cycles_walked"] >= 1, summary["stopped"]
+    assert summary["joint_rms_per_half_cycle_deg"][0] < 1.5
