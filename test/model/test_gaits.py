@@ -31,7 +31,7 @@ def test_a_run_scene_source_is_the_scene_it_makes():
 
 
 def test_an_unknown_gait_is_refused_with_the_scene_gaits():
-    with pytest.raises(SceneError, match=r"has no gait 'hop'; its gaits: walk, run"):
+    with pytest.raises(SceneError, match=r"has no gait 'hop'; its gaits: walk, toe_first, run"):
         with_gait(WALKER2D, "hop")
 
 
