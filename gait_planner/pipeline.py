@@ -220,14 +220,18 @@ def plan_free_step(planner: Planner, scene: Scene, settings: GaitSettings, *,
     steps. Golden-section search over the step length to `STEP_TOLERANCE` (each trial a
     plan of the same built problem, warm-started from the last: the step length is a
     parameter), then `plan_certified` at the best step. Returns (result, certificate) as
-    `plan_certified`; the result's settings["step_length_search"] says what was tried."""
+    `plan_certified`, its stats counting every trial's iterations and solve time; its
+    settings["step_length_search"] says what was tried."""
     low, high = free_step_range(settings)
     tried: dict[float, float] = {}
+    spent = [0, 0.0]  # the trials' iterations and solve time
     start = time.perf_counter()
 
     def cost_per_metre(step: float) -> float:
         trial = planner.plan(scene, dataclasses.replace(settings, step_length=step),
                              warm_start=warm_start or bool(tried))
+        spent[0] += trial.stats.iterations
+        spent[1] += trial.stats.solve_time
         tried[step] = trial.cost_value / step if trial.success else math.inf
         return tried[step]
 
@@ -247,6 +251,9 @@ def plan_free_step(planner: Planner, scene: Scene, settings: GaitSettings, *,
     best = min(tried, key=tried.get)
     result, cert = plan_certified(planner, scene, dataclasses.replace(settings, step_length=best),
                                   warm_start=True)
+    result = dataclasses.replace(result, stats=dataclasses.replace(
+        result.stats, iterations=result.stats.iterations + spent[0],
+        solve_time=result.stats.solve_time + spent[1]))
     result.settings["step_length_search"] = (
         f"step length free at {settings.speed:g} m/s within [{low:.4f}, {high:.4f}] m: "
         f"{len(tried)} plans in {time.perf_counter() - start:.1f} s, least J per metre at "
