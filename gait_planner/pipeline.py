@@ -257,7 +257,8 @@ def plan_free_step(planner: Planner, scene: Scene, settings: GaitSettings, *,
     result.settings["step_length_search"] = (
         f"step length free at {settings.speed:g} m/s within [{low:.4f}, {high:.4f}] m: "
         f"{len(tried)} plans in {time.perf_counter() - start:.1f} s, least J per metre at "
-        f"{best:.4f} m; J/m tried: " + ", ".join(f"{s:.4f} m: {j:.4f}" for s, j in sorted(tried.items())))
+        f"{best:.4f} m; J/m tried: "
+        + ", ".join(f"{s:.4f} m: {j:.4f}" for s, j in sorted(tried.items())))
     return result, cert
 
 

@@ -86,12 +86,6 @@ class Ground:
         return np.array([-math.sin(a), 0.0, math.cos(a)])
 
     @property
-    def tangent(self) -> np.ndarray:
-        """(3,) unit vector up the ramp in the walking direction (e_x on level ground)."""
-        a = math.radians(self.slope)
-        return np.array([math.cos(a), 0.0, math.sin(a)])
-
-    @property
     def rise_per_step(self) -> float:
         """Rise (m) of the mirror image per metre of step length: tan(slope)."""
         return math.tan(math.radians(self.slope))

@@ -184,8 +184,8 @@ def schedule_heights(mb: Multibody, points: dict[str, float], half_width: float
                      ) -> list[float]:
     """The required heights (m) of the `edge_heights` rows of every point of one node of a
     `clearance_schedule`, in row order."""
-    edges = 1 if mb.scene.planar or half_width <= 0 else 2
-    return [h for h in points.values() for _ in range(edges)]
+    return [h for name, h in points.items()
+            for _ in range(edge_heights(mb, name, half_width)[0].shape[0])]
 
 
 def clearance_rows(mb: Multibody, q_at: Callable[[int], ca.MX],

@@ -16,8 +16,8 @@ Rows per body (3D; planar scenes drop the y rows and the roll row):
 where M_roll (N m) is the generalised force on d2_z: a moment d2 x e_z M_roll about the
 heel-toe line, which two point forces cannot carry. On a ramp (`gait_planner.model.ground`)
 the roll row is n . d2 (n the ramp's normal; the foot flat on the ramp), and M_roll is the
-moment about the heel-toe line of a foot flat on it (n . (e x d2) = 1). The net ground force on the body is
-F_a + F_b with F_b = (0, F_b,y, F_b,z).
+moment about the heel-toe line of a foot flat on it (n . (e x d2) = 1). The net ground
+force on the body is F_a + F_b with F_b = (0, F_b,y, F_b,z).
 
 A full contact has one more multiplier, s (N), that no row sees: equal and opposite forces
 along the heel-toe line e = (x_b - x_a)/|x_b - x_a| change neither the net force nor the

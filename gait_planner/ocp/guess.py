@@ -91,7 +91,8 @@ def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[
             if sibling is None:
                 raise ValueError(f"contact point {c.name!r} is never held and no point of its "
                                  f"body is: the kinematic guess cannot place body {c.body!r}")
-            offset = (mb.point_matrix(c.body, c.point) - mb.point_matrix(c.body, sibling.point)) @ q_pose
+            offset = (mb.point_matrix(c.body, c.point)
+                      - mb.point_matrix(c.body, sibling.point)) @ q_pose
             targets[c.name] = targets[sibling.name] + offset
     return targets
 
