@@ -46,6 +46,7 @@ import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.ocp.clearance import (clearance_rows, clearance_schedule, ground_heights,
+                                        midpoint_heights, midpoint_schedule,
                                         schedule_heights, strike_rows, strike_schedule)
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.elements import ElementGroup, Layout
@@ -311,10 +312,21 @@ class Transcription:
             self._without_elements["ground_clearance"] = ca.MX(-ca.DM(self.clearances))
         strikes = strike_schedule(mb.scene, held) if s.strike_speed_max > 0 else {}
         if strikes:
-            rows = self._strike_elements(strikes,
-                                         sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
+            c = np.array([s.base_time_step, s.strike_speed_max])
+            rows = self._interval_groups(
+                strikes, lambda points: strike_rows(mb, points, self.ground), c,
+                sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
             self._ineq.append(("strike_speed", rows))
             self._without_elements["strike_speed"] = ca.MX(rows.shape[0], 1)
+        midpoints = (midpoint_schedule(mb.scene, held, self.ground) if s.ground_clearance
+                     else {})
+        if midpoints:
+            rows = self._interval_groups(
+                midpoints, lambda points: midpoint_heights(mb, points, s.foot_half_width,
+                                                           self.ground),
+                np.zeros(2), sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
+            self._ineq.append(("midpoint_clearance", rows))
+            self._without_elements["midpoint_clearance"] = ca.MX(rows.shape[0], 1)
         root = mb.block(mb.scene.root.body).start
         inner = self.Q[:, 1:N]
         for name, entry, bound in (("torso_lean", 11, self._lean_bound),
@@ -373,23 +385,26 @@ class Transcription:
                 np.stack([self.layout.node_p_index(n) for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), np.zeros(1)))
 
-    def _strike_elements(self, strikes: dict[int, tuple[str, ...]], first_row: int) -> ca.MX:
-        """The strike_speed rows (`strike_rows`) of the intervals that end at a strike
-        (`strike_schedule`), from row first_row of g on, declared as interval elements;
-        returns them as one MX column."""
-        c = np.array([self.settings.base_time_step, self.settings.strike_speed_max])
+    def _interval_groups(self, schedule: dict[int, tuple[str, ...]], rows_of, c: np.ndarray,
+                         first_row: int) -> ca.MX:
+        """Rows rows_of(points)(q_n, q_{n+1}, h_n, c) of the intervals n of `schedule`
+        ({interval: points}: the strike_speed rows of `strike_schedule`, the
+        midpoint_clearance rows of `midpoint_schedule`), from row first_row of g on,
+        declared as interval elements, one Function per set of points; returns them as one
+        MX column."""
         groups: dict[tuple[tuple[str, ...], bool], list[tuple[int, np.ndarray]]] = {}
+        functions: dict[tuple[str, ...], ca.Function] = {}
         out, row = [], first_row
-        for n, points in strikes.items():
+        for n, points in schedule.items():
+            fn = functions.setdefault(points, rows_of(points))
+            size = int(fn.size1_out(0))
             groups.setdefault((points, self.layout.mirrored(n == self.N - 2)), []).append(
-                (n, row + np.arange(len(points))))
-            row += len(points)
-            out.append(strike_rows(self.mb, points, self.ground)(
-                self.Q[:, n], self.Q[:, n + 1], self.h[n], ca.DM(c)))
+                (n, row + np.arange(size)))
+            row += size
+            out.append(fn(self.Q[:, n], self.Q[:, n + 1], self.h[n], ca.DM(c)))
         for (points, next_mirrored), chosen in groups.items():
             self.elements.append(ElementGroup(
-                self.layout.interval_element(strike_rows(self.mb, points, self.ground),
-                                             next_mirrored),
+                self.layout.interval_element(functions[points], next_mirrored),
                 np.stack([self.layout.interval_z_index(n) for n, _ in chosen], 1),
                 np.stack([self.layout.interval_p_index(n) for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), c))

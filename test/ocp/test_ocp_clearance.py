@@ -165,3 +165,47 @@ def test_stair_clearance_is_the_height_above_the_tread_with_edges_moved_to_the_l
         edge = edges[near][0]
         top = max(ground.height(edge - 1e-9), ground.height(edge + 1e-9))
         assert z - height >= top - 0.01 * abs(rise)
+
+
+@pytest.mark.parametrize("rise", [0.15, -0.15, 0.0])
+def test_midpoint_rows_are_the_free_points_of_each_interval_on_stairs_down(walker3d_held, rise):
+    """On stairs down every interval lists the points it does not hold (the segment check's
+    points); on stairs up and on a plane none (a segment above a plane is lowest at a
+    node)."""
+    from gait_planner.model.ground import Ground
+    from gait_planner.ocp.clearance import midpoint_schedule
+
+    scene, held = walker3d_held
+    ground = Ground(step_height=rise, riser=0.44, tread=0.63) if rise else Ground()
+    out = midpoint_schedule(scene, held, ground)
+    if rise >= 0:
+        assert out == {}
+        return
+    names = [c.name for c in scene.contacts]
+    assert out == {n: tuple(p for p in names if p not in points)
+                   for n, points in enumerate(held) if set(names) - set(points)}
+
+
+@settings(max_examples=40, deadline=None)
+@given(a=st.tuples(st.floats(-0.5, 1.5), st.floats(-0.3, 0.3)),
+       b=st.tuples(st.floats(-0.5, 1.5), st.floats(-0.3, 0.3)))
+def test_midpoint_heights_are_the_heights_of_the_segment_midpoints(walker3d_held, a, b):
+    """`midpoint_heights` of two configurations is the clearance height of the midpoint of
+    the point's two positions (positions are linear in the director coordinates)."""
+    from gait_planner.model.ground import Ground
+    from gait_planner.model.rotations import rot_x, rot_y
+    from gait_planner.ocp.clearance import midpoint_heights
+
+    scene, _ = walker3d_held
+    mb = Multibody(scene)
+    ground = Ground(step_height=-0.15, riser=0.44, tread=0.63)
+    qs = []
+    for (x, z), D in ((a, rot_y(0.3)), (b, rot_x(0.2) @ rot_y(-0.4))):
+        q = np.zeros(mb.k)
+        q[mb.block("foot_l")] = np.r_[x, 0.05, z, D[:, 0], D[:, 1], D[:, 2]]
+        qs.append(q)
+    got = float(midpoint_heights(mb, ("foot_l_heel",), 0.0, ground)(
+        qs[0], qs[1], 0.01, [0.01, 0.0]))
+    mid = 0.5 * (mb.contact_rows("foot_l_heel") @ qs[0] + mb.contact_rows("foot_l_heel") @ qs[1])
+    tread = ground.clearance_height(mid[0], lambda u: 0.5 * (1.0 + np.tanh(0.5 * u)))
+    assert got == pytest.approx(mid[2] - float(tread), abs=1e-12)

@@ -122,6 +122,7 @@ def test_a_stair_plan_lands_one_tread_up_and_clears_every_edge():
 
 @pytest.mark.parametrize("scene, ground", [
     ("walker2d", {"slope": 10.0}), ("walker2d", {"step_height": 0.15}),
+    pytest.param("walker2d", {"step_height": -0.15}, marks=pytest.mark.slow),
     pytest.param("walker3d", {"slope": 10.0}, marks=pytest.mark.slow),
     pytest.param("walker3d", {"slope": -10.0}, marks=pytest.mark.slow),
     pytest.param("walker3d", {"step_height": 0.15}, marks=pytest.mark.slow),
@@ -135,3 +136,22 @@ def test_a_plan_for_a_ground_passes_every_check_against_that_ground(scene, groun
     assert certificate.ok, certificate.summary
     report = verify_result(result)
     assert report.ok, report.failures
+
+
+def test_a_deep_stair_down_continues_from_a_plan_on_a_shallower_one():
+    """A cold plan of stairs down deeper than STAIR_COLD_MAX starts from the plan of the
+    same request on stairs of that depth, which the planner keeps: its origin says so, its
+    iterations include that plan's, and a second request of the shallower stair re-plans
+    warm from it."""
+    from gait_planner.ocp.solve import STAIR_COLD_MAX
+
+    scene = load_scene("walker2d")
+    planner = Planner()
+    deep = settings_for(scene, step_height=-0.15, compiled=True)
+    result = planner.plan(scene, deep, warm_start=False)
+    assert result.success, result.message
+    assert f"stairs of {-STAIR_COLD_MAX:g} m, cold" in result.settings["initial_guess"]
+    shallow = planner.plan(scene, settings_for(scene, step_height=-STAIR_COLD_MAX,
+                                               compiled=True))
+    assert shallow.success and shallow.settings["initial_guess"].startswith("warm start")
+    assert shallow.stats.iterations < result.stats.iterations
