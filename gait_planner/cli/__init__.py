@@ -22,6 +22,7 @@ from importlib import metadata
 from typing import Callable, NoReturn, Sequence
 
 from gait_planner.cli.errors import CliError
+from gait_planner.cli.library import add_library_parser
 from gait_planner.cli.ros_commands import (GAIT_HELP, SLOPE_HELP, SPEED_HELP, STEP_HEIGHT_HELP,
                                           add_call_parser, add_node_parser)
 from gait_planner.cli.simulate import add_simulate_parser
@@ -338,7 +339,7 @@ def _prepare(args: argparse.Namespace) -> int:
 COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
     _add_run, _add_plan, _add_report, add_node_parser, add_call_parser, add_simulate_parser,
     add_walk_parser,
-    _add_urdf, _add_prepare)
+    _add_urdf, _add_prepare, add_library_parser)
 
 
 # --- entry point -------------------------------------------------------------------------
