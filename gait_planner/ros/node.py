@@ -43,6 +43,8 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
+from gait_planner.gaitlib.index import LibraryError
+from gait_planner.gaitlib.serve import library_start
 from gait_planner.io import messages
 from gait_planner.io.atomic import remove_stale_temporaries
 from gait_planner.io.rrd_recorder import RrdRecorder
@@ -176,6 +178,9 @@ class GaitPlannerNode(Node):
                 request, default_scene=self._param("default_scene"),
                 default_max_solve_time=self._param("max_solve_time"),
                 compiled=self._param("compile_derivatives"))
+            library = self._param("gait_library")
+            note = "" if not library or planned.cold_start else library_start(
+                self._planner, Path(library).expanduser(), planned, self._scenes)
             outcome = plan_and_record(self._planner, planned, self._param("output_dir"),
                                       rrd=False, stage=self._worker.enter,
                                       scenes=self._scenes)
@@ -183,7 +188,7 @@ class GaitPlannerNode(Node):
             answer.success, answer.message = False, self._stopped_message()
             self.get_logger().info(f"{answer.message}: nothing recorded")
             return
-        except (RequestError, OSError) as err:
+        except (RequestError, LibraryError, OSError) as err:
             answer.success, answer.message = False, str(err)
             self.get_logger().warning(f"plan request refused: {err}")
             return
@@ -200,6 +205,9 @@ class GaitPlannerNode(Node):
                 "success": False,
                 "message": self._stopped_message() if stopped else result.message,
                 "solver_status": result.stats.status})
+        if note:
+            answer.message = f"{answer.message} ({note})"
+            self.get_logger().info(note)
         if result.success:
             self._recorder.submit(result, outcome.mcap_path.with_suffix(".rrd"), self._recorded)
             self._publish(result, stamp)

@@ -68,6 +68,12 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         "folder, gait_planner/ocp/library.py; `make setup` plans the shipped scenes' default "
         "requests into it) and add this node's plans to it; a request with cold_start "
         "ignores it", read_only=True)),
+    "gait_library": ("", _descriptor(
+        ParameterType.PARAMETER_STRING,
+        "A gait library's folder (gait-planner library build; empty: none): a request of "
+        "its scene, gait and settings inside its grid starts from the interpolation of the "
+        "plans around it (gait_planner/gaitlib/serve.py); others are planned as usual, and "
+        "the answer's message says which", read_only=True)),
     "feedback_every": (1, _descriptor(
         ParameterType.PARAMETER_INTEGER,
         "Action feedback every this many IPOPT iterations (and at every phase change)",
@@ -120,6 +126,20 @@ def check_scene_dirs(value: list[str]) -> str | None:
     return None
 
 
+def check_gait_library(value: str) -> str | None:
+    """Why `value` cannot be the gait library's folder (None if it can: empty, or a folder
+    with a library's manifest)."""
+    from gait_planner.gaitlib.index import LibraryError, read_manifest
+
+    if not value:
+        return None
+    try:
+        read_manifest(Path(value).expanduser())
+    except LibraryError as err:
+        return f"gait_library: {err}"
+    return None
+
+
 def _check_solve_time(value: float) -> str | None:
     return None if 0.0 < value <= MAX_SOLVE_TIME else (
         f"max_solve_time must be > 0 and <= {MAX_SOLVE_TIME:g} s, got {value}")
@@ -142,6 +162,7 @@ def validator(node: Node) -> Callable[[list], SetParametersResult]:
         "max_solve_time": _check_solve_time,
         "output_dir": lambda value: check_output_dir(
             value, list(node.get_parameter("allowed_output_dirs").value)),
+        "gait_library": check_gait_library,
         "allowed_output_dirs": lambda value: None if len(value) else (
             "allowed_output_dirs must name at least one folder"),
     }

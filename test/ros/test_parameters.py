@@ -68,7 +68,7 @@ def test_parameters_are_declared_with_type_range_and_description(parameters):
     client, wait = parameters
     names = ["default_scene", "output_dir", "allowed_output_dirs", "max_solve_time",
              "compile_derivatives", "feedback_every", "prepare_on_start", "plan_library",
-             "scene_dirs"]
+             "scene_dirs", "gait_library"]
     described = {d.name: d for d in wait(client.describe_parameters(names)).descriptors}
     assert all(described[name].description for name in names)
     assert described["max_solve_time"].type == ParameterType.PARAMETER_DOUBLE
@@ -78,6 +78,7 @@ def test_parameters_are_declared_with_type_range_and_description(parameters):
     assert described["compile_derivatives"].type == ParameterType.PARAMETER_BOOL
     assert described["prepare_on_start"].read_only
     assert described["plan_library"].read_only
+    assert described["gait_library"].read_only
     assert described["scene_dirs"].type == ParameterType.PARAMETER_STRING_ARRAY
     assert described["scene_dirs"].read_only
 

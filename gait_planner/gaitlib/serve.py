@@ -1,0 +1,103 @@
+"""Answering a request from a gait library: the start interpolated from its neighbours.
+
+A request of the library's scene, gait and fixed settings whose grid fields lie inside the
+grid's hull starts from the multilinear interpolation of the optima of the grid cell's
+corners (`interpolated_start`: primal x, multipliers and reference configurations, each
+weighted like the request's position in the cell; an axis the request sits on exactly
+takes one value). That start is solved to the full tolerance and checked as any plan
+(`Planner.remember`, then a warm plan). Outside the hull, or where a corner failed, the
+request is planned as any other, and `library_start` says why.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from pathlib import Path
+
+import numpy as np
+
+from gait_planner.gaitlib.grid import AXES, Grid, parse_grid
+from gait_planner.gaitlib.index import (LibraryIndex, Manifest, load_start, read_manifest,
+                                        start_path)
+from gait_planner.gaitlib.worker import point_request
+from gait_planner.model.loader import find_scene
+from gait_planner.ocp.library import StoredPlan
+from gait_planner.ocp.settings import GaitSettings
+from gait_planner.ocp.solve import Planner
+from gait_planner.pipeline import SceneLookup, request_settings
+from gait_planner.request import PlanRequest
+
+_FREE = ("max_solve_time", "compiled")  # settings a library's plans need not share
+
+
+def cell(grid: Grid, values: dict[str, float]) -> list[tuple[tuple[int, ...], float]] | str:
+    """The corners (indices) of the grid cell holding `values` and their multilinear
+    weights (summing to 1, zero-weight corners left out), or a sentence saying which field
+    lies outside the grid."""
+    per_axis = []
+    for field, axis in grid.axes:
+        v = values[field]
+        if not axis[0] - 1e-12 <= v <= axis[-1] + 1e-12:
+            return (f"{field} {v:g} is outside the library's range "
+                    f"[{axis[0]:g}, {axis[-1]:g}]")
+        i = min(int(np.searchsorted(axis, v, side="right")) - 1, len(axis) - 1)
+        i = max(i, 0)
+        if i == len(axis) - 1 or abs(v - axis[i]) <= 1e-12:
+            per_axis.append([(i, 1.0)])
+        else:
+            t = (v - axis[i]) / (axis[i + 1] - axis[i])
+            per_axis.append([(i, 1.0 - t), (i + 1, t)])
+    return [(tuple(i for i, _ in combo), float(np.prod([w for _, w in combo])))
+            for combo in itertools.product(*per_axis)]
+
+
+def interpolated_start(folder: Path, corners: list[tuple[str, float]], step: float,
+                       mu: float) -> StoredPlan:
+    """The weighted sum of the corners' optima [(point name, weight)]."""
+    plans = [(load_start(start_path(folder, name)), w) for name, w in corners]
+    mix = {name: sum(w * getattr(p, name) for p, w in plans)
+           for name in ("x", "lam_x", "lam_g", "qref")}
+    names = ", ".join(f"{name} x {w:.2f}" for name, w in corners)
+    return StoredPlan(step, mu, source=f"the gait library {folder.name}: {names}", **mix)
+
+
+def library_start(planner: Planner, folder: str | Path, request: PlanRequest,
+                  scenes: SceneLookup = find_scene) -> str:
+    """If `request` lies inside the library in `folder`, give `planner` the start
+    interpolated from its neighbours (module docstring) for its next warm plan; returns a
+    sentence saying what was done, or why the library does not serve the request.
+    LibraryError if `folder` is not a library."""
+    folder = Path(folder)
+    manifest: Manifest = read_manifest(folder)
+    grid = parse_grid(manifest.grid)
+    scene, settings = request_settings(request, scenes)
+    first = grid.indices()[0]
+    own_scene, own = request_settings(point_request(manifest, grid.name(first),
+                                                    grid.values(first), cold=False), scenes)
+    values = {field: float(getattr(settings, field)) for field in AXES}
+    same = dataclasses.replace(own, **{f: values[f] for f in grid.fields},
+                               **{f: getattr(settings, f) for f in _FREE})
+    if (scene.name, scene.source) != (own_scene.name, own_scene.source) or same != settings:
+        differ = [f.name for f in dataclasses.fields(GaitSettings)
+                  if getattr(same, f.name) != getattr(settings, f.name)]
+        return (f"not from the gait library {folder.name}: the request differs from it in "
+                + (", ".join(differ) if differ else "its scene"))
+    corners = cell(grid, values)
+    if isinstance(corners, str):
+        return f"not from the gait library {folder.name}: {corners}"
+    index = LibraryIndex(folder)
+    try:
+        rows = {row.name: row for row in index.rows()}
+    finally:
+        index.close()
+    named = [(grid.name(i), w) for i, w in corners]
+    missing = [name for name, _ in named if rows.get(name) is None or rows[name].status != "ok"]
+    if missing:
+        return (f"not from the gait library {folder.name}: its points {', '.join(missing)} "
+                f"around the request have no plan")
+    start = interpolated_start(folder, named, settings.step_length,
+                               settings.friction_coefficient)
+    planner.remember(scene, settings, start)
+    return f"started from {start.source}"
+
