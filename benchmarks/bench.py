@@ -29,6 +29,7 @@ FULL = [
     ["integrators.py", "--long-steps", "30000"],
     ["walk.py"],
     ["gait_trends.py"],
+    ["gait_library.py"],
 ]
 QUICK = [
     ["model_size.py", "--quick", "--compiled"],
@@ -38,6 +39,7 @@ QUICK = [
     ["integrators.py", "--quick"],
     ["walk.py", "--quick"],
     ["gait_trends.py", "--quick"],
+    ["gait_library.py", "--quick"],
 ]
 
 

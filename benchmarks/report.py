@@ -392,11 +392,54 @@ def gait_trends(doc) -> list[str]:
     return out + [""]
 
 
+def gait_library(doc) -> list[str]:
+    out = ["## 9. Gait libraries on Ray", ""]
+    if doc is None:
+        return out + ["Not measured.", ""]
+    rows = doc["rows"]
+    builds = [r for r in rows if r["kind"] in ("build", "cluster")]
+    serve = [r for r in rows if r["kind"] == "serve"]
+    out += [provenance(doc), "",
+            "`gait_library.py`: `gait-planner library build` (`gait_planner.gaitlib`) of the "
+            f"walker2d grid `{doc['header']['grid']}` into fresh folders: plans per minute of "
+            "planning (Ray's start apart), by continuation (a seed per worker cold, every "
+            "other point warm from a finished neighbour) or as independent cold plans; the "
+            "same on `ray.cluster_utils.Cluster` with 4 one-CPU nodes on this machine (they "
+            "share its 2 cores: the build runs unchanged through a cluster address, but no "
+            "speed-up can show here). Every recording is checked by the verifier. Figure: "
+            "[gait_library.png](gait_library.png).", ""]
+    out += table(builds, [
+        ("kind", "kind", ""), ("scene", "scene", ""), ("points", "points", "d"),
+        ("workers", "workers", ""), ("continuation", "continuation", ""),
+        ("Ray start s", "ray_start_s", ".1f"), ("planning s", "planning_s", ".1f"),
+        ("plans/min", "plans_per_min", ".1f"), ("IPOPT iterations", "iterations", "d"),
+        ("cold points", "cold_points", "d"), ("failed", "failed", "d")])
+    bad = [f"{r['scene']} ({r['kind']}, {r['workers']} workers): {', '.join(r['verifier_failures'])}"
+           for r in builds if r["verifier_failures"]]
+    out += ["", "Recordings failing the verifier: " + ("; ".join(bad) if bad else "none") + "."]
+    if serve:
+        out += ["", f"In-hull answers (walker3d library `{doc['header']['serve_grid']}`, "
+                "requests at the cells' centres, problem built as after the node's first "
+                "request): from the library's interpolation, from the nearest single stored "
+                "plan (the node without a library), and cold.", ""]
+        out += table(serve, [
+            ("step m", "step_length", ".3f"), ("mu", "friction_coefficient", ".2f"),
+            ("library it", "library_iterations", "d"), ("library s", "library_s", ".3f"),
+            ("nearest it", "nearest_iterations", "d"), ("nearest s", "nearest_s", ".3f"),
+            ("cold it", "cold_iterations", "d"), ("cold s", "cold_s", ".2f")])
+        its = [r["library_iterations"] for r in serve]
+        secs = [r["library_s"] for r in serve]
+        out += ["", f"From the library: {min(its)} to {max(its)} IPOPT iterations, "
+                f"{min(secs):.3f} to {max(secs):.3f} s (target: at most 3 iterations and "
+                f"0.1 s)."]
+    return out + [""]
+
+
 def main() -> None:
     docs = {name: load(name) for name in ("work_precision", "integrators", "model_size",
                                          "model_size_compiled", "hard_cases", "cold_solve",
                                          "node_latency_walker3d", "request_sweep", "walk",
-                                         "gait_trends")}
+                                         "gait_trends", "gait_library")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
              "`benchmarks/results/*.json`; every number below is in those files with the "
@@ -412,6 +455,7 @@ def main() -> None:
     lines += request_sweep(docs["request_sweep"])
     lines += walk(docs["walk"])
     lines += gait_trends(docs["gait_trends"])
+    lines += gait_library(docs["gait_library"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")

@@ -38,6 +38,8 @@ def add_library_parser(subparsers: argparse._SubParsersAction) -> None:
                        help="an existing Ray cluster's address (ray start ...) instead")
     build.add_argument("--seeds", type=int, default=None, metavar="K",
                        help="points planned cold to start from (default: one per worker)")
+    build.add_argument("--independent", action="store_true",
+                       help="plan every point cold and on its own, without continuation")
     build.set_defaults(handler=_build)
     for name, text in (("list", "one line per finished point"),
                        ("show", "every field of one point")):
@@ -85,7 +87,8 @@ def _build(args: argparse.Namespace) -> int:
             request_settings(point_request(manifest, grid.name(i), grid.values(i), cold=True),
                              find_scene)
         summary = build_library(args.out, manifest, workers=args.workers,
-                                address=args.address, seeds=args.seeds)
+                                address=args.address, seeds=args.seeds,
+                                continuation=not args.independent)
     except (GridError, LibraryError, RequestError) as err:
         raise CliError(str(err)) from None
     print(f"library {args.out}: {summary.planned} points planned ({summary.failed} failed), "

@@ -39,8 +39,9 @@ class BuildSummary:
     failed: int  # of which failed
     skipped: int  # points finished before it (resumed)
     total: int
-    wall_time: float  # s
+    wall_time: float  # s, Ray's start included
     iterations: int  # IPOPT iterations of this build's attempts
+    ray_start: float = 0.0  # s, starting Ray or joining its cluster
 
 
 Progress = Callable[[str], None]
@@ -78,11 +79,13 @@ def _init_ray(workers: int | None, address: str | None):
 
 def build_library(folder: str | Path, manifest: Manifest, *, workers: int | None = None,
                   address: str | None = None, seeds: int | None = None,
+                  continuation: bool = True,
                   progress: Progress = print_progress) -> BuildSummary:
     """Plan every point of manifest.grid into `folder` (module docstring) that is not
     finished yet. workers: local Ray worker processes (None: one per core); address: an
-    existing Ray cluster instead; seeds: cold points to start from (None: one per worker).
-    LibraryError if the folder holds another library; GridError for a bad grid."""
+    existing Ray cluster instead; seeds: cold points to start from (None: one per worker);
+    continuation False: every point cold and on its own (independent plans, e.g. to
+    compare). LibraryError if the folder holds another library; GridError for a bad grid."""
     folder = Path(folder)
     grid = parse_grid(manifest.grid)
     manifest = dataclasses.replace(manifest, grid=grid.text())  # one spelling per grid
@@ -100,6 +103,7 @@ def build_library(folder: str | Path, manifest: Manifest, *, workers: int | None
         progress(f"library: all {len(names)} points already finished")
         return summary
     ray = _init_ray(workers, address)
+    summary.ray_start = time.perf_counter() - start
     try:
         task = ray.remote(num_cpus=1, max_retries=TASK_RETRIES)(_plan_point)
         capacity = max(1, int(ray.cluster_resources().get("CPU", 1)))
@@ -109,7 +113,10 @@ def build_library(folder: str | Path, manifest: Manifest, *, workers: int | None
         waiting = list(todo)  # neither finished nor running
 
         def neighbour_start(i) -> str | None:
-            """A finished neighbour point i has not been continued from yet."""
+            """A finished neighbour point i has not been continued from yet (None without
+            continuation)."""
+            if not continuation:
+                return None
             return next((grid.name(j) for j in grid.neighbours(i)
                          if grid.name(j) in converged and grid.name(j) not in tried[grid.name(i)]),
                         None)
@@ -131,14 +138,14 @@ def build_library(folder: str | Path, manifest: Manifest, *, workers: int | None
             summary.failed += 1
 
         def fill() -> None:
-            """Start waiting points from finished neighbours while workers are free; when
-            nothing runs, seed the waiting points that have not been tried cold, and record
-            the rest as failed."""
+            """Start waiting points from finished neighbours (without continuation: cold,
+            once) while workers are free; when nothing runs, seed the waiting points that
+            have not been tried cold, and record the rest as failed."""
             for i in list(waiting):
                 if len(running) >= capacity:
                     return
-                start_from = neighbour_start(i)
-                if start_from is not None:
+                start_from = neighbour_start(i) if continuation else None
+                if start_from is not None or not (continuation or tried[grid.name(i)]):
                     submit(i, start_from)
             if running or not waiting:
                 return

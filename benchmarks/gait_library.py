@@ -1,0 +1,178 @@
+"""Gait libraries on Ray (`gait_planner.gaitlib`): plans per minute against workers,
+continuation against independent cold plans, a simulated cluster, and the in-hull answer.
+
+    .venv/bin/python benchmarks/gait_library.py            # ~10 min on 2 cores
+    .venv/bin/python benchmarks/gait_library.py --quick    # a 3 x 2 walker2d grid, ~2 min
+
+Rows of results/gait_library.json:
+* "build": the walker2d grid `GRID` (27 plans) built into a fresh folder with 1 and 2 local
+  workers by continuation, and with 2 workers as independent cold plans: wall time (Ray's
+  start apart), plans per minute, IPOPT iterations, failures, points whose recording
+  fails the verifier.
+* "cluster": the same grid on `ray.cluster_utils.Cluster` with 4 nodes of one CPU each,
+  all on this machine: the build runs unchanged through an address, as on a real
+  cluster; the 4 nodes share 2 cores, so this shows the scheduling and its overhead, not
+  a speed-up, which needs more cores.
+* "serve": walker3d's library `SERVE_GRID` built, then requests at the centres of its
+  cells answered in one process as the node answers them (problem built, as after the
+  node's first request): from the library (`gaitlib.serve.library_start`, then a warm
+  plan), from the nearest single stored plan (the node without a library), and cold.
+  Iterations and wall time (library_start included).
+Figure gait_library.png: J and the half cycle's duration over the walker2d grid, and the
+serve times.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from gait_planner.gaitlib.build import build_library
+from gait_planner.gaitlib.grid import parse_grid
+from gait_planner.gaitlib.index import PLANS, LibraryIndex, Manifest
+from gait_planner.gaitlib.serve import library_start
+from gait_planner.model.loader import find_scene
+from gait_planner.ocp.solve import Planner
+from gait_planner.pipeline import request_settings
+from gait_planner.request import plan_request
+from gait_planner.verify import verify_recording
+from results_io import figure_path, write_results
+
+GRID = "step_length=0.40:0.80:0.05,friction_coefficient=0.6/0.8/1.0"
+QUICK_GRID = "step_length=0.5/0.6/0.7,friction_coefficient=0.6/1.0"
+SERVE_GRID = "step_length=0.55:0.70:0.05,friction_coefficient=0.8/1.0"
+
+
+def _rows(folder: Path):
+    index = LibraryIndex(folder)
+    try:
+        return index.rows()
+    finally:
+        index.close()
+
+
+def build_row(kind: str, scene: str, grid: str, folder: Path, **options) -> dict:
+    summary = build_library(folder, Manifest(scene, "", grid, {}), progress=lambda line: None,
+                            **options)
+    rows = _rows(folder)
+    failing = [r.name for r in rows if r.status == "ok"
+               and not verify_recording(folder / PLANS / r.mcap).ok]
+    planning = summary.wall_time - summary.ray_start
+    out = {"kind": kind, "scene": scene, "grid": grid, "points": summary.total,
+           "workers": options.get("workers"), "continuation": options.get("continuation", True),
+           "ray_start_s": summary.ray_start, "planning_s": planning,
+           "plans_per_min": summary.planned / planning * 60.0,
+           "iterations": summary.iterations, "failed": summary.failed,
+           "cold_points": sum(r.start == "cold" for r in rows),
+           "verifier_failures": failing}
+    print(f"{kind:8s} {scene} workers {out['workers']} continuation {out['continuation']}: "
+          f"{summary.planned} plans in {planning:.1f} s (+{summary.ray_start:.1f} s Ray), "
+          f"{out['plans_per_min']:.1f}/min, {summary.iterations} iterations, "
+          f"{summary.failed} failed, {len(failing)} fail the verifier", flush=True)
+    return out
+
+
+def cluster_row(grid: str, folder: Path) -> dict:
+    from ray.cluster_utils import Cluster
+
+    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1})
+    for _ in range(3):
+        cluster.add_node(num_cpus=1)
+    try:
+        return build_row("cluster", "walker2d", grid, folder, address=cluster.address)
+    finally:
+        cluster.shutdown()
+
+
+def serve_rows(folder: Path, grid_text: str) -> list[dict]:
+    """Requests at the centres of the library's cells, three ways (module docstring)."""
+    grid = parse_grid(grid_text)
+    centres = [{f: 0.5 * (axis[i] + axis[i + 1]) for (f, axis), i in zip(grid.axes, index)}
+               for index in itertools.product(*(range(n - 1) for n in grid.shape))]
+    planner = Planner()
+    first = plan_request(scene="walker3d", compiled=True, **grid.values(grid.indices()[0]))
+    scene, s = request_settings(first, find_scene)
+    planner.plan(scene, s, warm_start=False)  # built, one plan stored: the node after a request
+    base = planner.stored_plans(scene, s)
+    out = []
+    for values in centres:
+        request = plan_request(scene="walker3d", compiled=True, **values)
+        scene, s = request_settings(request, find_scene)
+        row = {"kind": "serve", "scene": "walker3d", **values}
+        for how in ("library", "nearest", "cold"):
+            planner._build(scene, s).stored[:] = list(base)  # as the node after one request
+            start = time.perf_counter()
+            note = library_start(planner, folder, request) if how == "library" else ""
+            result = planner.plan(scene, s, warm_start=how != "cold")
+            row[f"{how}_s"] = time.perf_counter() - start
+            row[f"{how}_iterations"] = result.stats.iterations
+            row[f"{how}_success"] = bool(result.success)
+            row[f"{how}_cost"] = result.cost_value if result.success else None
+            if how == "library":
+                row["note"] = note
+        print(f"serve {values}: library {row['library_iterations']} it {row['library_s']:.3f} s, "
+              f"nearest {row['nearest_iterations']} it {row['nearest_s']:.3f} s, cold "
+              f"{row['cold_iterations']} it {row['cold_s']:.2f} s", flush=True)
+        out.append(row)
+    return out
+
+
+def figure(folder: Path, grid_text: str, serve: list[dict]) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in _rows(folder) if r.status == "ok"]
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    for mu in sorted({r.request["friction_coefficient"] for r in rows}):
+        sel = sorted((r for r in rows if r.request["friction_coefficient"] == mu),
+                     key=lambda r: r.request["step_length"])
+        steps = [r.request["step_length"] for r in sel]
+        axes[0].plot(steps, [r.cost for r in sel], "o-", label=f"mu {mu:g}")
+        axes[1].plot(steps, [r.duration for r in sel], "o-", label=f"mu {mu:g}")
+    axes[0].set(xlabel="step length (m)", ylabel="J (J s)", title="walker2d library: cost")
+    axes[1].set(xlabel="step length (m)", ylabel="half cycle (s)", title="duration")
+    axes[0].legend()
+    if serve:
+        x = np.arange(len(serve))
+        for k, how in enumerate(("library", "nearest", "cold")):
+            axes[2].bar(x + 0.27 * (k - 1), [r[f"{how}_s"] for r in serve], 0.27, label=how)
+        axes[2].set_yscale("log")
+        axes[2].set(xlabel="walker3d request (cell centre)", ylabel="answer (s)",
+                    title="in-hull answer time")
+        axes[2].legend()
+    fig.tight_layout()
+    fig.savefig(figure_path("gait_library.png"), dpi=110)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args()
+    grid = QUICK_GRID if args.quick else GRID
+    rows: list[dict] = []
+    with tempfile.TemporaryDirectory(prefix="gait_library_") as tmp:
+        root = Path(tmp)
+        for workers in ((2,) if args.quick else (1, 2)):
+            rows.append(build_row("build", "walker2d", grid, root / f"w{workers}",
+                                  workers=workers))
+        rows.append(build_row("build", "walker2d", grid, root / "independent", workers=2,
+                              continuation=False))
+        serve = []
+        if not args.quick:
+            rows.append(cluster_row(grid, root / "cluster"))
+            rows.append(build_row("build", "walker3d", SERVE_GRID, root / "walker3d", workers=2))
+            serve = serve_rows(root / "walker3d", SERVE_GRID)
+            rows += serve
+        figure(root / "w2", grid, serve)
+    write_results("gait_library", rows, {"grid": grid, "serve_grid": SERVE_GRID})
+
+
+if __name__ == "__main__":
+    main()
