@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import socket
 import sys
 import time
 from dataclasses import dataclass
@@ -26,7 +27,8 @@ from pathlib import Path
 from typing import Callable
 
 from gait_planner.gaitlib.grid import Grid, parse_grid
-from gait_planner.gaitlib.index import (PLANS, LibraryIndex, Manifest, PlanRow, write_manifest)
+from gait_planner.gaitlib.index import (PLANS, LibraryError, LibraryIndex, Manifest, PlanRow,
+                                        write_manifest)
 from gait_planner.io.atomic import remove_stale_temporaries
 
 MAX_ATTEMPTS = 3  # per point: neighbours first, then cold
@@ -65,6 +67,20 @@ def seed_points(grid: Grid, count: int, candidates: list[tuple[int, ...]]) -> li
     return chosen
 
 
+def check_address(address: str, timeout: float = 5.0) -> None:
+    """LibraryError if nothing answers at a Ray cluster's HOST:PORT within `timeout` s
+    (Ray itself waits minutes before it gives up); other forms ("auto", ray://) are left
+    to Ray."""
+    host, sep, port = address.rpartition(":")
+    if not sep or not port.isdigit() or "/" in address:
+        return
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout).close()
+    except OSError as err:
+        raise LibraryError(f"no Ray cluster answers at {address} ({err}); start one with "
+                           f"'ray start --head' or leave out --address for a local one") from None
+
+
 def _init_ray(workers: int | None, address: str | None):
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")  # a local, private instance
     import ray
@@ -88,6 +104,8 @@ def build_library(folder: str | Path, manifest: Manifest, *, workers: int | None
     compare). LibraryError if the folder holds another library; GridError for a bad grid."""
     folder = Path(folder)
     grid = parse_grid(manifest.grid)
+    if address:
+        check_address(address)
     manifest = dataclasses.replace(manifest, grid=grid.text())  # one spelling per grid
     folder.mkdir(parents=True, exist_ok=True)
     write_manifest(folder, manifest)

@@ -55,3 +55,11 @@ def test_an_optimum_is_read_back_bit_for_bit(tmp_path):
     assert (back.step, back.mu) == (0.6, 0.8)
     for name in ("x", "lam_x", "lam_g", "qref"):
         assert np.array_equal(getattr(back, name), getattr(plan, name))
+
+
+def test_a_cluster_address_nobody_answers_is_refused_before_the_folder_is_made(tmp_path):
+    from gait_planner.gaitlib.build import build_library
+
+    with pytest.raises(LibraryError, match="no Ray cluster answers at 127.0.0.1:1"):
+        build_library(tmp_path / "lib", MANIFEST, address="127.0.0.1:1")
+    assert not (tmp_path / "lib").exists()
