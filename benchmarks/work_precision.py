@@ -1,6 +1,10 @@
 """Speed against error: DMOCC (the product) and Hermite-Simpson direct collocation on
 minimal coordinates (`gait_planner.collocation`), the same gait problem at several grids,
 both solved cold from the same kinematic guess with the same IPOPT options, in one process.
+The collocation runs twice: "collocation" with its per-point derivative elements compiled
+to C as DMOCC's are (the baseline), "collocation_interpreted" with CasADi's derivatives of
+its one expanded SX graph. Every method builds its NLP, derivatives and IPOPT instances
+before the clock starts (build_time_s).
 
     .venv/bin/python benchmarks/work_precision.py            # walker2d 4..16, walker3d 4..12
     .venv/bin/python benchmarks/work_precision.py --quick    # walker2d at 4 and 8
@@ -16,6 +20,10 @@ same way for both methods:
 * against a fine reference: the same problem by DMOCC at `REFERENCE` intervals per phase;
   joint angles compared at the same phase-relative times (each phase's nodes mapped to
   [k, k + 1] for phase k, the reference interpolated linearly), and the cost difference.
+Time per solve, from IPOPT's own timers of every stage (`StageTimes`): evaluation_s (f, g
+and their derivatives; jacobian_s and hessian_s of it), callback_s (the progress callback),
+kkt_s = IPOPT's wall time - evaluation - callback (the KKT factorisations and solves, and
+IPOPT's own steps), rest_s = solve_time_s - IPOPT's wall time (guess, Python between stages).
 Rows go to benchmarks/results/work_precision.json; the plot to benchmarks/work_precision.png.
 """
 
@@ -29,6 +37,7 @@ import time
 import numpy as np
 
 from gait_planner.collocation import plan_collocation
+from gait_planner.ocp import ipopt
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
@@ -39,10 +48,47 @@ GRIDS = (4, 6, 8, 12, 16)
 GRIDS_WALKER3D = (4, 6, 8, 12)
 REFERENCE = 24
 TIME_LIMIT = 120.0  # s per solve (fine grids that do not converge end here)
-# s per collocation solve, by scene: walker2d converges within 35 s on every grid that
-# converges at all; walker3d needed 68, 195, 134 and 291 s at 4, 6, 8 and 12 per phase
-# (collocation.solve, on a loaded machine), and 150 s keeps `make bench` within 30 min
-COLLOCATION_TIME_LIMIT = {"walker2d": 60.0, "walker3d": 150.0}
+# s per collocation solve (either form), by scene: walker2d converges within 35 s on every
+# grid that converges at all; walker3d's compiled form converged in 86 s at 4 per phase and
+# 52 s at 12, and stopped here at 6 and 8 (loaded machine, 2026-11-27; collocation.solve)
+COLLOCATION_TIME_LIMIT = {"walker2d": 60.0, "walker3d": 300.0}
+METHODS = ("dmocc", "collocation", "collocation_interpreted")
+# IPOPT's timers (solver.stats() "t_wall_<key>") summed by `StageTimes`
+TIMERS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l", "callback_fun")
+
+
+class StageTimes:
+    """Within `with StageTimes() as t:`, every IPOPT call of either planner (both call
+    `ocp.ipopt.solve_stage`, which this wraps) adds its wall time (t.seconds["ipopt"]) and
+    IPOPT's timers (`TIMERS`) to t.seconds."""
+
+    def __enter__(self):
+        self.seconds = dict.fromkeys(("ipopt",) + TIMERS, 0.0)
+        self.original = ipopt.solve_stage
+
+        def timed(solver, *args):
+            start = time.perf_counter()
+            out = self.original(solver, *args)
+            self.seconds["ipopt"] += time.perf_counter() - start
+            stats = solver.stats()
+            for key in TIMERS:
+                self.seconds[key] += float(stats.get(f"t_wall_{key}", 0.0))
+            return out
+
+        ipopt.solve_stage = timed
+        return self
+
+    def __exit__(self, *exc):
+        ipopt.solve_stage = self.original
+
+    def row(self, solve_time: float) -> dict:
+        """The split of a solve of solve_time seconds (module docstring)."""
+        t = self.seconds
+        evaluation = sum(t[k] for k in TIMERS if k != "callback_fun")
+        return {"evaluation_s": evaluation, "jacobian_s": t["nlp_jac_g"],
+                "hessian_s": t["nlp_hess_l"], "callback_s": t["callback_fun"],
+                "kkt_s": t["ipopt"] - evaluation - t["callback_fun"],
+                "rest_s": solve_time - t["ipopt"]}
 
 
 def settings_at(scene, n: int, time_limit: float):
@@ -75,6 +121,7 @@ def reference_error(result, reference) -> float:
 
 
 def solve(method: str, scene, n: int, time_limit: float):
+    """(result, build time s, problem size) of one cold plan by `method` (`METHODS`)."""
     s = settings_at(scene, n, time_limit)
     start = time.perf_counter()
     if method == "dmocc":
@@ -84,8 +131,9 @@ def solve(method: str, scene, n: int, time_limit: float):
         result = planner.plan(scene, s, warm_start=False)
         size = planner.problem_size(scene, s)
     else:
-        s = dataclasses.replace(s, max_solve_time=COLLOCATION_TIME_LIMIT[scene.name])
-        result = plan_collocation(scene, s)  # recursive Newton-Euler, one expanded SX graph
+        s = dataclasses.replace(s, max_solve_time=COLLOCATION_TIME_LIMIT[scene.name],
+                                compiled=method == "collocation")
+        result = plan_collocation(scene, s)  # recursive Newton-Euler
         build = result.stats.build_time
         size = {k: result.settings.get(k) for k in ("variables", "constraints",
                                                       "jacobian_nonzeros", "hessian_nonzeros")}
@@ -94,13 +142,17 @@ def solve(method: str, scene, n: int, time_limit: float):
 
 def measure(method: str, scene_name: str, n: int, reference, time_limit: float) -> dict:
     scene = load_scene(scene_name)
-    result, build, size = solve(method, scene, n, time_limit)
+    with StageTimes() as times:
+        result, build, size = solve(method, scene, n, time_limit)
     row = {"method": method, "scene": scene_name, "intervals_per_phase": n,
            **{k: (int(v) if v is not None else None) for k, v in size.items()
               if k != "intervals"},
            "build_time_s": build, "solve_time_s": result.stats.solve_time,
-           "iterations": result.stats.iterations, "cost": result.cost_value,
-           "converged": bool(result.success), "message": result.message}
+           "iterations": result.stats.iterations,
+           **times.row(result.stats.solve_time),
+           "derivatives": result.settings.get("derivatives"),
+           "cost": result.cost_value, "converged": bool(result.success),
+           "message": result.message}
     if not result.success:
         return row
     node, phase = (physics_error(result, reset=r) for r in ("node", "phase"))
@@ -150,7 +202,7 @@ def run(quick: bool = False, time_limit: float = TIME_LIMIT) -> list[dict]:
                   f"{'J = %.5f' % reference.cost_value if reference else 'did not converge'}",
                   flush=True)
         for n in grids[scene_name]:
-            for method in ("dmocc", "collocation"):
+            for method in METHODS:
                 rows.append(measure(method, scene_name, n, reference, time_limit))
                 print_row(rows[-1])
     return rows
@@ -160,9 +212,13 @@ def print_row(r: dict) -> None:
     def f(key, fmt):
         v = r.get(key)
         return "-" if v is None else format(v, fmt)
-    print(f"{r['scene']:9s} {r['method']:12s} n={r['intervals_per_phase']:3d} "
-          f"vars={f('variables', 'd'):>6} it={r['iterations']:5d} "
-          f"t={r['solve_time_s']:8.2f} s J={f('cost', '.5f'):>9} "
+    it = max(r["iterations"], 1)
+    print(f"{r['scene']:9s} {r['method']:23s} n={r['intervals_per_phase']:3d} "
+          f"vars={f('variables', 'd'):>6} build={r['build_time_s']:6.1f} s it={r['iterations']:5d} "
+          f"t={r['solve_time_s']:8.2f} s (per it.: eval {1e3 * r['evaluation_s'] / it:.1f} "
+          f"kkt {1e3 * r['kkt_s'] / it:.1f} "
+          f"rest {1e3 * (r['callback_s'] + r['rest_s']) / it:.1f} ms) "
+          f"J={f('cost', '.5f'):>9} "
           f"phys rms/max={f('error_physics_rms_deg', '.3g')}/{f('error_physics_max_deg', '.3g')} deg "
           f"ref={f('error_reference_rms_deg', '.3g')} deg "
           f"{'' if r['converged'] else 'FAILED: ' + r['message'][:60]}", flush=True)
@@ -178,7 +234,8 @@ def plot(rows: list[dict], path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, (key, title) in zip(axes, keys):
         for scene in sorted({r["scene"] for r in rows}):
-            for method, style in (("dmocc", "o-"), ("collocation", "s--")):
+            for method, style in (("dmocc", "o-"), ("collocation", "s--"),
+                                  ("collocation_interpreted", "^:")):
                 pts = sorted((r["solve_time_s"], r[key], r["intervals_per_phase"]) for r in rows
                              if r["scene"] == scene and r["method"] == method
                              and r.get(key) is not None)

@@ -56,14 +56,13 @@ they cost as much as the whole rest of the gradient and half of the Jacobian's t
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+from typing import Any, Callable, NamedTuple, Protocol
 
 import casadi as ca
 import numpy as np
 
 from gait_planner.ocp.compile import Source
 from gait_planner.ocp.elements import ElementGroup
-from gait_planner.ocp.transcription import Transcription
 from gait_planner.ocp.vectorize import LANES
 
 # Given the element derivatives to form, returns them (e.g. compiled) in the same order.
@@ -80,6 +79,24 @@ Compiler = Callable[[list[Source]], list[ca.Function]]
 INTERPRETED_ABOVE = 90_000
 
 
+class ElementNLP(Protocol):
+    """What is read here of a transcription (`ocp.transcription.Transcription`, and the
+    collocation baseline's `collocation.transcription.CollocationTranscription`): MX x, p,
+    cost and g, the cost and g without their elements' parts, the `ElementGroup`s, and a
+    layout whose element_inputs(x, p) -> (xe, pe) are the vectors the elements' z_index and
+    p_index point into, xe being x followed by images sign * x[source] (plus terms free of x)
+    given by layout.images {"x_source", "x_sign"} (None: no images)."""
+
+    x: ca.MX
+    p: ca.MX
+    cost: ca.MX
+    cost_without_elements: ca.MX
+    g: ca.MX
+    g_without_elements: ca.MX
+    elements: list[ElementGroup]
+    layout: Any
+
+
 class ExpandedNLP(NamedTuple):
     """The NLP as SX expressions of SX symbols x (nx,) and p: the cost f and the rows g
     (IPOPT's nlp_f and nlp_g), and their parts that are not elements (f_rest, g_rest)."""
@@ -92,7 +109,7 @@ class ExpandedNLP(NamedTuple):
     g_rest: ca.SX
 
 
-def expand_nlp(tr: Transcription) -> ExpandedNLP:
+def expand_nlp(tr: ElementNLP) -> ExpandedNLP:
     """The MX graph of the transcription's mapped per-node Functions expanded into one SX
     graph, once for the NLP and its derivatives (walker3d: 0.18 s)."""
     x, p = ca.SX.sym("x", int(tr.x.shape[0])), ca.SX.sym("p", int(tr.p.shape[0]))
@@ -102,7 +119,7 @@ def expand_nlp(tr: Transcription) -> ExpandedNLP:
     return ExpandedNLP(x, p, f, f_rest, g, g_rest)
 
 
-def nlp_derivatives(tr: Transcription, compiler: Compiler | None = None,
+def nlp_derivatives(tr: ElementNLP, compiler: Compiler | None = None,
                     expanded: ExpandedNLP | None = None) -> dict[str, ca.Function]:
     """{"grad_f", "jac_g", "hess_lag"} of the NLP (tr.x, tr.p, tr.cost, tr.g); expanded:
     `expand_nlp(tr)` if the caller has it."""
