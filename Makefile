@@ -10,7 +10,7 @@ PYTHON := $(VENV)/bin/python
 PYTEST_ARGS ?=
 FUZZ_EXAMPLES ?= 1000
 
-.PHONY: setup test test-slow test-all fuzz run docs bench bench-quick clean distclean
+.PHONY: setup test test-slow test-all fuzz run docs bench bench-quick bench-peers clean distclean
 
 setup:
 	@tools/setup.sh $(VENV)
@@ -45,6 +45,16 @@ bench: setup
 
 bench-quick: setup
 	$(PYTHON) benchmarks/bench.py --quick
+
+# `bench-peers` (issue #27): DMOCC against Crocoddyl and Drake, each peer in its own env
+# .venv-peers/<peer> (benchmarks/peers/setup_env.sh; a peer whose env cannot be made is
+# skipped with the reason), walker2d and walker3d at 4, 8 and 16 intervals per phase, 300 s
+# per solve; benchmarks/results/peers.json and benchmarks/peers.png (benchmarks/README.md).
+PEERS ?= crocoddyl drake
+PEERS_ARGS ?=
+bench-peers: setup
+	@for peer in $(PEERS); do benchmarks/peers/setup_env.sh $$peer || true; done
+	$(PYTHON) -m benchmarks.peers.run --peers $(PEERS) $(PEERS_ARGS)
 
 # Build outputs and caches; keeps .venv/ (and forgets its msg_defs build, so the next
 # `make setup` rebuilds and reinstalls gait_planner_msgs) and keeps runs/.

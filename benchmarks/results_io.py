@@ -79,3 +79,9 @@ def write_results(name: str, rows: list[dict], meta: dict | None = None) -> Path
     document = {"header": {**header(), **(meta or {})}, "rows": rows}
     path.write_text(json.dumps(document, indent=1, default=_plain) + "\n")
     return path
+
+
+def load_results(name: str) -> dict | None:
+    """benchmarks/results/<name>.json as written by `write_results`, or None if absent."""
+    path = RESULTS / f"{name}.json"
+    return json.loads(path.read_text()) if path.exists() else None
