@@ -98,6 +98,11 @@ REFINE_ATTEMPTS = COLD_ATTEMPTS[:1]
 STAIR_COLD_MAX = 0.10
 
 
+def _variants(attempts) -> list[str]:
+    """The solver variants of `attempts` (lists of stages), each once, in order."""
+    return list(dict.fromkeys(variant for attempt in attempts for variant, *_ in attempt))
+
+
 @dataclasses.dataclass
 class _Built:
     tr: Transcription
@@ -136,10 +141,10 @@ class Planner:
     def prepare(self, scene: Scene, settings: GaitSettings) -> str:
         """Build the problem of (scene, settings) now, compiling its derivative elements if
         the settings ask for it (cached on disk for later processes), and the IPOPT
-        instances of a cold start and of a warm re-plan (walker3d: 0.7 s each), so that
-        no plan spends time on them. Returns how the derivatives are evaluated, in words."""
+        instances of a cold start, its fallback with the inertia test and a warm re-plan
+        (walker3d: 0.7 s each), so that no plan spends time on them. Returns how the derivatives are evaluated, in words."""
         built = self._build(scene, settings)
-        for variant, *_ in COLD_ATTEMPTS[0] + WARM_ATTEMPTS[0]:
+        for variant in _variants(COLD_ATTEMPTS + WARM_ATTEMPTS):
             self._solver(built, settings, variant)
         return built.derivatives_used
 
@@ -330,7 +335,9 @@ class Planner:
                             and settings.step_height < -STAIR_COLD_MAX)
             attempts = (WARM_ATTEMPTS if warm_start or stairs_first
                         else REFINE_ATTEMPTS if refine_from is not None else COLD_ATTEMPTS)
-            for variant, *_ in attempts[0]:  # a fallback's solver is built if it is needed
+            # every solver the plan may use, its fallbacks' and a continuation's (warm)
+            # included, before the clock starts
+            for variant in _variants(attempts + WARM_ATTEMPTS):
                 self._solver(built, settings, variant)
         except (ValueError, RuntimeError) as err:
             return failed_result(scene, settings, f"could not build the problem: {err}")
