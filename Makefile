@@ -37,7 +37,8 @@ docs: setup
 	$(PYTHON) tools/docs.py --plan $(SCREENSHOT)
 
 # Benchmarks (benchmarks/README.md): `bench` rewrites benchmarks/REPORT.md and
-# benchmarks/results/*.json (~40 min on 2 cores, the plans walked in MuJoCo ~6 of them:
+# benchmarks/results/*.json (over an hour on 2 cores: work_precision.py ~55 min of it under
+# load on 2026-11-27, the plans walked in MuJoCo ~6 min:
 # benchmarks/walk.py); `bench-quick` is a smoke run (~3 min)
 # writing to build/bench-quick/ instead.
 bench: setup

@@ -1,6 +1,6 @@
 """Run the benchmarks and rewrite benchmarks/REPORT.md (`make bench`, `make bench-quick`).
 
-    .venv/bin/python benchmarks/bench.py            # everything (~40 min on 2 cores)
+    .venv/bin/python benchmarks/bench.py            # everything (over an hour on 2 cores)
     .venv/bin/python benchmarks/bench.py --quick    # smoke run (~3 min): small cases only,
                                                     # results and report in build/bench-quick/
 

@@ -5,7 +5,8 @@ continuation against independent cold plans, a simulated cluster, and the in-hul
     .venv/bin/python benchmarks/gait_library.py --quick    # a 3 x 2 walker2d grid, ~2 min
 
 Rows of results/gait_library.json:
-* "build": the walker2d grid `GRID` (27 plans) built into a fresh folder with 1 and 2 local
+* "build": the walker2d grid `GRID` (27 plans: step length and slope; friction does not
+  bind on level walks, so J would not change along it) built into a fresh folder with 1 and 2 local
   workers by continuation, and with 2 workers as independent cold plans: wall time (Ray's
   start apart), plans per minute, IPOPT iterations, failures, points whose recording
   fails the verifier.
@@ -18,8 +19,8 @@ Rows of results/gait_library.json:
   node's first request): from the library (`gaitlib.serve.library_start`, then a warm
   plan), from the nearest single stored plan (the node without a library), and cold.
   Iterations and wall time (library_start included).
-Figure gait_library.png: J and the half cycle's duration over the walker2d grid, and the
-serve times.
+Figure gait_library.png: J over the walker2d grid, IPOPT iterations per point by
+continuation and independently, and the serve times.
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ from gait_planner.request import plan_request
 from gait_planner.verify import verify_recording
 from results_io import figure_path, write_results
 
-GRID = "step_length=0.40:0.80:0.05,friction_coefficient=0.6/0.8/1.0"
+GRID = "step_length=0.40:0.80:0.05,slope=-5/0/5"
 QUICK_GRID = "step_length=0.5/0.6/0.7,friction_coefficient=0.6/1.0"
 SERVE_GRID = "step_length=0.55:0.70:0.05,friction_coefficient=0.8/1.0"
 
@@ -122,31 +123,40 @@ def serve_rows(folder: Path, grid_text: str) -> list[dict]:
     return out
 
 
-def figure(folder: Path, grid_text: str, serve: list[dict]) -> None:
+def figure(folders: dict[str, Path], serve: list[dict]) -> None:
+    """J over step length per value of the grid's second axis (the continuation build),
+    iterations per point of each build, and the in-hull answer times."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = [r for r in _rows(folder) if r.status == "ok"]
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
-    for mu in sorted({r.request["friction_coefficient"] for r in rows}):
-        sel = sorted((r for r in rows if r.request["friction_coefficient"] == mu),
+    fig, axes = plt.subplots(1, 3, figsize=(14, 3.9))
+    rows = [r for r in _rows(folders["continuation"]) if r.status == "ok"]
+    other = [k for k in rows[0].request if k != "step_length"][0] if rows else ""
+    for value in sorted({r.request[other] for r in rows}):
+        sel = sorted((r for r in rows if r.request[other] == value),
                      key=lambda r: r.request["step_length"])
-        steps = [r.request["step_length"] for r in sel]
-        axes[0].plot(steps, [r.cost for r in sel], "o-", label=f"mu {mu:g}")
-        axes[1].plot(steps, [r.duration for r in sel], "o-", label=f"mu {mu:g}")
+        axes[0].plot([r.request["step_length"] for r in sel], [r.cost for r in sel], "o-",
+                     label=f"{other} {value:g}")
     axes[0].set(xlabel="step length (m)", ylabel="J (J s)", title="walker2d library: cost")
-    axes[1].set(xlabel="step length (m)", ylabel="half cycle (s)", title="duration")
-    axes[0].legend()
+    axes[0].legend(fontsize=8)
+    for label, folder in folders.items():
+        its = [r.iterations for r in _rows(folder)]
+        axes[1].plot(range(len(its)), its, "o-" if label == "continuation" else "s--",
+                     label=f"{label}: {sum(its)} in all")
+    axes[1].set(xlabel="grid point", ylabel="IPOPT iterations",
+                title="iterations per point (2 workers)")
+    axes[1].legend(fontsize=8)
     if serve:
         x = np.arange(len(serve))
         for k, how in enumerate(("library", "nearest", "cold")):
             axes[2].bar(x + 0.27 * (k - 1), [r[f"{how}_s"] for r in serve], 0.27, label=how)
+        axes[2].set_xticks(x, [f"{r['step_length']:.3f} m\nmu {r['friction_coefficient']:g}"
+                               for r in serve], fontsize=7)
         axes[2].set_yscale("log")
-        axes[2].set(xlabel="walker3d request (cell centre)", ylabel="answer (s)",
-                    title="in-hull answer time")
-        axes[2].legend()
+        axes[2].set(ylabel="answer (s)", title="walker3d: in-hull answers")
+        axes[2].legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(figure_path("gait_library.png"), dpi=110)
 
@@ -170,7 +180,7 @@ def main() -> None:
             rows.append(build_row("build", "walker3d", SERVE_GRID, root / "walker3d", workers=2))
             serve = serve_rows(root / "walker3d", SERVE_GRID)
             rows += serve
-        figure(root / "w2", grid, serve)
+        figure({"continuation": root / "w2", "independent": root / "independent"}, serve)
     write_results("gait_library", rows, {"grid": grid, "serve_grid": SERVE_GRID})
 
 

@@ -82,15 +82,26 @@ def work_precision(doc) -> list[str]:
             "*reference*: DMOCC at "
             f"{doc['header'].get('reference', '?')} intervals per phase, joint angles at equal "
             "phase-relative times; *certificate*: inverse dynamics, largest torque error in % "
-            "of the peak torque away from contact switches. The collocation is its fast form "
-            "(recursive Newton–Euler dynamics, the NLP expanded to one SX graph) with a time "
-            f"limit per solve of {_limits(doc['header'].get('collocation_time_limit_s', '?'))}; "
-            "DMOCC uses its compiled derivative elements.", "",
+            "of the peak torque away from contact switches. The collocation (recursive "
+            "Newton–Euler dynamics) runs as DMOCC does: its rows as per-point, per-knot and "
+            "per-interval elements whose derivatives are compiled to C (`collocation`, the "
+            "baseline), and for comparison with CasADi's derivatives of the one expanded SX "
+            "graph (`collocation_interpreted`); every IPOPT instance is built before the clock "
+            "starts. Time limit per collocation solve: "
+            f"{_limits(doc['header'].get('collocation_time_limit_s', '?'))}. Per iteration: "
+            "*eval* is IPOPT's time in f, g and their derivatives, *KKT* its wall time less "
+            "that and the progress callback (mostly MUMPS), in ms.", "",
             "![work-precision](work_precision.png)", ""]
+    for r in rows:
+        its = max(r.get("iterations") or 0, 1)
+        r["eval_ms"] = 1e3 * r["evaluation_s"] / its if r.get("evaluation_s") is not None else None
+        r["kkt_ms"] = 1e3 * r["kkt_s"] / its if r.get("kkt_s") is not None else None
     out += table(rows, [
         ("scene", "scene", ""), ("method", "method", ""), ("n", "intervals_per_phase", "d"),
         ("variables", "variables", "d"), ("iterations", "iterations", "d"),
-        ("solve s", "solve_time_s", ".2f"), ("converged", "converged", ""),
+        ("build s", "build_time_s", ".1f"), ("solve s", "solve_time_s", ".2f"),
+        ("eval ms/it", "eval_ms", ".3g"), ("KKT ms/it", "kkt_ms", ".3g"),
+        ("converged", "converged", ""),
         ("J", "cost", ".5f"), ("physics RMS deg", "error_physics_rms_deg", ".3g"),
         ("physics max deg", "error_physics_max_deg", ".3g"),
         ("phase max deg", "error_physics_phase_max_deg", ".3g"),
@@ -435,11 +446,68 @@ def gait_library(doc) -> list[str]:
     return out + [""]
 
 
+PEER_NOTES = {
+    "crocoddyl": "Crocoddyl (FDDP, multiple shooting as its biped example writes it: contact "
+                 "forward dynamics, 6D sole and 3D point contacts, impulses at touch-down): "
+                 "same schedule, placements, durations and mu; it cannot free the start state "
+                 "or the durations, makes periodicity a terminal cost and cones, limits and "
+                 "the ground barrier costs, and minimises squared torques (+ a small state "
+                 "regularisation), not kinetic energy. Its RK4 rows take 4 dynamics "
+                 "evaluations per interval; the 'x0 DMOCC' rows start from DMOCC's optimal "
+                 "start state (warm), the 'x0 guess' rows from the kinematic guess's.",
+    "drake": "Drake (MathematicalProgram, backward Euler or midpoint dynamics from the "
+             "plant's mass matrix and bias terms, impulses at touch-down, hard cones: exact in "
+             "the plane, an 8-sided pyramid in 3D, hard mirror periodicity and limits, squared "
+             "torques, from the kinematic guess): same schedule, placements, durations and "
+             "mu; point contacts only (no full-foot roll moment, no foot width), no swing "
+             "clearance ramp or strike-speed bound; its IPOPT runs with a limited-memory "
+             "Hessian, SNOPT reports function evaluations, not iterations.",
+}
+
+
+def peers(doc) -> list[str]:
+    out = ["## 10. DMOCC against Crocoddyl and Drake", ""]
+    if doc is None:
+        return out + ["Not measured (`make bench-peers`).", ""]
+    rows = doc["rows"]
+    versions = sorted({f"{r['peer']} {r['version']}" for r in rows if r.get("version")})
+    out += [provenance(doc), "",
+            "`make bench-peers` (`benchmarks/peers/run.py`, each peer in its own environment "
+            "`.venv-peers/<peer>`): the same walker (the project's URDF), DMOCC's contact "
+            "schedule, foot placements and phase durations, the same friction coefficient; "
+            "every plan measured by the project's instruments: one-interval drift against "
+            "the continuous dynamics (Pinocchio, DOP853; RMS and max over the nodes), the "
+            "swing foot's drift over a phase, contact points held (mm), cone and joint-limit "
+            "violations, the plan's own periodicity gap, and the integral of squared torques "
+            "(every method's, whatever it minimised). Time limit "
+            f"{doc['header'].get('time_limit_s', 300):g} s per solve. Versions: "
+            f"{', '.join(versions) or 'see the requirements files'}. Rows measured at "
+            f"different times carry their own `measured` stamp in the JSON. Figure: "
+            "[peers.png](peers.png).", ""]
+    out += table(sorted(rows, key=lambda r: (r["scene"], r["grid"], r["method"] != "DMOCC",
+                                             r["method"])), [
+        ("scene", "scene", ""), ("n", "grid", "d"), ("method", "method", ""),
+        ("conv", "converged", ""), ("build s", "build_time", ".2g"),
+        ("solve s", "solve_time", ".3g"), ("iter", "iterations", ""),
+        ("int tau^2", "squared_torque", ".4g"), ("node RMS deg", "drift_node_rms_deg", ".3g"),
+        ("node max deg", "drift_node_max_deg", ".3g"), ("swing mm", "swing_phase_mm", ".3g"),
+        ("hold mm", "contact_hold_mm", ".2g"), ("cone N", "cone_violation_n", ".2g"),
+        ("limit deg", "joint_limit_deg", ".2g"), ("periodic mm", "plan_periodicity_mm", ".3g"),
+        ("status", "status", "")])
+    out += ["", "What is and is not comparable:", "",
+            "* DMOCC: frees the start state and the phase durations, imposes periodicity, "
+            "cones, limits, swing clearance and strike speed as hard constraints, and minimises "
+            "kinetic energy; its row is the plan the product answers with."]
+    out += [f"* {text}" for peer, text in PEER_NOTES.items()
+            if any(r["peer"] == peer for r in rows)]
+    return out + [""]
+
+
 def main() -> None:
     docs = {name: load(name) for name in ("work_precision", "integrators", "model_size",
                                          "model_size_compiled", "hard_cases", "cold_solve",
                                          "node_latency_walker3d", "request_sweep", "walk",
-                                         "gait_trends", "gait_library")}
+                                         "gait_trends", "gait_library", "peers")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
              "`benchmarks/results/*.json`; every number below is in those files with the "
@@ -456,6 +524,7 @@ def main() -> None:
     lines += walk(docs["walk"])
     lines += gait_trends(docs["gait_trends"])
     lines += gait_library(docs["gait_library"])
+    lines += peers(docs["peers"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
