@@ -10,10 +10,10 @@ import sys
 from pathlib import Path
 
 from gait_planner.cli.errors import CliError
+from gait_planner.gaitlib.grid import AXES
 
 GRID_HELP = ("grid axes, comma-separated: field=start:stop:step or field=v1/v2/...; fields: "
-             "step_length, friction_coefficient, slope, speed, step_height (e.g. "
-             "step_length=0.4:0.9:0.05,friction_coefficient=0.4:1.0:0.2)")
+             f"{', '.join(AXES)} (e.g. step_length=0.4:0.9:0.05,friction_coefficient=0.4:1.0:0.2)")
 
 
 def add_library_parser(subparsers: argparse._SubParsersAction) -> None:

@@ -308,7 +308,7 @@ class Planner:
             return None, failed_result(
                 scene, settings, f"the plan on stairs of {lower.step_height:g} m that a "
                 f"{settings.step_height:g} m stair starts from failed: {result.message}")
-        return self._built[_key(scene, lower)].stored[-1], result
+        return self.stored_plans(scene, lower)[-1], result
 
     def plan(self, scene: Scene, settings: GaitSettings, *, warm_start: bool = True,
              guess: str = "kinematic", refine_from: GaitSettings | None = None) -> PlanResult:
