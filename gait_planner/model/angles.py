@@ -39,51 +39,64 @@ def spherical_rotation(pitch: float, roll: float, yaw: float) -> np.ndarray:
 
 
 def spherical_angles(R: np.ndarray) -> tuple[float, float, float]:
-    """(pitch, roll, yaw) of R = Ry(pitch) Rx(roll) Rz(yaw); roll in [-pi/2, pi/2].
+    """(pitch, roll, yaw) of R = Ry(pitch) Rx(roll) Rz(yaw); roll in [-pi/2, pi/2]
+    (`spherical_angles_rows` of one rotation)."""
+    pitch, roll, yaw = spherical_angles_rows(np.asarray(R, dtype=float)[None])[0]
+    return float(pitch), float(roll), float(yaw)
+
+
+def spherical_angles_rows(R: np.ndarray) -> np.ndarray:
+    """(pitch, roll, yaw) (n, 3) of rotations R (n, 3, 3) = Ry(pitch) Rx(roll) Rz(yaw).
 
     roll = atan2(-R12, cos(roll)) is accurate to round-off everywhere (arcsin(-R12) is not
     near +-90 deg); yaw is taken from the remainder Rx(roll)^T Ry(pitch)^T R = Rz(yaw), so the
     three angles rebuild R to round-off even next to the gimbal lock, where pitch and yaw
     separately are ill-determined.
     """
-    c_roll = float(np.hypot(R[0, 2], R[2, 2]))
-    roll = float(np.arctan2(-R[1, 2], c_roll))
-    if c_roll > _GIMBAL_LOCK:
-        pitch = float(np.arctan2(R[0, 2], R[2, 2]))
-    else:  # gimbal lock: only pitch -/+ yaw is defined; put it all into pitch
-        pitch = float(np.arctan2(-R[2, 0], R[0, 0]))
-    rest = rot_x(roll).T @ rot_y(pitch).T @ R
-    return pitch, roll, float(np.arctan2(rest[1, 0], rest[0, 0]))
+    c_roll = np.hypot(R[:, 0, 2], R[:, 2, 2])
+    roll = np.arctan2(-R[:, 1, 2], c_roll)
+    # gimbal lock: only pitch -/+ yaw is defined; put it all into pitch
+    pitch = np.where(c_roll > _GIMBAL_LOCK, np.arctan2(R[:, 0, 2], R[:, 2, 2]),
+                     np.arctan2(-R[:, 2, 0], R[:, 0, 0]))
+    cp, sp, cr, sr = np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
+    # first column of the remainder: (Ry(pitch)^T R) then Rx(roll)^T, rows 0 and 1
+    rest_00 = cp * R[:, 0, 0] - sp * R[:, 2, 0]
+    rest_10 = cr * R[:, 1, 0] + sr * (sp * R[:, 0, 0] + cp * R[:, 2, 0])
+    return np.stack([pitch, roll, np.arctan2(rest_10, rest_00)], axis=1)
 
 
 def revolute_angle(R: np.ndarray, axis) -> float:
     """Angle of the rotation R about the unit vector `axis` (R assumed to fix axis)."""
+    return float(revolute_angle_rows(np.asarray(R, dtype=float)[None], axis)[0])
+
+
+def revolute_angle_rows(R: np.ndarray, axis) -> np.ndarray:
+    """Angles (n,) of rotations R (n, 3, 3) about the unit vector `axis` (each R assumed to
+    fix it): the components of R - R^T give 2 sin(theta) a, the trace 1 + 2 cos(theta)."""
     a = np.asarray(axis, dtype=float)
-    # components of R - R^T give 2 sin(theta) a; trace gives 1 + 2 cos(theta)
-    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    return float(np.arctan2(0.5 * w @ a, 0.5 * (np.trace(R) - 1.0)))
+    w = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]],
+                 axis=1)
+    return np.arctan2(0.5 * w @ a, 0.5 * (np.trace(R, axis1=1, axis2=2) - 1.0))
 
 
 def _frames(scene: Scene, q: np.ndarray) -> dict[str, np.ndarray]:
-    return {
-        b.name: q[12 * i + 3 : 12 * i + 12].reshape(3, 3).T for i, b in enumerate(scene.bodies)
-    }
+    """Per body its triads (n, 3, 3) of configurations q (n, k)."""
+    return {b.name: q[:, 12 * i + 3 : 12 * i + 12].reshape(-1, 3, 3).transpose(0, 2, 1)
+            for i, b in enumerate(scene.bodies)}
 
 
 def joint_angles(scene: Scene, q: np.ndarray) -> np.ndarray:
     """Joint angles (rad) of configurations q: (k,) -> (na,) or (n, k) -> (n, na)."""
     q = np.asarray(q, dtype=float)
-    if q.ndim == 2:
-        return np.array([joint_angles(scene, row) for row in q])
+    if q.ndim == 1:
+        return joint_angles(scene, q[None])[0]
     frames = _frames(scene, q)
-    out: list[float] = []
+    out = []
     for joint in scene.joints:
-        R = frames[joint.parent].T @ frames[joint.child]
-        if joint.type is JointType.SPHERICAL:
-            out += spherical_angles(R)
-        else:
-            out.append(revolute_angle(R, joint.axis))
-    return np.array(out)
+        R = np.einsum("nji,njk->nik", frames[joint.parent], frames[joint.child])
+        out.append(spherical_angles_rows(R) if joint.type is JointType.SPHERICAL
+                   else revolute_angle_rows(R, joint.axis)[:, None])
+    return np.concatenate(out, axis=1) if out else np.zeros((q.shape[0], 0))
 
 
 def root_angles(R: np.ndarray) -> tuple[float, float, float]:

@@ -69,17 +69,19 @@ def _mirror_forces(tr: Transcription, forces: dict[str, np.ndarray],
         rolls[mirror.get(body, body)][dst] = -rolls[body][src]
 
 
-def joint_rates(tr: Transcription, q: np.ndarray, times: np.ndarray,
-                step: float) -> tuple[np.ndarray, np.ndarray]:
+def joint_rates(scene, mirror: tuple[np.ndarray, np.ndarray, np.ndarray], q: np.ndarray,
+                times: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
     """Joint-angle velocities and accelerations (N+1, na), rad/s and rad/s^2, of a half
-    cycle: `central_rates` with the periodic continuation as the outer neighbours of nodes
-    0 and N: q_{-1} = A (q_{N-2} - s e - c) and q_{N+1} = A q_2 + s e + c (the mirror of
-    `ocp.mirror`, eqs. 7-9), h_{-1} = h_{N-2}, h_N = h_1."""
-    N = tr.N
+    cycle q (N+1, k) at times (N+1,): `central_rates` with the periodic continuation as the
+    outer neighbours of nodes 0 and N: q_{-1} = A (q_{N-2} - s e - c) and
+    q_{N+1} = A q_2 + s e + c, with mirror = (A, e, c) (`ocp.mirror.configuration_mirror`,
+    eqs. 7-9), h_{-1} = h_{N-2}, h_N = h_1."""
+    A, shift, lift = mirror
+    N = len(q) - 1
     h = np.diff(times)
-    before = tr.A @ (q[N - 2] - step * tr.shift - tr.lift)
-    after = tr.A @ q[2] + step * tr.shift + tr.lift
-    return central_rates(tr.mb.scene, np.vstack([before, q, after]),
+    before = A @ (q[N - 2] - step * shift - lift)
+    after = A @ q[2] + step * shift + lift
+    return central_rates(scene, np.vstack([before, q, after]),
                          np.concatenate([[times[0] - h[N - 2]], times, [times[-1] + h[1]]]))
 
 
@@ -95,6 +97,16 @@ def central_rates(scene, q: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.n
     velocity = (dt[1:] * slope[:-1] + dt[:-1] * slope[1:]) / w
     acceleration = 2.0 * (slope[1:] - slope[:-1]) / w
     return velocity, acceleration
+
+
+def node_kinetic_energy(mass_diagonal: np.ndarray, q: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Kinetic energy (n,) J at the nodes of configurations q (n, k) with interval lengths
+    h (n-1,) s: each interval's 1/2 v^T M v with v = (q_{n+1} - q_n) / h_n and the director
+    mass matrix M = diag(mass_diagonal) (k,), averaged over a node's two intervals (an end
+    node takes its one interval's)."""
+    v = np.diff(q, axis=0) / h[:, None]
+    T = 0.5 * np.einsum("ni,i,ni->n", v, mass_diagonal, v)
+    return np.concatenate([[T[0]], 0.5 * (T[:-1] + T[1:]), [T[-1]]])
 
 
 def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray, *,
@@ -123,15 +135,12 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
     _mirror_forces(tr, forces, rolls, 1, N)
 
     half = 0.5 * (np.concatenate([[0.0], h]) + np.concatenate([h, [0.0]]))  # w_n; ends h/2
-    gen = np.array([half[n] * np.array(mb.actuation(q[n])) @ tau[n] for n in range(N + 1)])
-    v = np.diff(q, axis=0) / h[:, None]
-    T_int = 0.5 * np.einsum("ni,i,ni->n", v, mb.mass_diagonal, v)
-    T_node = np.concatenate([[T_int[0]], 0.5 * (T_int[:-1] + T_int[1:]), [T_int[-1]]])
+    gen = half[:, None] * np.array(mb.actuation_force.map(N + 1)(q.T, tau.T)).T
     angles = joint_angles(scene, q)
-    rates = joint_rates(tr, q, times, float(p[-2]))
+    rates = joint_rates(scene, (tr.A, tr.shift, tr.lift), q, times, float(p[-2]))
 
     viol = violations(tr, g)
-    constraint = max(max(float(np.abs(np.array(mb.constraints(qn))).max()) for qn in q),
+    constraint = max(float(np.abs(np.array(mb.constraints.map(N + 1)(q.T))).max()),
                      *(v for k, v in viol.items() if not k.startswith("dynamics")
                        and k in ("contact_hold", "contact_establish", "pin_x")))
     dynamics = FORCE_SCALE * max((v for k, v in viol.items() if k.startswith("dynamics")),
@@ -155,7 +164,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
         times=times, q=q, tau=tau, joint_angle_names=angle_names(scene), joint_angles=angles,
         joint_velocities=rates[0], joint_accelerations=rates[1],
         phases=tuple(phases[k].name for k in node_phase), active_contacts=active,
-        contact_forces=forces, roll_moments=rolls, generalized_force=gen, kinetic_energy=T_node,
+        contact_forces=forces, roll_moments=rolls, generalized_force=gen, kinetic_energy=node_kinetic_energy(mb.mass_diagonal, q, h),
         potential_energy=q @ mech.gravity_gradient, phase_scaling=x[-int(tr.S.shape[0]):].copy(),
         duration=float(times[N - 1] - times[0]), stats=stats, ground=tr.ground,
         settings={
