@@ -47,11 +47,12 @@ bench: setup
 bench-quick: setup
 	$(PYTHON) benchmarks/bench.py --quick
 
-# `bench-peers` (issue #27): DMOCC against Crocoddyl and Drake, each peer in its own env
-# .venv-peers/<peer> (benchmarks/peers/setup_env.sh; a peer whose env cannot be made is
-# skipped with the reason), walker2d and walker3d at 4, 8 and 16 intervals per phase, 300 s
-# per solve; benchmarks/results/peers.json and benchmarks/peers.png (benchmarks/README.md).
-PEERS ?= crocoddyl drake
+# `bench-peers` (issue #27): DMOCC against Crocoddyl, Drake and OpenSim Moco, each peer in
+# its own env .venv-peers/<peer> (benchmarks/peers/setup_env.sh; a peer whose env cannot be
+# made is skipped with the reason), walker2d and walker3d at 4, 8 and 16 intervals per
+# phase, 300 s per solve; benchmarks/results/peers.json and benchmarks/peers.png
+# (benchmarks/README.md).
+PEERS ?= crocoddyl drake opensim
 PEERS_ARGS ?=
 bench-peers: setup
 	@for peer in $(PEERS); do benchmarks/peers/setup_env.sh $$peer || true; done

@@ -7,7 +7,8 @@ director configurations by forward kinematics of the URDF's body links (a link's
 its parent-joint point, the root's its centre of mass, axes the directors:
 `gait_planner.io.urdf`), one node appended as the periodic continuation (node K + 1 =
 mirror(node 1) + step, interval K holding the mirror image of interval 0's contacts, as
-DMOCC's node N: `gait_planner.result`). `measure(...)` then reports
+DMOCC's node N: `gait_planner.result`), joint rates by central differences continued
+periodically as DMOCC's (`ocp.solution.joint_rates`). `measure(...)` then reports
 * `verify.simulation.physics_error` at reset "node" (one interval's drift) and "phase", the
   plan's torques applied as what they are: the URDF joints' efforts (conjugate to the
   angles; spherical joints by their pitch/roll/yaw efforts at the simulated configuration),
@@ -21,7 +22,10 @@ DMOCC's node N: `gait_planner.result`). `measure(...)` then reports
 * joint limits: the largest excursion (deg) of a joint angle outside problem.joint_ranges;
 * the plan's own periodicity error (mm): node K against mirror(node 0) + step;
 * the squared-torque cost: integral of |efforts|^2 over the half cycle (N^2 m^2 s), with the
-  plan's own hold.
+  plan's own hold;
+* if asked (`walk_to`), the walk in MuJoCo: the plan recorded by the product's MCAP writer
+  and walked `WALK_STEPS` half cycles by the reference controller
+  (`gait_planner.walk.simulate.walk`, config/walk.yaml), as a user walks a DMOCC plan.
 DMOCC's own rows (`measure_dmocc`) use its `PlanResult` and `physics_error` unchanged.
 """
 
@@ -37,19 +41,25 @@ import pinocchio as pin
 
 from benchmarks.peers import exchange
 from benchmarks.peers.problem import urdf_joint_names, urdf_model
+from gait_planner.io.mcap_writer import write_plan_mcap
 from gait_planner.io.messages import node_efforts
 from gait_planner.io.urdf import kinematic_tree
 from gait_planner.model.angles import angle_names, conjugate_torques, joint_angles
+from gait_planner.model.ground import Ground
 from gait_planner.model.loader import load_scene
+from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
-from gait_planner.ocp.mirror import contact_partners
+from gait_planner.ocp.mirror import configuration_mirror, contact_partners
+from gait_planner.ocp.solution import joint_rates, node_kinetic_energy
 from gait_planner.result import PlanResult, SolverStats
 from gait_planner.verify import simulation
 from gait_planner.verify.constrained import ConstrainedModel
 from gait_planner.verify.continuous import cardan_efforts, effort_names
 from gait_planner.verify.mechanics import Mechanics, parse_scene
+from gait_planner.walk.simulate import walk
 
 HOLDS = ("zero", "linear")
+WALK_STEPS = 10  # half cycles walked in MuJoCo (`gait-planner walk`'s default)
 _S = np.diag([1.0, -1.0, 1.0])
 
 
@@ -157,17 +167,20 @@ def plan_result(problem: dict, plan: exchange.Plan) -> tuple[PlanResult, np.ndar
         f = plan.forces.get(c, np.zeros((K + 1, 3)))
         partner = plan.forces.get(partners[c], np.zeros((K + 1, 3)))
         forces[c] = np.vstack([f, _S @ partner[1]])
-    velocity = np.gradient(np.unwrap(angles, axis=0), times, axis=0)
+    mb = Multibody(scene)
+    velocity, acceleration = joint_rates(
+        scene, configuration_mirror(mb, Ground(slope=problem["slope"])), q, times, step)
     result = PlanResult(
         success=bool(plan.meta["converged"]), message=str(plan.meta["status"]), scene=scene,
         cost_name="torque_squared", cost_value=float(plan.meta["objective"]),
         step_length=step, friction_coefficient=problem["friction_coefficient"], times=times,
         q=q, tau=couples_of_efforts(scene, angles, efforts_angles), joint_angle_names=tuple(names),
         joint_angles=angles, joint_velocities=velocity,
-        joint_accelerations=np.gradient(velocity, times, axis=0),
+        joint_accelerations=acceleration,
         phases=tuple(phases[p]["name"] for p in plan.phase_of_node) + (phases[-1]["name"],),
         active_contacts=tuple(active), contact_forces=forces, roll_moments={},
-        generalized_force=np.zeros_like(q), kinetic_energy=np.full(K + 2, np.nan),
+        generalized_force=np.zeros_like(q),
+        kinetic_energy=node_kinetic_energy(mb.mass_diagonal, q, np.diff(times)),
         potential_energy=np.array([mech.potential_energy(row) for row in q]),
         phase_scaling=np.zeros(0), duration=float(times[K] - times[0]),
         stats=SolverStats(status=str(plan.meta["status"]),
@@ -232,9 +245,19 @@ def _physics(node, phase) -> dict:
             "physics_failure": node.failure or phase.failure}
 
 
-def measure(problem: dict, plan: exchange.Plan) -> dict:
-    """Every measure of a peer's plan (module docstring); a plan with a NaN or an infinity
-    is measured as a failure."""
+def walk_measures(result: PlanResult, path: Path) -> dict:
+    """The plan recorded to `path` (MCAP) and walked `WALK_STEPS` half cycles in MuJoCo
+    (module docstring): half cycles walked, why the walk stopped, the joints' RMS tracking
+    error (deg) and the feedback's share of the joint torques."""
+    out = walk(write_plan_mcap(result, path), WALK_STEPS)
+    return {"walk_half_cycles": out["half_cycles_walked"], "walk_steps": WALK_STEPS,
+            "walk_stopped": out["stopped"], "walk_joint_rms_deg": out["joint_rms_deg"],
+            "walk_feedback_share": out["feedback_share"]}
+
+
+def measure(problem: dict, plan: exchange.Plan, walk_to: Path | None = None) -> dict:
+    """Every measure of a peer's plan (module docstring), the walk if `walk_to` names its
+    recording; a plan with a NaN or an infinity is measured as a failure."""
     torques = plan.tau if plan.tau is not None else plan.tau_nodes
     if not (np.isfinite(plan.q).all() and np.isfinite(torques).all()):
         return {"physics_failure": "the plan is not finite"}
@@ -246,19 +269,20 @@ def measure(problem: dict, plan: exchange.Plan) -> dict:
            "squared_torque": squared_torque(result.times, efforts, hold, K), "hold": hold}
     if not plan.forces:
         row["cone_violation_n"] = row["force_error_n"] = float("nan")
-    return row
+    return {**row, **(walk_measures(result, walk_to) if walk_to is not None else {})}
 
 
-def measure_dmocc(result: PlanResult, problem: dict) -> dict:
+def measure_dmocc(result: PlanResult, problem: dict, walk_to: Path | None = None) -> dict:
     """The same measures of DMOCC's own plan, by its own `physics_error` (node torques
-    linear between nodes, as couples)."""
+    linear between nodes, as couples), and its walk if `walk_to` names its recording."""
     K = len(result.times) - 2
     node, phase = (simulation.physics_error(result, reset=r) for r in ("node", "phase"))
     names = list(result.joint_angle_names)
     order = [names.index(n) for n in effort_names(parse_scene(result.scene.source))]
     return {**_physics(node, phase), **held_measures(result, problem, K),
             "squared_torque": squared_torque(result.times, node_efforts(result)[:, order],
-                                             "linear", K), "hold": "linear"}
+                                             "linear", K), "hold": "linear",
+            **(walk_measures(result, walk_to) if walk_to is not None else {})}
 
 
 def main() -> None:

@@ -10,8 +10,11 @@ For each scene and grid (intervals per phase): DMOCC plans the scene's default r
 problem (DMOCC's schedule, placements, durations, guess) and each peer whose env exists
 (`setup_env.sh`; a missing env is a skipped row with its reason) runs as a subprocess of its
 env's Python with the time limit (`--time-limit`, default 300 s per solve, the process killed
-60 s after), its plan.npz measured here. Rows: benchmarks/results/peers.json
-(`results_io`); figure: benchmarks/peers.png (solve time against one-interval drift).
+60 s after), its plan.npz measured here; DMOCC's plan and every converged peer plan are also
+walked in MuJoCo by the reference controller (`measure.walk_measures`, 10 half cycles).
+Rows: benchmarks/results/peers.json (`results_io`); figure: benchmarks/peers.png (solve time
+against one-interval drift). `--remeasure` measures the plans of the last run again without
+running the peers.
 """
 
 from __future__ import annotations
@@ -47,7 +50,12 @@ VARIANTS = {
               ("IPOPT", ["--intervals", "{n}", "--solver", "ipopt"]),
               ("SNOPT midpoint", ["--intervals", "{n}", "--solver", "snopt",
                                   "--scheme", "midpoint"])),
+    # Moco's CasADi solver (Hermite-Simpson, IPOPT) as example2DWalking's prediction sets it
+    # up; from the kinematic guess, and from DMOCC's plan as the guess
+    "opensim": (("Moco HS, guess", ["--intervals", "{n}", "--start", "guess"]),
+                ("Moco HS, x0 DMOCC", ["--intervals", "{n}", "--start", "dmocc"])),
 }
+SOLVE_KEYS = ("build_time", "solve_time", "wall_time", "iterations")  # kept by --remeasure
 COLUMNS = (("build_time", "build s", ".3g"), ("solve_time", "solve s", ".3g"),
            ("iterations", "iter", "d"), ("converged", "conv", ""),
            ("objective", "J own", ".4g"), ("squared_torque", "int tau^2", ".4g"),
@@ -56,7 +64,8 @@ COLUMNS = (("build_time", "build s", ".3g"), ("solve_time", "solve s", ".3g"),
            ("swing_phase_mm", "phase swing mm", ".3g"),
            ("plan_periodicity_mm", "periodic mm", ".3g"),
            ("contact_hold_mm", "hold mm", ".3g"), ("cone_violation_n", "cone N", ".3g"),
-           ("joint_limit_deg", "limit deg", ".3g"))
+           ("joint_limit_deg", "limit deg", ".3g"),
+           ("walk_half_cycles", "walked", "d"), ("walk_joint_rms_deg", "walk RMS deg", ".3g"))
 
 
 def peer_python(peer: str) -> tuple[Path | None, str]:
@@ -88,8 +97,11 @@ def run_peer(python: Path, peer: str, argv: list[str], problem_path: Path, out: 
 
 
 def scene_rows(scene: str, n: int, peers: list[str], time_limit: float,
-               planner: Planner) -> list[dict]:
-    """DMOCC's row and every peer variant's row of one scene and grid."""
+               planner: Planner, remeasure: dict | None = None) -> list[dict]:
+    """DMOCC's row and every peer variant's row of one scene and grid. With `remeasure`
+    (the previous run's DMOCC row of this scene and grid, or {}) the peers are not run: the
+    plans that run left in WORK are measured again, and their solve statistics, and
+    DMOCC's, are that run's ("solved" says when)."""
     folder = WORK / f"{scene}-{n}"
     start = time.perf_counter()
     result, settings, path = export(scene, n, folder, time_limit=time_limit, planner=planner)
@@ -100,26 +112,37 @@ def scene_rows(scene: str, n: int, peers: list[str], time_limit: float,
              "build_time": result.stats.build_time, "solve_time": result.stats.solve_time,
              "wall_time": wall, "iterations": result.stats.iterations,
              "converged": result.success, "objective": result.cost_value,
-             "status": result.stats.status, **measure_dmocc(result, problem)}]
+             "status": result.stats.status,
+             **measure_dmocc(result, problem, walk_to=folder / "DMOCC.mcap")}]
+    if remeasure:
+        rows[0].update({k: remeasure[k] for k in SOLVE_KEYS if k in remeasure},
+                       solved=remeasure.get("measured", ""))
     for peer in peers:
         python, why = peer_python(peer)
         for label, argv in VARIANTS[peer]:
             row = {**base, "method": f"{peer} {label}", "peer": peer}
-            if python is None:
+            if python is None and remeasure is None:
                 rows.append({**row, "status": f"skipped: {why}"})
                 continue
             out = folder / f"{peer}-{label.replace(' ', '_').replace(',', '')}.npz"
-            out.unlink(missing_ok=True)
-            plan, why_not = run_peer(python, peer, [a.format(n=n) for a in argv], path, out,
-                                     time_limit)
+            if remeasure is not None:
+                if not out.exists():  # that run did not run it: nothing to measure again
+                    continue
+                plan, why_not = exchange.read_plan(out), ""
+            else:
+                out.unlink(missing_ok=True)
+                plan, why_not = run_peer(python, peer, [a.format(n=n) for a in argv], path,
+                                         out, time_limit)
             if plan is None:
                 rows.append({**row, "status": why_not})
                 continue
             meta = plan.meta
-            rows.append({**row, **{k: meta[k] for k in (
+            solved = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime(out.stat().st_mtime))
+            rows.append({**row, "solved": solved, **{k: meta[k] for k in (
                 "build_time", "solve_time", "iterations", "converged", "objective", "status",
                 "notes", "solver", "formulation", "version")}, "start": meta.get("start", ""),
-                **measure(problem, plan)})
+                **measure(problem, plan,
+                          walk_to=out.with_suffix(".mcap") if meta["converged"] else None)})
     return rows
 
 
@@ -181,6 +204,9 @@ def main() -> None:
     parser.add_argument("--peers", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     parser.add_argument("--time-limit", type=float, default=300.0)
     parser.add_argument("--quick", action="store_true", help="walker2d at 4 per phase")
+    parser.add_argument("--remeasure", action="store_true",
+                        help="do not run the peers: measure the plans the last run left in "
+                             f"{WORK.relative_to(REPO)} again (DMOCC is planned again)")
     parser.add_argument("--merge", action="store_true",
                         help="keep the rows of results/peers.json that this run does not "
                              "measure again (another peer, scene or grid)")
@@ -188,14 +214,19 @@ def main() -> None:
     if args.quick:
         args.scenes, args.grids = ["walker2d"], [4]
     planner = Planner()
+    old = load_results("peers")
+    previous = {(r["scene"], r["grid"]): {"measured": old["header"]["date_utc"], **r}
+                for r in (old["rows"] if old else []) if r["method"] == "DMOCC"}
     rows = []
     for scene in args.scenes:
         for n in args.grids:
-            rows += scene_rows(scene, n, args.peers, args.time_limit, planner)
+            rows += scene_rows(scene, n, args.peers, args.time_limit, planner,
+                               previous.get((scene, n), {}) if args.remeasure else None)
             print(table(rows[-1 - sum(len(VARIANTS[p]) for p in args.peers):]), flush=True)
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     rows = [{**row, "measured": stamp} for row in rows]
     argv = " ".join(sys.argv[1:])
+    # read again: another run may have merged its rows since this one started
     if args.merge and (old := load_results("peers")) is not None:
         again = {(r["scene"], r["grid"], r["method"]) for r in rows}
         kept = [{**r, "measured": r.get("measured", old["header"]["date_utc"])}

@@ -3,9 +3,9 @@
 #
 #   benchmarks/peers/setup_env.sh PEER [ROOT]     # -> ROOT/PEER (default ROOT: .venv-peers)
 #
-# PEER is a name with benchmarks/peers/requirements-PEER.txt (crocoddyl, drake). The env is made
-# with ${PYTHON:-python3.11} -m venv and pip-installs that file; a stamp (the file's hash) skips
-# the install when nothing changed. Exits 1 with one line on stderr saying why when the env
+# PEER is a name with benchmarks/peers/requirements-PEER.txt (crocoddyl, drake, opensim). The
+# env is made with ${PYTHON:-python3.11} -m venv and pip-installs that file; a stamp (the
+# file's hash) skips the install when nothing changed. Exits 1 with one line on stderr saying why when the env
 # cannot be made (no such peer, no Python 3.11, a package pip cannot install): `make
 # bench-peers` then skips that peer with the reason.
 set -euo pipefail

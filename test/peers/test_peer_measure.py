@@ -1,13 +1,14 @@
 """The peers' shared plumbing (benchmarks/peers): the exchange format and the adapter test of
 issue #27 — a DMOCC plan written as plan.npz and measured by measure.py reproduces DMOCC's
-own physics_error and the other measures (walker2d, 4 intervals per phase)."""
+own physics_error, the other measures and its walk in MuJoCo (walker2d, 4 intervals per
+phase)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from benchmarks.peers import exchange
+from benchmarks.peers import exchange, measure as measure_module
 from benchmarks.peers.measure import (effort_physics_error, measure, measure_dmocc,
                                       plan_result, squared_torque)
 
@@ -55,6 +56,24 @@ def test_a_dmocc_plan_through_the_exchange_format_measures_as_dmocc_itself(dmocc
     assert ours["contact_hold_mm"] < 1e-6 and ours["joint_limit_deg"] < 1e-6
     assert ours["plan_periodicity_mm"] < 1e-6  # DMOCC's node N-1 is mirror(node 0)
     assert ours["cone_violation_n"] < 1e-6
+
+
+def test_a_dmocc_plan_through_the_exchange_format_walks_as_dmocc_itself(dmocc, tmp_path,
+                                                                        monkeypatch):
+    """The peer path's PlanResult (its joint rates continued periodically as DMOCC's) is
+    recorded and walked as DMOCC's own: the same reference, so the same walk."""
+    result, problem = dmocc
+    monkeypatch.setattr(measure_module, "WALK_STEPS", 3)
+    rebuilt, _, _ = plan_result(problem, _as_plan(result, problem))
+    np.testing.assert_allclose(rebuilt.joint_velocities, result.joint_velocities, atol=1e-9)
+    np.testing.assert_allclose(rebuilt.joint_accelerations, result.joint_accelerations,
+                               atol=1e-6)
+    np.testing.assert_allclose(rebuilt.kinetic_energy, result.kinetic_energy, rtol=1e-12)
+    ours = measure_module.walk_measures(rebuilt, tmp_path / "peer.mcap")
+    theirs = measure_module.walk_measures(result, tmp_path / "dmocc.mcap")
+    assert ours["walk_steps"] == 3 and ours["walk_half_cycles"] == theirs["walk_half_cycles"]
+    assert ours["walk_stopped"] == theirs["walk_stopped"]
+    assert ours["walk_joint_rms_deg"] == pytest.approx(theirs["walk_joint_rms_deg"], rel=1e-6)
 
 
 def test_zero_order_hold_torques_drive_the_simulation_per_interval(dmocc):
