@@ -429,20 +429,25 @@ def gait_library(doc) -> list[str]:
            for r in builds if r["verifier_failures"]]
     out += ["", "Recordings failing the verifier: " + ("; ".join(bad) if bad else "none") + "."]
     if serve:
-        out += ["", f"In-hull answers (walker3d library `{doc['header']['serve_grid']}`, "
+        out += ["", "In-hull answers (walker3d libraries over step length and friction, "
                 "requests at the cells' centres, problem built as after the node's first "
                 "request): from the library's interpolation, from the nearest single stored "
                 "plan (the node without a library), and cold.", ""]
         out += table(serve, [
-            ("step m", "step_length", ".3f"), ("mu", "friction_coefficient", ".2f"),
+            ("library grid", "serve_grid", ""),
+            ("step m", "step_length", ".4f"), ("mu", "friction_coefficient", ".2f"),
             ("library it", "library_iterations", "d"), ("library s", "library_s", ".3f"),
+            ("of which interpolation s", "library_start_s", ".3f"),
             ("nearest it", "nearest_iterations", "d"), ("nearest s", "nearest_s", ".3f"),
             ("cold it", "cold_iterations", "d"), ("cold s", "cold_s", ".2f")])
-        its = [r["library_iterations"] for r in serve]
-        secs = [r["library_s"] for r in serve]
-        out += ["", f"From the library: {min(its)} to {max(its)} IPOPT iterations, "
-                f"{min(secs):.3f} to {max(secs):.3f} s (target: at most 3 iterations and "
-                f"0.1 s)."]
+        out.append("")
+        for grid in dict.fromkeys(r["serve_grid"] for r in serve):
+            its = [r["library_iterations"] for r in serve if r["serve_grid"] == grid]
+            secs = [r["library_s"] for r in serve if r["serve_grid"] == grid]
+            out.append(f"From the library `{grid}`: {min(its)} to {max(its)} IPOPT iterations "
+                       f"(median {float(np.median(its)):g}), {min(secs):.3f} to "
+                       f"{max(secs):.3f} s (median {float(np.median(secs)):.3f} s); target: "
+                       "at most 3 iterations and 0.1 s.")
     return out + [""]
 
 
@@ -462,11 +467,23 @@ PEER_NOTES = {
              "mu; point contacts only (no full-foot roll moment, no foot width), no swing "
              "clearance ramp or strike-speed bound; its IPOPT runs with a limited-memory "
              "Hessian, SNOPT reports function evaluations, not iterations.",
+    "opensim": "OpenSim Moco (MocoCasADiSolver: Hermite-Simpson collocation on DMOCC's "
+               "nodes, IPOPT with CasADi's finite differences and a limited-memory Hessian, "
+               "tolerances 1e-4, as its example2DWalking prediction): the walker as an "
+               "OpenSim Model from the URDF (the scene's torso inertia), squared torques, "
+               "hard mirror periodicity (controls included), joint ranges, speed limit and "
+               "torso lean as bounds, DMOCC's total duration; its contact is Moco's, "
+               "compliant (smooth Hunt-Crossley spheres at the contact points against a "
+               "half-space, smoothed Coulomb plus viscous friction), so there is no "
+               "schedule, no placements, no impacts and no hard cone: the optimiser finds "
+               "its own contact sequence and feet may slide or sink a little; the hold and "
+               "cone columns measure it against DMOCC's schedule. Moco has no time limit: "
+               "a stopped row is its iterate at the limit (Moco's stop file deleted).",
 }
 
 
 def peers(doc) -> list[str]:
-    out = ["## 10. DMOCC against Crocoddyl and Drake", ""]
+    out = ["## 10. DMOCC against Crocoddyl, Drake and OpenSim Moco", ""]
     if doc is None:
         return out + ["Not measured (`make bench-peers`).", ""]
     rows = doc["rows"]
@@ -479,10 +496,15 @@ def peers(doc) -> list[str]:
             "the continuous dynamics (Pinocchio, DOP853; RMS and max over the nodes), the "
             "swing foot's drift over a phase, contact points held (mm), cone and joint-limit "
             "violations, the plan's own periodicity gap, and the integral of squared torques "
-            "(every method's, whatever it minimised). Time limit "
+            "(every method's, whatever it minimised); DMOCC's plan and every converged "
+            "peer plan recorded by the product's writer and walked in MuJoCo by the "
+            "reference controller (config/walk.yaml), as a user walks a plan: half cycles "
+            "walked of 10 and the joints' RMS tracking error. Time limit "
             f"{doc['header'].get('time_limit_s', 300):g} s per solve. Versions: "
             f"{', '.join(versions) or 'see the requirements files'}. Rows measured at "
-            f"different times carry their own `measured` stamp in the JSON. Figure: "
+            f"different times carry their own `measured` stamp in the JSON (and rows measured "
+            "again from a saved plan, `run.py --remeasure`, the time it was solved: "
+            "`solved`). Figure: "
             "[peers.png](peers.png).", ""]
     out += table(sorted(rows, key=lambda r: (r["scene"], r["grid"], r["method"] != "DMOCC",
                                              r["method"])), [
@@ -493,6 +515,7 @@ def peers(doc) -> list[str]:
         ("node max deg", "drift_node_max_deg", ".3g"), ("swing mm", "swing_phase_mm", ".3g"),
         ("hold mm", "contact_hold_mm", ".2g"), ("cone N", "cone_violation_n", ".2g"),
         ("limit deg", "joint_limit_deg", ".2g"), ("periodic mm", "plan_periodicity_mm", ".3g"),
+        ("walked", "walk_half_cycles", "d"), ("walk RMS deg", "walk_joint_rms_deg", ".3g"),
         ("status", "status", "")])
     out += ["", "What is and is not comparable:", "",
             "* DMOCC: frees the start state and the phase durations, imposes periodicity, "
