@@ -55,6 +55,8 @@ RADIUS = {"heel": 0.035, "other": 0.015}  # m, heel / front spheres of 2D_gait.o
 
 
 # --- rotations --------------------------------------------------------------------------
+# (numpy twins of gait_planner.model.rotations, which imports casadi: the opensim env has
+# numpy and opensim only)
 def _rx(a: float) -> np.ndarray:
     c, s = math.cos(a), math.sin(a)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
