@@ -101,7 +101,16 @@ def test_configurations_through_drake(scene_name, tmp_path):
                           str(tmp_path / "q.json"), str(tmp_path / "plan.npz")],
                          cwd=ROOT, capture_output=True, text=True, timeout=300, check=True)
     out = json.loads(run.stdout)
-    back = exchange.read_plan(tmp_path / "plan.npz").q
+    assert_peer_walker_agrees(scene_name, problem, model, qs, tmp_path / "plan.npz", out)
+
+
+def assert_peer_walker_agrees(scene_name: str, problem: dict, model: pin.Model,
+                              qs: np.ndarray, plan_path: Path, out: dict) -> None:
+    """A peer's walker against Pinocchio: configurations qs through the peer and back
+    (plan_path) are qs, the peer's contact points out["points"] are Pinocchio's, and its
+    mirror images out["mirror"] put each contact at its partner's mirror image, shifted by
+    the step (the drake and opensim tests)."""
+    back = exchange.read_plan(plan_path).q
     for q, q_back in zip(qs, back):  # the quaternion up to its sign
         sign = np.sign(q[3:7] @ q_back[3:7])
         np.testing.assert_allclose(q_back[3:7] * sign, q[3:7], atol=1e-12)
@@ -110,10 +119,10 @@ def test_configurations_through_drake(scene_name, tmp_path):
     contacts = problem["contact_frames"]
     partners = contact_partners(load_scene(scene_name))
     reflect = np.array([1.0, -1.0, 1.0])
-    for q, drake_points, image in zip(qs, out["points"], out["mirror"]):
+    for q, points, image in zip(qs, out["points"], out["mirror"]):
         expected = _frame_points(model, q, contacts)
         for c in contacts:
-            np.testing.assert_allclose(drake_points[c], expected[c], atol=1e-9)
+            np.testing.assert_allclose(points[c], expected[c], atol=1e-9)
         mirrored = _frame_points(model, np.asarray(image), contacts)
         for c in contacts:
             np.testing.assert_allclose(mirrored[partners[c]],

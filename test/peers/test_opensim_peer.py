@@ -17,11 +17,9 @@ import pinocchio as pin
 import pytest
 
 from benchmarks.peers import exchange
-from gait_planner.model.loader import load_scene
-from gait_planner.ocp.mirror import contact_partners
 
 # the drake test's helpers (same folder, on sys.path under pytest's default import mode)
-from test_drake_peer import STEP, _configurations, _frame_points, _problem
+from test_drake_peer import _configurations, _problem, assert_peer_walker_agrees
 
 ROOT = Path(__file__).resolve().parents[2]
 OPENSIM_PYTHON = ROOT / ".venv-peers" / "opensim" / "bin" / "python"
@@ -94,27 +92,11 @@ def test_configurations_through_opensim(scene_name, tmp_path):
     out = json.loads(line[len("RESULT "):])
     assert not (ROOT / "opensim.log").exists()
     np.testing.assert_allclose(out["mass"], pin.computeTotalMass(model), rtol=1e-12)
-    back = exchange.read_plan(tmp_path / "plan.npz").q
-    for q, q_back in zip(qs, back):  # the quaternion up to its sign
-        sign = np.sign(q[3:7] @ q_back[3:7])
-        np.testing.assert_allclose(q_back[3:7] * sign, q[3:7], atol=1e-12)
-        np.testing.assert_allclose(np.delete(q_back, range(3, 7)),
-                                   np.delete(q, range(3, 7)), atol=1e-12)
-    contacts = problem["contact_frames"]
-    partners = contact_partners(load_scene(scene_name))
-    reflect = np.array([1.0, -1.0, 1.0])
+    assert_peer_walker_agrees(scene_name, problem, model, qs, tmp_path / "plan.npz", out)
     data = model.createData()
     nqs = [model.joints[j].nq for j in range(2, model.njoints)]
     joint_v = [model.joints[model.getJointId(n)].idx_v for n in problem["joint_names"]]
-    for q, points, image, mass_matrix in zip(qs, out["points"], out["mirror"],
-                                             out["mass_matrix"]):
-        expected = _frame_points(model, q, contacts)
-        for c in contacts:
-            np.testing.assert_allclose(points[c], expected[c], atol=1e-9)
-        mirrored = _frame_points(model, np.asarray(image), contacts)
-        for c in contacts:
-            np.testing.assert_allclose(mirrored[partners[c]],
-                                       reflect * expected[c] + [STEP, 0.0, 0.0], atol=1e-9)
+    for q, mass_matrix in zip(qs, out["mass_matrix"]):
         M = pin.crba(model, data, exchange.to_pinocchio(q, nqs))
         M = np.triu(M) + np.triu(M, 1).T
         np.testing.assert_allclose(mass_matrix, M[np.ix_(joint_v, joint_v)], atol=1e-9)
