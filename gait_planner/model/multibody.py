@@ -28,7 +28,7 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from gait_planner.model.rotations import axis_rotation, exp_so3
+from gait_planner.model.rotations import axis_rotation, exp_so3, log_so3
 from gait_planner.model.scene import JointType, RootType, Scene
 
 E_X, E_Y, E_Z = (ca.DM([1.0, 0.0, 0.0]), ca.DM([0.0, 1.0, 0.0]), ca.DM([0.0, 0.0, 1.0]))
@@ -267,6 +267,31 @@ class Multibody:
         self.actuation_force = ca.Function(
             "actuation_force", [q, tau], [f], ["q", "tau"], ["f"]
         )
+
+    def increment(self, q: np.ndarray, q_next: np.ndarray) -> np.ndarray:
+        """u (ndof,) with reparametrise(u, q) = q_next, both (k,) satisfying the constraints
+        (the inverse of F_d, numpy): the root's displacement and rotation vector, each
+        joint's relative turn expressed as `_reparametrise_expr` takes it (spherical: the
+        rotation vector in the parent's given directors; revolute: the angle about its
+        axis). Rotation vectors are the principal logarithm, so turns above pi are not
+        recovered."""
+        frames = {}
+        for i, name in enumerate(self.body_names):
+            b0, b1 = q[12 * i : 12 * i + 12], q_next[12 * i : 12 * i + 12]
+            D0, D1 = b0[3:].reshape(3, 3).T, b1[3:].reshape(3, 3).T
+            frames[name] = (b1[:3] - b0[:3], D0, D1 @ D0.T)  # displacement, D, rotation
+        root = self.scene.root
+        u = np.zeros(self.ndof)
+        move, _, turn = frames[root.body]
+        w = log_so3(turn)
+        u[: self.root_dof] = (np.concatenate([move, w]) if root.type is RootType.FREE
+                              else [move[0], move[2], w[1]])
+        for joint in self.scene.joints:
+            _, Dp, Rp = frames[joint.parent]
+            a = Dp.T @ log_so3(Rp.T @ frames[joint.child][2])
+            sl = slice(self.root_dof + self.joint_slices[joint.name].start, None)
+            u[sl][: joint.dof] = a if joint.type is JointType.SPHERICAL else a @ joint.axis
+        return u
 
     @cached_property
     def mass_matrix(self) -> np.ndarray:

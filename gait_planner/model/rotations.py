@@ -75,3 +75,20 @@ def rot_axis(axis: np.ndarray, a: float) -> np.ndarray:
     n = np.asarray(axis, dtype=float)
     N = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
     return np.eye(3) + np.sin(a) * N + (1.0 - np.cos(a)) * N @ N
+
+
+def log_so3(R: np.ndarray) -> np.ndarray:
+    """The rotation vector w (3,) rad with exp_so3(w) = R, |w| <= pi (numpy), for a rotation
+    matrix R (3, 3): the angle from the trace, the axis from the skew part (near pi from
+    R + I, whose columns are then multiples of the axis)."""
+    cos = np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)
+    angle = float(np.arccos(cos))
+    axial = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    if angle < 1e-6:
+        return axial  # sin(angle) ~ angle
+    if angle < np.pi - 1e-3:
+        return angle / np.sin(angle) * axial
+    S = R + np.eye(3)
+    axis = S[:, int(np.argmax(np.linalg.norm(S, axis=0)))]
+    axis = axis / np.linalg.norm(axis)
+    return angle * (axis if axis @ axial >= 0 else -axis)

@@ -10,11 +10,17 @@ the default 15 ms intervals it misses the certificate (0.47 % of the peak torque
 it, 0.099 %, with J 1018.46 instead of 1021.28 J s; planned cold on the fine grid IPOPT finds
 another minimum (J 1336, 0.34 %). Measured 2026-11-23 (benchmarks/HISTORY.md, "Grid refinement").
 
-The fine start keeps the coarse plan where the grids share nodes: fine node n sits at
-coarse node n / factor; its reference configuration (`Transcription.Qref`, which must
-satisfy every holonomic constraint) is coarse node floor(n / factor) and its increment u
-is zero; node torques are interpolated linearly in time, contact multipliers taken from the
-nearest coarse node of the same phase, the phase scalings sigma kept.
+The fine start follows the coarse plan in time (`coarse_times`: fine node n at coarse time
+n / factor, the last phase compressed so that both grids' node N - 1 is the image of
+node 0). A fine node at coarse time m + t (0 <= t < 1) has coarse node m as its reference
+configuration (`Transcription.Qref`, which must satisfy every holonomic constraint) and
+the increment u = t times the increment from node m to node m + 1 (`_increments`); node
+torques are interpolated linearly in time, contact multipliers linearly between the
+coarse nodes of the same phase, an impact node's scaled by the factor (`_multipliers`),
+the phase scalings sigma kept. Until 2026-11-27 the start stood at node m (u = 0) and put
+the last free node on the image of node 0 twice: 7.8 kN of residual in walker3d's dynamics
+rows, and refinements of walker3d's 0.9 m step took ~190 iterations where they now take
+50-60 (benchmarks/HISTORY.md).
 """
 
 from __future__ import annotations
@@ -52,18 +58,71 @@ def refined_start(coarse: Transcription, plan: StoredPlan,
     p = np.concatenate([plan.qref.reshape(-1), [plan.step, plan.mu]])
     Q, TAU = (np.array(v) for v in ca.Function("q_tau", [coarse.x, coarse.p],
                                                [coarse.Q, coarse.TAU])(x, p))
-    m, r = np.divmod(np.arange(fine.N - 1), factor)  # fine node -> coarse node, remainder
+    times = coarse_times(coarse, fine)
+    m = np.minimum(np.floor(times).astype(int), coarse.N - 1)
+    t = times - m
     qref_fine = Q[:, m].T
-    w = (r / factor)[None, :]
-    tau = (1 - w) * TAU[:, m] + w * TAU[:, m + 1]
-    coarse_lam = coarse.node_multipliers(x)
+    tau = (1 - t) * TAU[:, m] + t * TAU[:, m + 1]
+    u = _increments(coarse, Q, m, t)
+    parts = _multipliers(coarse, fine, coarse.node_multipliers(x), factor, times)
+    sigma = x[-int(coarse.S.shape[0]):]
+    x0 = np.concatenate([u.reshape(-1), (tau / TORQUE_SCALE).T.reshape(-1), *parts, sigma])
+    return x0, qref_fine
+
+
+def coarse_times(coarse: Transcription, fine: Transcription) -> np.ndarray:
+    """(N_fine - 1,) the time of each free fine node in coarse intervals. Node N - 1 is the
+    mirror image of node 0 on both grids, so the half cycle is N - 1 intervals: 2 N_c - 1
+    fine intervals are N_c - 1/2 coarse ones, and the last phase (whose final interval is
+    the image of the first) is one fine interval longer than twice its coarse length.
+    Every phase but the last maps fine node n to n / factor; the last is compressed so
+    that its free nodes end at the coarse image of node 0. (Mapping n to n / factor there
+    put fine node N - 2 on the image of node 0 and node N - 1 on it again: one interval
+    standing still, a residual of 7.8 kN in walker3d's dynamics rows.)"""
+    factor = fine.N // coarse.N
+    n = np.arange(fine.N - 1, dtype=float)
+    last = int(np.argmax(coarse.phase_of_interval == coarse.phase_of_interval[-1]))
+    squeeze = (coarse.N - 1 - last) / (fine.N - 1 - factor * last)
+    return np.where(n <= factor * last, n / factor, last + (n - factor * last) * squeeze)
+
+
+def _increments(coarse: Transcription, Q: np.ndarray, m: np.ndarray, t: np.ndarray
+                ) -> np.ndarray:
+    """u (len(m), ndof) of the fine nodes at fraction t of coarse interval m, about coarse
+    node m (Q (k, N + 1) the coarse nodes): t times the increment from node m to node m + 1
+    (`Multibody.increment`: the root's displacement and every joint's turn). A start that
+    stood at node m for the whole coarse interval (u = 0) left 16 kN in walker3d's dynamics
+    rows; this one leaves under 1 kN, most rows under 100 N. (Catmull-Rom in the
+    increments left less still, but overshot the joint speed limits and walker3d's
+    0.15 m stairs up then failed to refine; 2026-11-27.)"""
+    steps = np.array([coarse.mb.increment(Q[:, j], Q[:, j + 1]) for j in range(coarse.N)])
+    return steps[m] * t[:, None]
+
+
+def _multipliers(coarse: Transcription, fine: Transcription, coarse_lam: dict,
+                 factor: int, times: np.ndarray) -> list[np.ndarray]:
+    """The fine nodes' contact multipliers (forces, scaled as in x): linear in time between
+    the coarse nodes of the same phase; a node that establishes a contact (an impact: the
+    first node of a phase holding a point the phase before did not) carries the impulse
+    over its weight w_n, which is `factor` times smaller on the fine grid, so its multiplier
+    is `factor` times the coarse one's and the nodes after it interpolate from the next
+    coarse node on."""
+    phases = coarse.mb.scene.gait.phases
+    impact = {k for k in range(1, len(phases))
+              if set(phases[k].contacts) - set(phases[k - 1].contacts)}
+    first = {k: int(np.argmax(coarse.phase_of_interval == k)) for k in impact}
     parts = []
     for n, size in zip(fine.lam_nodes, fine.lam_sizes):  # a phase's nodes share a layout
-        phase, nearest = fine.phase_of_interval[n], round(n / factor)
-        same = [j for j in coarse.lam_nodes if coarse.phase_of_interval[j] == phase]
-        parts.append(coarse_lam[min(same, key=lambda j: abs(j - nearest))] if same
-                     else np.zeros(size))
-    sigma = x[-int(coarse.S.shape[0]):]
-    x0 = np.concatenate([np.zeros(fine.U.numel()), (tau / TORQUE_SCALE).T.reshape(-1),
-                         *parts, sigma])
-    return x0, qref_fine
+        phase = fine.phase_of_interval[n]
+        if phase in impact and n == factor * first[phase]:
+            parts.append(factor * coarse_lam[first[phase]])
+            continue
+        same = [j for j in coarse.lam_nodes if coarse.phase_of_interval[j] == phase
+                and not (phase in impact and j == first[phase])]
+        if not same:
+            parts.append(np.zeros(size))
+            continue
+        lam = np.array([coarse_lam[j] for j in same])
+        t = times[n] if n < times.size else coarse.N - 1
+        parts.append(np.array([np.interp(t, same, lam[:, i]) for i in range(size)]))
+    return parts

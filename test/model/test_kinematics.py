@@ -165,3 +165,17 @@ def test_actuation_is_internal(model, scene, seed):
     # each body does receive a moment: the test above is not vacuous
     per_body = np.cross(qb[:, 1:], f[:, 1:]).sum(axis=1)
     assert np.abs(per_body).max() > 1e-3 * np.abs(tau).max()  # not trivially zero
+
+
+@pytest.mark.parametrize("scene", SCENES)
+@settings(max_examples=20, deadline=None)
+@given(data=st.data())
+def test_increment_inverts_the_reparametrisation(model, scene, data):
+    """Multibody.increment(q, F_d(u, q)) = u for turns below half a revolution (entries
+    within 1.5 rad: a rotation vector of at most 2.6 rad), at configurations far from
+    upright; the refinement's start relies on it (`ocp.refine`)."""
+    mb = model(scene).mb
+    q = random_configuration(mb, data.draw(increments(mb.ndof), label="u0"))
+    u = data.draw(increments(mb.ndof, bound=1.5), label="u")
+    q_next = np.array(mb.reparametrise(u, q)).ravel()
+    np.testing.assert_allclose(mb.increment(q, q_next), u, atol=1e-9)
