@@ -124,14 +124,33 @@ def test_an_unreachable_speed_is_refused_with_its_range_before_anything_is_built
 @pytest.mark.parametrize("speed", [0.5, 5.0])
 def test_a_speed_alone_no_step_in_the_bounds_reaches_is_refused(speed, tmp_path):
     """With the step free (no step_length), any step of the scene's step_length_bounds
-    [0.4, 0.9] m over the half cycles sigma allows: 0.684 to 4.615 m/s."""
+    [0.4, 0.9] m over the half cycles sigma allows (0.684 to 4.615 m/s), no faster than
+    the walk's speed_max (walker2d: 3.5 m/s)."""
     with pytest.raises(RequestError) as refused:
         plan_and_record(_NoPlanner(), plan_request(scene="walker2d", speed=speed), tmp_path)
     assert str(refused.value) == (
         f"speed = {speed} m/s is outside the range scene 'walker2d' allows at step lengths "
-        f"within [0.4, 0.9] m (the step free): [0.6838, 4.6154] m/s (a half cycle of 0.195 to "
-        f"0.585 s: sigma within scaling_bounds [0.5, 1.5])")
+        f"within [0.4, 0.9] m (the step free): [0.6838, 3.5000] m/s (a half cycle of 0.195 to "
+        f"0.585 s: sigma within scaling_bounds [0.5, 1.5]"
+        f"; no faster than the gait's speed_max 3.5 m/s, the fastest it was planned at, "
+        f"with joint_speed_max 450 deg/s (the scene file says where))")
     assert not any(tmp_path.iterdir())
+
+
+def test_a_walk_faster_than_the_scene_ever_planned_is_refused_before_building(tmp_path):
+    """walker3d's walk declares speed_max 3.0 m/s (3.5 and 4.0 m/s found no plan in 90 s,
+    its joint speed rows most violated), below sigma's 3.333 m/s at a 0.9 m step; its run
+    declares none, so a run at 3.5 m/s stays a request to plan."""
+    with pytest.raises(RequestError) as refused:
+        plan_and_record(_NoPlanner(), plan_request(scene="walker3d", speed=3.2,
+                                                   step_length=0.9), tmp_path)
+    assert "[1.5385, 3.0000] m/s" in str(refused.value)
+    assert "speed_max 3 m/s" in str(refused.value)
+    assert not any(tmp_path.iterdir())
+    _, walk = request_settings(plan_request(scene="walker3d", speed=3.0, step_length=0.9))
+    assert walk.speed == 3.0
+    _, run = request_settings(plan_request(scene="walker3d", speed=3.5, gait="run"))
+    assert run.speed == 3.5 and run.speed_max == 0
 
 
 def test_a_speed_reaches_the_settings_and_0_leaves_the_durations_free():

@@ -267,6 +267,9 @@ def render_request_limits() -> str:
         for path in sorted((ROOT / "config/scenes").glob("walker*.yaml"))
         for st in [settings_for(load_scene_file(path), step_length_free=True)]
         for lo, hi in [speed_range(st)] for a, b in [step_range(st)])
+    fastest = ", ".join(
+        f"{path.stem} {st.speed_max:g} m/s" for path in sorted((ROOT / "config/scenes").glob("walker*.yaml"))
+        for st in [settings_for(load_scene_file(path))] if st.speed_max > 0)
     (mu_lo, mu_hi), (n_lo, n_hi) = ranges.FRICTION_RANGE, ranges.INTERVALS_RANGE
     return (f"* `step_length`: at most the legs' reach ({reach});\n"
             f"* `friction_coefficient`: {mu_lo:g} to {mu_hi:g};\n"
@@ -278,7 +281,8 @@ def render_request_limits() -> str:
             f"* `speed`: with a step length, what the scene's σ bounds allow at it, "
             f"step_length / longest to step_length / shortest half cycle ({speeds}); "
             f"alone, what they allow at any step within the scene's `step_length_bounds` "
-            f"({free}).\n")
+            f"({free}); never above the gait's `speed_max`, the fastest walk the scene "
+            f"file says was planned ({fastest}).\n")
 
 
 def render_parameters() -> str:

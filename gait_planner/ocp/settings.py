@@ -51,7 +51,11 @@ class GaitSettings:
     over an interval stays below joint_speed_max * h_n; speed m/s (0 = free durations):
     the half cycle's mean forward speed step_length / (t_{N-1} - t_0), held by one
     equality row on sigma (`gait_planner.ocp.transcription.speed_row`); `settings_for`
-    refuses a speed outside `speed_range`; step_length_free: with a speed, the step length
+    refuses a speed outside `speed_range`; speed_max m/s (0 = none): the fastest mean
+    speed of this gait the scene declares plannable, a measured limit (faster requests
+    found no plan, the joint speed rows or the cones most violated; no bound computable
+    before building is near it: benchmarks/HISTORY.md): `speed_range` ends there;
+    step_length_free: with a speed, the step length
     is the one of least cost per metre within `step_range` (`gait_planner.pipeline.
     plan_free_step`; step_length is where the search starts); step_length_bounds m (lower,
     upper): the scene's range of step lengths for such a search (empty: 0.5 to 1.5 times
@@ -96,6 +100,7 @@ class GaitSettings:
     strike_speed_max: float = 0.0
     joint_speed_max: float = 0.0
     speed: float = 0.0
+    speed_max: float = 0.0
     step_length_free: bool = False
     step_length_bounds: tuple[float, ...] = ()
     slope: float = 0.0
@@ -152,7 +157,7 @@ class GaitSettings:
             object.__setattr__(self, "step_length_bounds", tuple(float(b) for b in bounds))
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
-                     "joint_speed_max", "speed", "twist_regularisation"):
+                     "joint_speed_max", "speed", "speed_max", "twist_regularisation"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")
 
@@ -178,10 +183,12 @@ def step_range(s: GaitSettings) -> tuple[float, float]:
 def speed_range(s: GaitSettings) -> tuple[float, float]:
     """(slowest, fastest) mean forward speed (m/s) of a half cycle of s.step_length within
     `duration_range` (walker2d/3d at their 0.6338 m step: 1.083 to 3.250 m/s); with
-    step_length_free, of any step within `step_range` (walker2d/3d: 0.598 to 4.615 m/s)."""
+    step_length_free, of any step within `step_range` (walker2d/3d: 0.598 to 4.615 m/s);
+    no faster than s.speed_max if the gait declares one."""
     shortest, longest = duration_range(s)
     low, high = step_range(s) if s.step_length_free else (s.step_length, s.step_length)
-    return low / longest, high / shortest
+    fast = high / shortest
+    return low / longest, min(fast, s.speed_max) if s.speed_max > 0 else fast
 
 
 def free_step_range(s: GaitSettings) -> tuple[float, float]:
@@ -201,11 +208,15 @@ def check_speed(s: GaitSettings, scene_name: str) -> None:
             low, high = step_range(s)
             at = (f"step lengths within [{low:g}, {high:g}] m (the step free)"
                   if s.step_length_free else f"step_length {s.step_length:g} m")
+            why = (f"a half cycle of {shortest:.4g} to {longest:.4g} s: sigma within "
+                   f"scaling_bounds [{s.scaling_bounds[0]:g}, {s.scaling_bounds[1]:g}]")
+            if s.speed_max > 0 and fast == s.speed_max:
+                why += (f"; no faster than the gait's speed_max {s.speed_max:g} m/s, the "
+                        f"fastest it was planned at, with joint_speed_max "
+                        f"{s.joint_speed_max:g} deg/s (the scene file says where)")
             raise SettingsError(
                 f"speed = {s.speed} m/s is outside the range scene {scene_name!r} allows at "
-                f"{at}: [{slow:.4f}, {fast:.4f}] m/s (a half cycle "
-                f"of {shortest:.4g} to {longest:.4g} s: sigma within scaling_bounds "
-                f"[{s.scaling_bounds[0]:g}, {s.scaling_bounds[1]:g}])")
+                f"{at}: [{slow:.4f}, {fast:.4f}] m/s ({why})")
 
 
 _OPTION_NAMES = {f.name for f in dataclasses.fields(GaitSettings)} - {
