@@ -59,7 +59,7 @@ def refined_start(coarse: Transcription, plan: StoredPlan,
     Q, TAU = (np.array(v) for v in ca.Function("q_tau", [coarse.x, coarse.p],
                                                [coarse.Q, coarse.TAU])(x, p))
     times = coarse_times(coarse, fine)
-    m = np.minimum(np.floor(times).astype(int), coarse.N - 1)
+    m = np.floor(times).astype(int)  # below N - 1: the last free node lies before the image
     t = times - m
     qref_fine = Q[:, m].T
     tau = (1 - t) * TAU[:, m] + t * TAU[:, m + 1]
@@ -81,9 +81,14 @@ def coarse_times(coarse: Transcription, fine: Transcription) -> np.ndarray:
     standing still, a residual of 7.8 kN in walker3d's dynamics rows.)"""
     factor = fine.N // coarse.N
     n = np.arange(fine.N - 1, dtype=float)
-    last = int(np.argmax(coarse.phase_of_interval == coarse.phase_of_interval[-1]))
+    last = first_interval(coarse, coarse.phase_of_interval[-1])
     squeeze = (coarse.N - 1 - last) / (fine.N - 1 - factor * last)
     return np.where(n <= factor * last, n / factor, last + (n - factor * last) * squeeze)
+
+
+def first_interval(tr: Transcription, phase: int) -> int:
+    """The first interval (and node) of `phase` on the grid of `tr`."""
+    return int(np.argmax(tr.phase_of_interval == phase))
 
 
 def _increments(coarse: Transcription, Q: np.ndarray, m: np.ndarray, t: np.ndarray
@@ -110,7 +115,7 @@ def _multipliers(coarse: Transcription, fine: Transcription, coarse_lam: dict,
     phases = coarse.mb.scene.gait.phases
     impact = {k for k in range(1, len(phases))
               if set(phases[k].contacts) - set(phases[k - 1].contacts)}
-    first = {k: int(np.argmax(coarse.phase_of_interval == k)) for k in impact}
+    first = {k: first_interval(coarse, k) for k in impact}
     parts = []
     for n, size in zip(fine.lam_nodes, fine.lam_sizes):  # a phase's nodes share a layout
         phase = fine.phase_of_interval[n]

@@ -12,7 +12,7 @@ import pytest
 
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp import solve
-from gait_planner.ocp.refine import refined_settings, refined_start
+from gait_planner.ocp.refine import first_interval, refined_settings, refined_start
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solution import violations
 from gait_planner.ocp.solve import Planner
@@ -42,19 +42,26 @@ def test_refined_settings_keep_the_half_cycle():
         sum(s.intervals) * s.base_time_step, rel=1e-15)
 
 
-def test_refined_start_keeps_the_coarse_plan_at_shared_nodes(coarse_walker2d):
-    scene, settings, planner, result = coarse_walker2d
+def _refined(coarse_walker2d):
+    """(coarse, fine transcriptions, x0, qref, p) of the refined start from the plan of
+    `coarse_walker2d`."""
+    _, settings, planner, _ = coarse_walker2d
     built = planner._built[next(iter(planner._built))]
     coarse, plan = built.tr, built.stored[-1]
     fine = Transcription(coarse.mech, refined_settings(settings))
     x0, qref = refined_start(coarse, plan, fine)
+    return coarse, fine, x0, qref, np.concatenate([qref.reshape(-1), [plan.step, plan.mu]])
+
+
+def test_refined_start_keeps_the_coarse_plan_at_shared_nodes(coarse_walker2d):
+    result = coarse_walker2d[3]
+    coarse, fine, x0, qref, p = _refined(coarse_walker2d)
     assert x0.shape == (int(fine.x.shape[0]),) and qref.shape == (fine.N - 1, coarse.mb.k)
-    p = np.concatenate([qref.reshape(-1), [plan.step, plan.mu]])
     Q, TAU, h = (np.array(v) for v in ca.Function("f", [fine.x, fine.p],
                                                   [fine.Q, fine.TAU, fine.h])(x0, p))
     # every phase but the last: fine node 2j is coarse node j (the last is compressed so
     # that both grids end on the image of node 0: `coarse_times`)
-    last = int(np.argmax(coarse.phase_of_interval == coarse.phase_of_interval[-1]))
+    last = first_interval(coarse, coarse.phase_of_interval[-1])
     shared = np.arange(0, 2 * last + 1, 2)
     np.testing.assert_allclose(Q[:, shared].T, result.q[shared // 2], atol=1e-12)
     np.testing.assert_allclose(TAU[:, shared].T, result.tau[shared // 2], atol=1e-9)
@@ -68,12 +75,7 @@ def test_refined_start_moves_between_the_coarse_nodes(coarse_walker2d):
     """No fine interval of the start stands still, and its discrete Euler-Lagrange rows are
     within 1 kN (FORCE_SCALE) in every phase: 0.54-0.64 kN at the impacts, where a start
     standing at each coarse node for a coarse interval left 5.9-6.7 kN (2026-11-27)."""
-    scene, settings, planner, _ = coarse_walker2d
-    built = planner._built[next(iter(planner._built))]
-    coarse, plan = built.tr, built.stored[-1]
-    fine = Transcription(coarse.mech, refined_settings(settings))
-    x0, qref = refined_start(coarse, plan, fine)
-    p = np.concatenate([qref.reshape(-1), [plan.step, plan.mu]])
+    _, fine, x0, _, p = _refined(coarse_walker2d)
     Q, g = (np.array(v) for v in ca.Function("f", [fine.x, fine.p], [fine.Q, fine.g])(x0, p))
     assert np.abs(np.diff(Q, axis=1)).max(axis=0).min() > 1e-4
     worst = violations(fine, g.ravel())
