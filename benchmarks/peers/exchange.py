@@ -154,6 +154,16 @@ class Plan:
         return 0.5 * (self.tau_nodes[:-1] + self.tau_nodes[1:])
 
 
+def configurations_plan(q: np.ndarray) -> Plan:
+    """A Plan of configurations q (K + 1, nq) alone, one per unit of time, one phase, zero
+    torques and placeholder meta: what the adapters' round-trip tests write to check a
+    peer's configurations through the exchange format."""
+    n = len(q)
+    return Plan(times=np.arange(n, dtype=float), q=np.asarray(q),
+                phase_of_node=np.zeros(n, dtype=int), meta={k: 0 for k in META_KEYS},
+                tau=np.zeros((n - 1, 1)))
+
+
 def write_plan(path: str | Path, plan: Plan) -> Path:
     """plan.npz from a Plan; checks the shapes and that meta has META_KEYS."""
     k = len(plan.times) - 1

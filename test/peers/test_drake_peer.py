@@ -37,11 +37,8 @@ problem = json.load(open(sys.argv[1]))
 walker = Walker(problem)
 qs = np.asarray(json.load(open(sys.argv[2])))
 reduced = [walker.from_pin(q) for q in qs]
-plan = exchange.Plan(times=np.arange(len(qs), dtype=float),
-                     q=np.array([walker.to_pin(r) for r in reduced]),
-                     phase_of_node=np.zeros(len(qs), dtype=int),
-                     meta={k: 0 for k in exchange.META_KEYS}, tau=np.zeros((len(qs) - 1, 1)))
-exchange.write_plan(sys.argv[3], plan)
+exchange.write_plan(sys.argv[3], exchange.configurations_plan(
+    np.array([walker.to_pin(r) for r in reduced])))
 out = {"points": [{c: walker.point(r, c).tolist() for c in walker.frames} for r in reduced],
        "mirror": [walker.to_pin(walker.mirror_q(r)).tolist() for r in reduced]}
 print(json.dumps(out))

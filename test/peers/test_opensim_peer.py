@@ -35,11 +35,8 @@ problem = json.load(open(sys.argv[1]))
 walker = Walker(problem, inertia_overrides=False)
 qs = np.asarray(json.load(open(sys.argv[2])))
 values = [walker.from_exchange(q) for q in qs]
-plan = exchange.Plan(times=np.arange(len(qs), dtype=float),
-                     q=np.array([walker.to_exchange(v) for v in values]),
-                     phase_of_node=np.zeros(len(qs), dtype=int),
-                     meta={k: 0 for k in exchange.META_KEYS}, tau=np.zeros((len(qs) - 1, 1)))
-exchange.write_plan(sys.argv[3], plan)
+exchange.write_plan(sys.argv[3], exchange.configurations_plan(
+    np.array([walker.to_exchange(v) for v in values])))
 signs = walker.mirror_signs()
 names = walker.coordinates
 step = problem["mirror"]["base"]["x_shift"]
