@@ -26,17 +26,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-# A swing point must clear a stair edge's height this far (m) before the edge (stairs up)
-# or after it (stairs down). Where a node's point moves less than this along x per
-# interval, the straight segment between two nodes cannot cut the edge's corner: its node
-# on the lower tread's side lies within the margin, at the higher tread's height. Where it
-# moves farther, the verifier's segment check finds the cut: a walker2d toe moved 8 cm in
-# one 15 ms interval over a 0.15 m stair and passed 8 mm below the corner; the plan,
-# refined to 80 intervals for its certificate, clears every corner by the swing clearance
-# (docs/design.md section 13). A 10 cm margin left walker2d's 0.15 m stairs infeasible.
+# A swing point must clear a stair edge's height this far (m) before the edge on stairs up.
+# Where a node's point moves less than this along x per interval, the straight segment
+# between two nodes cannot cut the edge's corner: its node on the lower tread's side lies
+# within the margin, at the higher tread's height. Where it moves farther, the verifier's
+# segment check finds the cut (a walker2d toe moved 8 cm in one 15 ms interval over a
+# 0.15 m stair and passed 8 mm below the corner). A 10 cm margin left walker2d's 0.15 m
+# stairs infeasible. Stairs down need no margin: their segment rows
+# (`gait_planner.ocp.clearance.segment_heights`) keep every segment above the corners; the
+# plan a cold plan on stairs down starts from keeps it (`Ground.segment_rows` False).
 EDGE_MARGIN = 0.05
 # Width (m) of the smooth step that stands for an edge in the clearance rows; its centre
-# lies another 5 widths towards the lower tread, so at EDGE_MARGIN from the edge the step
+# lies another 5 widths towards the lower tread, so at the margin from the edge the step
 # is 99.3 % up (1 mm short on a 0.15 m stair, within the swing clearance).
 EDGE_WIDTH = 0.005
 
@@ -49,12 +50,15 @@ class GroundError(ValueError):
 class Ground:
     """slope deg (uphill positive); step_height m per step (stairs; 0: none); riser m,
     the x of the edge between tread 0 and tread 1; tread m, the depth of a tread (the
-    step length)."""
+    step length); segment_rows: on stairs down, the segments between two nodes are kept
+    above the edges' corners by the segment rows (True) or by `EDGE_MARGIN` as on stairs
+    up (False: the start of a cold plan, `gait_planner.ocp.solve`)."""
 
     slope: float = 0.0
     step_height: float = 0.0
     riser: float = 0.0
     tread: float = 0.0
+    segment_rows: bool = True
 
     def __post_init__(self):
         for name in ("slope", "step_height", "riser", "tread"):
@@ -107,14 +111,23 @@ class Ground:
             return self.step_height * (np.floor((x - self.riser) / self.tread) + 1.0)
         return x * self.rise_per_step
 
+    @property
+    def edge_margin(self) -> float:
+        """How far (m) towards the lower tread a swing point must be at the higher tread's
+        height: `EDGE_MARGIN` on stairs up and on stairs down without segment rows, 0 on
+        stairs down with them and without stairs."""
+        if self.step_height > 0 or (self.step_height < 0 and not self.segment_rows):
+            return EDGE_MARGIN
+        return 0.0
+
     def clearance_height(self, x, sigmoid):
         """Smooth ground height (m) at x that a swing point must clear (stairs only): the
         treads' heights with each edge a smooth step of width `EDGE_WIDTH`, moved
-        `EDGE_MARGIN` and 5 widths towards the lower tread, for the edges -1, 0 and 1 (the three a half
-        cycle's swing foot passes over, from tread -1 to tread 1). sigmoid: the logistic
-        function of the caller's algebra (CasADi or numpy)."""
+        `edge_margin` and 5 widths towards the lower tread, for the edges -1, 0 and 1 (the
+        three a half cycle's swing foot passes over, from tread -1 to tread 1). sigmoid: the
+        logistic function of the caller's algebra (CasADi or numpy)."""
         h = self.step_height
-        ahead = (EDGE_MARGIN + 5 * EDGE_WIDTH) * (1.0 if h > 0 else -1.0)
+        ahead = (self.edge_margin + 5 * EDGE_WIDTH) * (1.0 if h > 0 else -1.0)
         steps = sum(sigmoid((x - self.riser - j * self.tread + ahead) / EDGE_WIDTH)
                     for j in (-1, 0, 1))
         return h * (steps - 1.0)

@@ -31,16 +31,27 @@ strike (`strike_schedule`, `strike_rows`): the foot comes down rather than in.
 
 On a ramp or stairs (`gait_planner.model.ground`) a height is measured from the ground
 the scene stands on: along the ramp's normal, or above the tread under the point, each
-stair edge a smooth step moved `EDGE_MARGIN` towards the lower tread so that the segment
-between two nodes clears the edge's corner (`ground_heights`); a strike's speed is its
-speed along the ground. On stairs down the midpoint of every interval a point is not held
-over stays above the treads too (`midpoint_heights`): a point's position is linear in the
-director coordinates, so the midpoint of its two nodes is the point of the mean
-configuration. Without it walker2d's forefoot, released 3 cm before the edge of a 0.15 m
-stair down, went 10 cm per interval and its segment passed 3.5 mm through the corner
-while both nodes cleared the smooth step (the verifier's segment check). Not on stairs up,
-whose plans cleared every corner without them: with them walker2d's 0.15 m stairs up
-found no plan in 120 s (it converges in 14 s without; 2026-11-27).
+stair edge a smooth step (`ground_heights`); a strike's speed is its speed along the
+ground. On stairs up the step is moved `EDGE_MARGIN` towards the lower tread, so that the
+segment between two nodes clears the edge's corner while a point moves less than that per
+interval. On stairs down the step sits at the edge (5 widths past it) and each segment
+between two nodes a point is not held over is kept above the corner exactly
+(`segment_heights`): each end must clear the staircase at its own x and at the other
+end's. A point's position is linear in the director coordinates, so the segment is the
+verifier's. The 7.5 cm margin these replace put the smooth step's shoulder past the edge,
+where walker3d's swing heel touched it and then dropped 15 cm in four intervals; its plan
+missed the continuous-dynamics certificate (1.23 % on 40 intervals, 0.36 % on 80).
+
+A cold plan on stairs down starts from a plan with the margin instead
+(`Ground.segment_rows` False, `gait_planner.ocp.solve`): cold from the kinematic guess
+with the segment rows, 0.10 m down found no plan in 300-600 s on either walker. That plan
+keeps its segments above the corners by the midpoint of every interval a point is not
+held over (`midpoint_heights`; the midpoint of two nodes' points is the point of the mean
+configuration): without it walker2d's forefoot, released 3 cm before the edge of a
+0.15 m stair down, went 10 cm per interval and its segment passed 3.5 mm through the
+corner while both nodes cleared the smooth step. Stairs up need neither: their plans
+cleared every corner, and with midpoint rows walker2d's 0.15 m stairs up found no plan in
+120 s (it converges in 14 s without; 2026-11-27).
 
 Used by both transcriptions (`gait_planner.ocp.transcription`,
 `gait_planner.collocation.transcription`), so the two solve the same problem.
@@ -182,6 +193,31 @@ def ground_heights(mb: Multibody, points: Sequence[str], half_width: float,
     return ca.Function("ground_heights_" + "_".join(points), [q], [height], ["q"], ["z"])
 
 
+def segment_heights(mb: Multibody, points: Sequence[str], half_width: float,
+                    ground: Ground) -> ca.Function:
+    """CasADi Function "segment_heights" (q_n, q_{n+1}, h_n, c) -> (2 r,) m, the rows that
+    keep the straight segment between two nodes' `edge_heights` points above stairs down:
+    first Z q_n - g(X q_{n+1}), then Z q_{n+1} - g(X q_n), each less the required height
+    c[1] (g: `Ground.clearance_height`; c[0], the base time step, and h_n are unused, the
+    interval element signature). With the nodes' own `ground_heights` rows, each end of a
+    segment is above g at both ends' x; g falls monotonically across the one edge a
+    segment crosses, so the whole segment is above the smooth staircase, which lies above
+    the edge's corner (module docstring)."""
+    q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
+        ca.SX.sym("c", 2)
+    blocks = [edge_heights(mb, name, half_width, ground) for name in points]
+    Z = ca.DM(np.vstack([z for z, _ in blocks]))
+    X = ca.DM(np.vstack([x for _, x in blocks]))
+
+    def g(x):
+        return ground.clearance_height(x, _logistic)
+
+    rows = ca.vertcat(ca.mtimes(Z, q0) - g(ca.mtimes(X, q1)),
+                      ca.mtimes(Z, q1) - g(ca.mtimes(X, q0))) - c[1]
+    return ca.Function("segment_heights_" + "_".join(points), [q0, q1, h, c], [rows],
+                       ["q", "q_next", "h", "c"], ["z"])
+
+
 def midpoint_heights(mb: Multibody, points: Sequence[str], half_width: float,
                      ground: Ground) -> ca.Function:
     """CasADi Function (q_n, q_{n+1}, h_n, c) -> (r,) m: the `ground_heights` of `points` at
@@ -195,18 +231,25 @@ def midpoint_heights(mb: Multibody, points: Sequence[str], half_width: float,
                        ["q", "q_next", "h", "c"], ["z"])
 
 
-def midpoint_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]], ground: Ground
-                      ) -> dict[int, tuple[str, ...]]:
-    """{interval n: contact points not held over it} of intervals 0..P-1 (held (P,) as in
-    `required_clearances`), on stairs down only ({} otherwise: above a plane a segment is
-    lowest at one of its ends; stairs up: module docstring). Points in the scene's order."""
+def segment_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]], ground: Ground,
+                     clearances: dict[int, dict[str, float]]
+                     ) -> dict[int, tuple[tuple[str, ...], float]]:
+    """{interval n: (contact points not held over it, required height m)} of intervals
+    0..P-1 (held (P,) as in `required_clearances`), on stairs down only, the intervals of
+    `segment_heights` (or of `midpoint_heights` without segment rows); {} otherwise: above
+    a plane a segment is lowest at one of its ends, and stairs up keep `EDGE_MARGIN`
+    (module docstring). The required height is the least of those points' required
+    heights at nodes n and n + 1 (`clearance_schedule`; 0 at a node where a point is
+    held), so that a segment ending in a contact asks only to stay above the treads.
+    Points in the scene's order."""
     if ground.step_height >= 0:
         return {}
     out = {}
     for n, points in enumerate(held):
         free = tuple(c.name for c in scene.contacts if c.name not in points)
         if free:
-            out[n] = free
+            out[n] = (free, min(clearances.get(m, {}).get(p, 0.0)
+                                for p in free for m in (n, n + 1)))
     return out
 
 

@@ -62,7 +62,11 @@ class GaitSettings:
     the scene's step); slope deg (uphill positive) and step_height m
     (stairs, per step; negative: down): the ground (`gait_planner.model.ground`,
     `ground_of`); `settings_for` refuses a ground the scene cannot stand on or reach
-    (`check_ground`);
+    (`check_ground`); stair_segment_rows: on stairs down, each swing segment is kept above
+    the stair edges' corners by the segment rows (True) or by the edge margin (False: the
+    start of a cold plan, `gait_planner.ocp.solve`; `gait_planner.model.ground.Ground`);
+    stairs_down_scaling_bounds (lower, upper): sigma's bounds on stairs down in place of
+    scaling_bounds (empty: the same), set by `settings_for`;
     phase_joint_limits: ((phase, ((angle, lo rad, hi rad), ...)), ...) from the option
     ``phase_joint_limits: {phase: {angle: [lo, hi]}}`` in degrees, ranges at the nodes that
     start an interval of that phase only; posture "paper" (the scene's declared ranges) or
@@ -105,6 +109,8 @@ class GaitSettings:
     step_length_bounds: tuple[float, ...] = ()
     slope: float = 0.0
     step_height: float = 0.0
+    stair_segment_rows: bool = True
+    stairs_down_scaling_bounds: tuple[float, ...] = ()
     twist_regularisation: float = 0.0
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
@@ -155,6 +161,14 @@ class GaitSettings:
                 bad("step_length_bounds", f"need [lower, upper] m with 0 < lower <= upper, got "
                                           f"{bounds!r}")
             object.__setattr__(self, "step_length_bounds", tuple(float(b) for b in bounds))
+        down = self.stairs_down_scaling_bounds
+        if down != ():
+            if (not isinstance(down, (list, tuple)) or len(down) != 2
+                    or not all(isinstance(b, (int, float)) and math.isfinite(b) for b in down)
+                    or not 0 < down[0] <= down[1]):
+                bad("stairs_down_scaling_bounds", f"need [lower, upper] with 0 < lower <= "
+                                                  f"upper, got {down!r}")
+            object.__setattr__(self, "stairs_down_scaling_bounds", tuple(float(b) for b in down))
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
                      "joint_speed_max", "speed", "speed_max", "twist_regularisation"):
@@ -280,10 +294,15 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
     if intervals_per_phase is not None:  # another grid on the same half cycle
         base_time_step *= sum(intervals) / (int(intervals_per_phase) * len(intervals))
         intervals = (int(intervals_per_phase),) * len(gait.phases)
+    scaling_bounds = tuple(gait.scaling_bounds)
+    height = options.get("step_height", 0.0)
+    if isinstance(height, (int, float)) and height < 0 \
+            and options.get("stairs_down_scaling_bounds"):
+        scaling_bounds = tuple(options["stairs_down_scaling_bounds"])
     settings = GaitSettings(
         step_length=gait.step_length if step_length is None else float(step_length),
         base_time_step=base_time_step,
-        scaling_bounds=tuple(gait.scaling_bounds),
+        scaling_bounds=scaling_bounds,
         friction_coefficient=(gait.friction_coefficient if friction_coefficient is None
                               else float(friction_coefficient)),
         cost=chosen,
@@ -308,7 +327,8 @@ def ground_of(scene: Scene, s: GaitSettings) -> Ground:
     reach = max(body.points[c.point][0] - body.points[pinned.point][0]
                 for c in scene.contacts if c.body == pinned.body)
     return Ground(slope=s.slope, step_height=s.step_height,
-                  riser=0.5 * (reach + s.step_length), tread=s.step_length)
+                  riser=0.5 * (reach + s.step_length), tread=s.step_length,
+                  segment_rows=s.stair_segment_rows)
 
 
 def leg_length(scene: Scene, contact: str) -> float:

@@ -6,14 +6,14 @@ length or friction coefficient re-plans from the nearest stored plan (primal and
 start) without rebuilding anything; with a `PlanLibrary` it also starts from, and adds to,
 the plans of earlier processes (`ocp.library`). A cold plan that fails from its guess at a
 step length other than the scene's is continued from the scene's (`Planner._continuation`);
-a cold plan on stairs down deeper than `STAIR_COLD_MAX` starts from the plan on stairs of
-that depth (`Planner._stair_start`).
+a cold plan on stairs down starts from the plan on stairs at most `STAIR_COLD_MAX` deep
+whose segments are kept above the edges by the edge margin instead of the segment rows
+(`Planner._stair_start`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from typing import Callable
 
@@ -94,7 +94,10 @@ REFINE_ATTEMPTS = COLD_ATTEMPTS[:1]
 # 2026-11-27: 0.10 m down converged cold in 388 iterations, 0.15 m down found no plan in
 # 300 s (1089 iterations), and from the 0.10 m plan it converged in 129 more, every check
 # passing. Not for stairs up, which converge cold: walker2d's 0.15 m up continued from
-# 0.10 m missed the certificate (0.692 %, refined 0.279 %).
+# 0.10 m missed the certificate (0.692 %, refined 0.279 %). The start is planned with the
+# edge margin, not the segment rows (`gait_planner.model.ground.Ground.segment_rows`):
+# with the rows, cold plans on 0.10 m down found no plan in 300-600 s (walker2d 1220-2280
+# iterations, walker3d 646-776), with the margin they converge (388 and 349 iterations).
 STAIR_COLD_MAX = 0.10
 
 
@@ -297,18 +300,25 @@ class Planner:
 
     def _stair_start(self, scene: Scene, settings: GaitSettings, guess: str
                      ) -> tuple[StoredPlan | None, PlanResult]:
-        """The start of a cold plan on stairs down deeper than `STAIR_COLD_MAX`: the same
-        request on stairs of that depth, planned cold from `guess` (its problem is kept for later
-        plans). Returns (its stored plan, its result), or (None, a failed result of
-        `settings` saying so) if it failed."""
+        """The start of a cold plan on stairs down: the same request on stairs at most
+        `STAIR_COLD_MAX` deep with the edge margin and midpoint rows instead of the segment
+        rows, and the scene's own scaling bounds (not `stairs_down_scaling_bounds`), planned
+        warm from a plan of that problem this planner keeps, else cold from `guess` (its
+        problem is kept for later plans). Returns (its stored plan, its multipliers of g
+        zeroed: the segment rows are not its rows; its result), or (None, a failed result
+        of `settings` saying so) if it failed."""
         lower = dataclasses.replace(
-            settings, step_height=math.copysign(STAIR_COLD_MAX, settings.step_height))
-        result = self.plan(scene, lower, warm_start=False, guess=guess)
+            settings, step_height=max(settings.step_height, -STAIR_COLD_MAX),
+            stair_segment_rows=False, scaling_bounds=tuple(scene.gait.scaling_bounds))
+        result = self.plan(scene, lower, warm_start=True, guess=guess)
         if not result.success:
             return None, failed_result(
-                scene, settings, f"the plan on stairs of {lower.step_height:g} m that a "
-                f"{settings.step_height:g} m stair starts from failed: {result.message}")
-        return self.stored_plans(scene, lower)[-1], result
+                scene, settings, f"the plan on stairs of {lower.step_height:g} m with the edge "
+                f"margin that a {settings.step_height:g} m stair starts from failed: "
+                f"{result.message}")
+        seed = self.stored_plans(scene, lower)[-1]
+        ng = int(self._build(scene, settings).tr.g.shape[0])
+        return dataclasses.replace(seed, lam_g=np.zeros(ng)), result
 
     def plan(self, scene: Scene, settings: GaitSettings, *, warm_start: bool = True,
              guess: str = "kinematic", refine_from: GaitSettings | None = None) -> PlanResult:
@@ -332,7 +342,7 @@ class Planner:
             built = self._build(scene, settings)
             warm_start = warm_start and bool(built.stored)
             stairs_first = (not warm_start and refine_from is None
-                            and settings.step_height < -STAIR_COLD_MAX)
+                            and settings.step_height < 0 and settings.stair_segment_rows)
             attempts = (WARM_ATTEMPTS if warm_start or stairs_first
                         else REFINE_ATTEMPTS if refine_from is not None else COLD_ATTEMPTS)
             # every solver the plan may use, its fallbacks' and a continuation's (warm)
@@ -358,10 +368,10 @@ class Planner:
             x_start, qref = seed.x, seed.qref
             duals_start = {"lam_x0": seed.lam_x, "lam_g0": seed.lam_g}
             first = [lower.stats.iterations, lower.stats.evaluation_time]
-            origin = (f"{guess} guess on stairs of "
-                      f"{math.copysign(STAIR_COLD_MAX, settings.step_height):g} m, cold "
-                      f"({lower.stats.iterations} iterations); continued to "
-                      f"{settings.step_height:g} m (warm)")
+            origin = (f"the plan on stairs of {max(settings.step_height, -STAIR_COLD_MAX):g} m "
+                      f"with the edge margin ({lower.settings['initial_guess']}; "
+                      f"{lower.stats.iterations} iterations); continued to "
+                      f"{settings.step_height:g} m with the segment rows (warm)")
         elif warm_start:
             nearest = min(built.stored, key=lambda r: abs(r.step - step) + abs(r.mu - mu))
             x_start, qref = nearest.x, nearest.qref

@@ -46,7 +46,8 @@ import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.ocp.clearance import (clearance_rows, clearance_schedule, ground_heights,
-                                        midpoint_heights, midpoint_schedule,
+                                        midpoint_heights, segment_heights,
+                                        segment_schedule,
                                         schedule_heights, strike_rows, strike_schedule)
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
 from gait_planner.ocp.elements import ElementGroup, Layout
@@ -314,19 +315,25 @@ class Transcription:
         if strikes:
             c = np.array([s.base_time_step, s.strike_speed_max])
             rows = self._interval_groups(
-                strikes, lambda points: strike_rows(mb, points, self.ground), c,
+                strikes, lambda points: strike_rows(mb, points, self.ground),
+                dict.fromkeys(strikes, c),
                 sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
             self._ineq.append(("strike_speed", rows))
             self._without_elements["strike_speed"] = ca.MX(rows.shape[0], 1)
-        midpoints = (midpoint_schedule(mb.scene, held, self.ground) if s.ground_clearance
-                     else {})
-        if midpoints:
+        segments = (segment_schedule(mb.scene, held, self.ground, schedule)
+                    if s.ground_clearance else {})
+        if segments:  # stairs down: segment rows, or midpoint rows with the edge margin
+            exact = self.ground.segment_rows
             rows = self._interval_groups(
-                midpoints, lambda points: midpoint_heights(mb, points, s.foot_half_width,
-                                                           self.ground),
-                np.zeros(2), sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
-            self._ineq.append(("midpoint_clearance", rows))
-            self._without_elements["midpoint_clearance"] = ca.MX(rows.shape[0], 1)
+                {n: points for n, (points, _) in segments.items()},
+                lambda points: (segment_heights if exact else midpoint_heights)(
+                    mb, points, s.foot_half_width, self.ground),
+                {n: np.array([s.base_time_step, required]) if exact else np.zeros(2)
+                 for n, (_, required) in segments.items()},
+                sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
+            name = "segment_clearance" if exact else "midpoint_clearance"
+            self._ineq.append((name, rows))
+            self._without_elements[name] = ca.MX(rows.shape[0], 1)
         root = mb.block(mb.scene.root.body).start
         inner = self.Q[:, 1:N]
         for name, entry, bound in (("torso_lean", 11, self._lean_bound),
@@ -385,29 +392,31 @@ class Transcription:
                 np.stack([self.layout.node_p_index(n) for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), np.zeros(1)))
 
-    def _interval_groups(self, schedule: dict[int, tuple[str, ...]], rows_of, c: np.ndarray,
-                         first_row: int) -> ca.MX:
-        """Rows rows_of(points)(q_n, q_{n+1}, h_n, c) of the intervals n of `schedule`
+    def _interval_groups(self, schedule: dict[int, tuple[str, ...]], rows_of,
+                         constants: dict[int, np.ndarray], first_row: int) -> ca.MX:
+        """Rows rows_of(points)(q_n, q_{n+1}, h_n, c_n) of the intervals n of `schedule`
         ({interval: points}: the strike_speed rows of `strike_schedule`, the
-        midpoint_clearance rows of `midpoint_schedule`), from row first_row of g on,
-        declared as interval elements, one Function per set of points; returns them as one
-        MX column."""
-        groups: dict[tuple[tuple[str, ...], bool], list[tuple[int, np.ndarray]]] = {}
+        segment_clearance rows of `segment_schedule`; constants {interval: c_n (2,)}), from
+        row first_row of g on, declared as interval elements, one Function per set of
+        points and one group per Function and constant; returns them as one MX column."""
+        groups: dict[tuple[tuple[str, ...], bool, tuple[float, ...]],
+                     list[tuple[int, np.ndarray]]] = {}
         functions: dict[tuple[str, ...], ca.Function] = {}
         out, row = [], first_row
         for n, points in schedule.items():
             fn = functions.setdefault(points, rows_of(points))
             size = int(fn.size1_out(0))
-            groups.setdefault((points, self.layout.mirrored(n == self.N - 2)), []).append(
+            c = tuple(float(v) for v in constants[n])
+            groups.setdefault((points, self.layout.mirrored(n == self.N - 2), c), []).append(
                 (n, row + np.arange(size)))
             row += size
             out.append(fn(self.Q[:, n], self.Q[:, n + 1], self.h[n], ca.DM(c)))
-        for (points, next_mirrored), chosen in groups.items():
+        for (points, next_mirrored, c), chosen in groups.items():
             self.elements.append(ElementGroup(
                 self.layout.interval_element(functions[points], next_mirrored),
                 np.stack([self.layout.interval_z_index(n) for n, _ in chosen], 1),
                 np.stack([self.layout.interval_p_index(n) for n, _ in chosen], 1),
-                np.stack([rows for _, rows in chosen], 1), c))
+                np.stack([rows for _, rows in chosen], 1), np.array(c)))
         return ca.vertcat(*out)
 
     def _node_rows(self):

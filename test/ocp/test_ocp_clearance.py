@@ -140,8 +140,9 @@ def test_stair_clearance_is_the_height_above_the_tread_with_edges_moved_to_the_l
         walker3d_held, x, z, rise):
     """On stairs a swing point's `ground_heights` row is its height above the tread under
     it (treads -1 to 1, what a half cycle's swing foot passes over), except near an edge,
-    where it is measured from the higher tread (the edge's step moved EDGE_MARGIN
-    towards the lower tread)."""
+    where it is measured from the higher tread (the edge's step moved the ground's
+    edge_margin, EDGE_MARGIN on stairs up and 0 on stairs down, towards the lower
+    tread)."""
     from gait_planner.model.ground import EDGE_MARGIN, EDGE_WIDTH, Ground
     from gait_planner.ocp.clearance import ground_heights
 
@@ -156,11 +157,14 @@ def test_stair_clearance_is_the_height_above_the_tread_with_edges_moved_to_the_l
     height = float(ground_heights(mb, ("foot_l_heel",), 0.0, ground)(q))
     edges = ground.riser + ground.tread * np.arange(-1, 2)
     distance = np.min(np.abs(x - edges))
-    # away from every edge (its smooth step centred EDGE_MARGIN + 5 widths from it, 10 more
+    # away from every edge (its smooth step centred edge_margin + 5 widths from it, 10 more
     # widths clear of that centre): the tread's height
     if distance > EDGE_MARGIN + 15 * EDGE_WIDTH:
         assert height == pytest.approx(z - float(ground.height(x)), abs=1e-5)
-    near = np.abs(x - edges) <= EDGE_MARGIN / 2  # near an edge: at least the higher tread's
+    # near an edge (up to it from the higher tread, half the margin past it): at least the
+    # higher tread's height
+    towards_lower = (x - edges) * np.sign(-rise)
+    near = (towards_lower >= -2 * EDGE_MARGIN) & (towards_lower <= ground.edge_margin / 2)
     if near.any():
         edge = edges[near][0]
         top = max(ground.height(edge - 1e-9), ground.height(edge + 1e-9))
@@ -168,44 +172,110 @@ def test_stair_clearance_is_the_height_above_the_tread_with_edges_moved_to_the_l
 
 
 @pytest.mark.parametrize("rise", [0.15, -0.15, 0.0])
-def test_midpoint_rows_are_the_free_points_of_each_interval_on_stairs_down(walker3d_held, rise):
+def test_segment_rows_are_the_free_points_of_each_interval_on_stairs_down(walker3d_held, rise):
     """On stairs down every interval lists the points it does not hold (the segment check's
-    points); on stairs up and on a plane none (a segment above a plane is lowest at a
-    node)."""
+    points) with the least required height of their two nodes, 0 next to a contact; on
+    stairs up and on a plane none (a segment above a plane is lowest at a node)."""
     from gait_planner.model.ground import Ground
-    from gait_planner.ocp.clearance import midpoint_schedule
+    from gait_planner.ocp.clearance import segment_schedule
 
     scene, held = walker3d_held
     ground = Ground(step_height=rise, riser=0.44, tread=0.63) if rise else Ground()
-    out = midpoint_schedule(scene, held, ground)
+    clearances = required_clearances(scene, held, MARGIN, 2.0)
+    out = segment_schedule(scene, held, ground, clearances)
     if rise >= 0:
         assert out == {}
         return
+    # the same intervals for the midpoint rows of a start with the edge margin
+    assert segment_schedule(scene, held, Ground(step_height=rise, riser=0.44, tread=0.63,
+                                                segment_rows=False), clearances) == out
     names = [c.name for c in scene.contacts]
-    assert out == {n: tuple(p for p in names if p not in points)
-                   for n, points in enumerate(held) if set(names) - set(points)}
+    assert {n: points for n, (points, _) in out.items()} == {
+        n: tuple(p for p in names if p not in points)
+        for n, points in enumerate(held) if set(names) - set(points)}
+    # foot_r_heel is released at node 8 (held there): the segment 8 -> 9 starts on the tread;
+    # at node 9 it is one node off the ground, sin(pi/4) of the margin with a 2-node ramp;
+    # 12 -> 13 is mid-swing for all three free points
+    assert out[8] == (("foot_r_heel", "foot_l_heel", "foot_l_forefoot"), 0.0)
+    assert out[9][1] == pytest.approx(MARGIN * math.sin(math.pi / 4))
+    assert out[12][1] == pytest.approx(MARGIN)
+
+
+def _foot_at(mb, x, z, D=np.eye(3)):
+    """walker3d's configuration (k,) with the left foot's director frame D and its heel at
+    (x, 0.05, z); the other bodies at the origin."""
+    q = np.zeros(mb.k)
+    block = mb.block("foot_l")
+    q[block] = np.r_[0.0, 0.0, 0.0, D[:, 0], D[:, 1], D[:, 2]]
+    q[block.start : block.start + 3] = np.array([x, 0.05, z]) - mb.contact_rows("foot_l_heel") @ q
+    return q
+
+
+def _logistic(u):
+    return 0.5 * (1.0 + np.tanh(0.5 * u))
+
+
+@settings(max_examples=40, deadline=None)
+@given(a=st.tuples(st.floats(-0.5, 1.5), st.floats(-0.3, 0.3)),
+       b=st.tuples(st.floats(-0.5, 1.5), st.floats(-0.3, 0.3)),
+       required=st.floats(0.0, 0.02))
+def test_segment_heights_are_each_end_above_the_staircase_at_the_other(walker3d_held, a, b,
+                                                                      required):
+    """`segment_heights` of two configurations: each end's height above the smooth
+    staircase at the other end's x, less the required height (positions are linear in the
+    director coordinates, so the point is the heel's)."""
+    from gait_planner.model.ground import Ground
+    from gait_planner.model.rotations import rot_x, rot_y
+    from gait_planner.ocp.clearance import segment_heights
+
+    scene, _ = walker3d_held
+    mb = Multibody(scene)
+    ground = Ground(step_height=-0.15, riser=0.44, tread=0.63)
+    q0, q1 = _foot_at(mb, *a, rot_y(0.3)), _foot_at(mb, *b, rot_x(0.2) @ rot_y(-0.4))
+    got = np.array(segment_heights(mb, ("foot_l_heel",), 0.0, ground)(
+        q0, q1, 0.01, [0.01, required])).ravel()
+    g = lambda x: float(ground.clearance_height(x, _logistic))  # noqa: E731
+    assert got == pytest.approx([a[1] - g(b[0]) - required, b[1] - g(a[0]) - required],
+                                abs=1e-12)
+
+
+@settings(max_examples=300, deadline=None)
+@given(x0=st.floats(-0.5, 1.5), x1=st.floats(-0.5, 1.5), z0=st.floats(-0.3, 0.3),
+       z1=st.floats(-0.3, 0.3))
+def test_segments_whose_rows_hold_do_not_cut_a_stair_corner(x0, x1, z0, z1):
+    """A segment whose two ends clear the smooth staircase (stairs down) at their own x and
+    at each other's by the verifier's GROUND_BAND passes above every corner: the
+    verifier's own segment check (`RecordedGround.edge_clearance`) finds no cut."""
+    from gait_planner.model.ground import Ground
+    from gait_planner.verify.ground import RecordedGround
+
+    ground = Ground(step_height=-0.15, riser=0.44, tread=0.63)
+    g = lambda x: float(ground.clearance_height(x, _logistic))  # noqa: E731
+    rows = [z0 - g(x0), z1 - g(x1), z0 - g(x1), z1 - g(x0)]
+    if min(rows) < GROUND_BAND:
+        return
+    recorded = RecordedGround(step_height=-0.15, riser=0.44, tread=0.63)
+    assert recorded.edge_clearance([x0, 0.0, z0], [x1, 0.0, z1]) >= 0.0
 
 
 @settings(max_examples=40, deadline=None)
 @given(a=st.tuples(st.floats(-0.5, 1.5), st.floats(-0.3, 0.3)),
        b=st.tuples(st.floats(-0.5, 1.5), st.floats(-0.3, 0.3)))
 def test_midpoint_heights_are_the_heights_of_the_segment_midpoints(walker3d_held, a, b):
-    """`midpoint_heights` of two configurations is the clearance height of the midpoint of
-    the point's two positions (positions are linear in the director coordinates)."""
+    """`midpoint_heights` (the rows of a start with the edge margin) of two configurations
+    is the clearance height of the midpoint of the point's two positions (positions are
+    linear in the director coordinates)."""
     from gait_planner.model.ground import Ground
     from gait_planner.model.rotations import rot_x, rot_y
     from gait_planner.ocp.clearance import midpoint_heights
 
     scene, _ = walker3d_held
     mb = Multibody(scene)
-    ground = Ground(step_height=-0.15, riser=0.44, tread=0.63)
-    qs = []
-    for (x, z), D in ((a, rot_y(0.3)), (b, rot_x(0.2) @ rot_y(-0.4))):
-        q = np.zeros(mb.k)
-        q[mb.block("foot_l")] = np.r_[x, 0.05, z, D[:, 0], D[:, 1], D[:, 2]]
-        qs.append(q)
+    ground = Ground(step_height=-0.15, riser=0.44, tread=0.63, segment_rows=False)
+    q0, q1 = _foot_at(mb, *a, rot_y(0.3)), _foot_at(mb, *b, rot_x(0.2) @ rot_y(-0.4))
     got = float(midpoint_heights(mb, ("foot_l_heel",), 0.0, ground)(
-        qs[0], qs[1], 0.01, [0.01, 0.0]))
-    mid = 0.5 * (mb.contact_rows("foot_l_heel") @ qs[0] + mb.contact_rows("foot_l_heel") @ qs[1])
-    tread = ground.clearance_height(mid[0], lambda u: 0.5 * (1.0 + np.tanh(0.5 * u)))
+        q0, q1, 0.01, [0.01, 0.0]))
+    rows = mb.contact_rows("foot_l_heel")
+    mid = 0.5 * (rows @ q0 + rows @ q1)
+    tread = ground.clearance_height(mid[0], _logistic)
     assert got == pytest.approx(mid[2] - float(tread), abs=1e-12)

@@ -71,6 +71,26 @@ def test_a_stair_edge_lies_midway_between_the_standing_toe_and_the_landing_heel(
         pytest.approx([0.0, 0.0, 0.15, 0.15])
 
 
+def test_stairs_down_take_their_own_scaling_bounds_and_segment_rows():
+    """walker3d declares sigma's bounds on stairs down (a slower step); elsewhere the
+    scene's hold. The edge margin applies on stairs up and to the start of a cold plan on
+    stairs down (segment_rows off), not to the plan itself."""
+    from gait_planner.model.ground import EDGE_MARGIN
+    from gait_planner.ocp.settings import SettingsError
+
+    scene = load_scene("walker3d")
+    down = settings_for(scene, step_height=-0.15)
+    assert down.scaling_bounds == (0.5, 2.0)
+    assert settings_for(scene, step_height=0.15).scaling_bounds == (0.5, 1.5)
+    assert settings_for(scene).scaling_bounds == (0.5, 1.5)
+    assert ground_of(scene, down).edge_margin == 0.0
+    assert ground_of(scene, settings_for(scene, step_height=0.15)).edge_margin == EDGE_MARGIN
+    start = ground_of(scene, settings_for(scene, step_height=-0.1, stair_segment_rows=False))
+    assert start.edge_margin == EDGE_MARGIN and not start.segment_rows
+    with pytest.raises(SettingsError, match="stairs_down_scaling_bounds"):
+        settings_for(scene, stairs_down_scaling_bounds=(2.0, 1.0))
+
+
 @pytest.mark.parametrize("slope", [10.0, -10.0])
 def test_a_ramp_plan_stands_on_the_ramp_and_pushes_within_its_cones(slope):
     """Every held point lies on the plane n . p = 0 and every point force in the cone about
@@ -126,6 +146,7 @@ def test_a_stair_plan_lands_one_tread_up_and_clears_every_edge():
     pytest.param("walker3d", {"slope": 10.0}, marks=pytest.mark.slow),
     pytest.param("walker3d", {"slope": -10.0}, marks=pytest.mark.slow),
     pytest.param("walker3d", {"step_height": 0.15}, marks=pytest.mark.slow),
+    pytest.param("walker3d", {"step_height": -0.15}, marks=pytest.mark.slow),
 ])
 def test_a_plan_for_a_ground_passes_every_check_against_that_ground(scene, ground):
     """The independent verifier rebuilds the ground from the recording's metadata: every
@@ -138,11 +159,11 @@ def test_a_plan_for_a_ground_passes_every_check_against_that_ground(scene, groun
     assert report.ok, report.failures
 
 
-def test_a_deep_stair_down_continues_from_a_plan_on_a_shallower_one():
-    """A cold plan of stairs down deeper than STAIR_COLD_MAX starts from the plan of the
-    same request on stairs of that depth, which the planner keeps: its origin says so, its
-    iterations include that plan's, and a second request of the shallower stair re-plans
-    warm from it."""
+def test_a_stair_down_continues_from_a_plan_with_the_edge_margin():
+    """A cold plan of stairs down starts from the plan of the same request on stairs at
+    most STAIR_COLD_MAX deep with the edge margin instead of the segment rows, which the
+    planner keeps: its origin says so and its iterations include that plan's; a second
+    request, of the shallower stair, starts from the kept plan warm."""
     from gait_planner.ocp.solve import STAIR_COLD_MAX
 
     scene = load_scene("walker2d")
@@ -150,8 +171,11 @@ def test_a_deep_stair_down_continues_from_a_plan_on_a_shallower_one():
     deep = settings_for(scene, step_height=-0.15, compiled=True)
     result = planner.plan(scene, deep, warm_start=False)
     assert result.success, result.message
-    assert f"stairs of {-STAIR_COLD_MAX:g} m, cold" in result.settings["initial_guess"]
+    origin = result.settings["initial_guess"]
+    assert f"stairs of {-STAIR_COLD_MAX:g} m with the edge margin (kinematic guess" in origin
+    assert "continued to -0.15 m with the segment rows" in origin
     shallow = planner.plan(scene, settings_for(scene, step_height=-STAIR_COLD_MAX,
-                                               compiled=True))
-    assert shallow.success and shallow.settings["initial_guess"].startswith("warm start")
+                                               compiled=True), warm_start=False)
+    assert shallow.success, shallow.message
+    assert "with the edge margin (warm start from the plan" in shallow.settings["initial_guess"]
     assert shallow.stats.iterations < result.stats.iterations
