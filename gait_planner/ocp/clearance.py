@@ -177,6 +177,13 @@ def edge_heights(mb: Multibody, point: str, half_width: float,
     return (np.array([ground.normal @ E for E in edges]), np.array([E[0] for E in edges]))
 
 
+def _stacked_edges(mb: Multibody, points: Sequence[str], half_width: float,
+                   ground: Ground) -> tuple[ca.DM, ca.DM]:
+    """(Z, X), each (r, k): the `edge_heights` rows of `points`, stacked in order."""
+    blocks = [edge_heights(mb, name, half_width, ground) for name in points]
+    return ca.DM(np.vstack([z for z, _ in blocks])), ca.DM(np.vstack([x for _, x in blocks]))
+
+
 def ground_heights(mb: Multibody, points: Sequence[str], half_width: float,
                    ground: Ground = LEVEL) -> ca.Function:
     """CasADi Function "ground_heights" q (k,) -> (r,) m: the heights above the ground of
@@ -184,11 +191,9 @@ def ground_heights(mb: Multibody, points: Sequence[str], half_width: float,
     Z q - `Ground.clearance_height`(X q), the height above the treads with each edge a
     smooth step moved towards the lower tread (`gait_planner.model.ground`)."""
     q = ca.SX.sym("q", mb.k)
-    blocks = [edge_heights(mb, name, half_width, ground) for name in points]
-    Z = ca.DM(np.vstack([z for z, _ in blocks]))
+    Z, X = _stacked_edges(mb, points, half_width, ground)
     height = ca.mtimes(Z, q)
     if ground.stairs:
-        X = ca.DM(np.vstack([x for _, x in blocks]))
         height = height - ground.clearance_height(ca.mtimes(X, q), _logistic)
     return ca.Function("ground_heights_" + "_".join(points), [q], [height], ["q"], ["z"])
 
@@ -205,9 +210,7 @@ def segment_heights(mb: Multibody, points: Sequence[str], half_width: float,
     the edge's corner (module docstring)."""
     q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
         ca.SX.sym("c", 2)
-    blocks = [edge_heights(mb, name, half_width, ground) for name in points]
-    Z = ca.DM(np.vstack([z for z, _ in blocks]))
-    X = ca.DM(np.vstack([x for _, x in blocks]))
+    Z, X = _stacked_edges(mb, points, half_width, ground)
 
     def g(x):
         return ground.clearance_height(x, _logistic)

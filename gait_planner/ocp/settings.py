@@ -153,22 +153,16 @@ class GaitSettings:
             object.__setattr__(self, "torso_lean_max", check_torso_lean_max(self.torso_lean_max))
         except PostureError as err:
             raise SettingsError(str(err)) from None
-        bounds = self.step_length_bounds
-        if bounds != ():
-            if (not isinstance(bounds, (list, tuple)) or len(bounds) != 2
-                    or not all(isinstance(b, (int, float)) and math.isfinite(b) for b in bounds)
-                    or not 0 < bounds[0] <= bounds[1]):
-                bad("step_length_bounds", f"need [lower, upper] m with 0 < lower <= upper, got "
-                                          f"{bounds!r}")
-            object.__setattr__(self, "step_length_bounds", tuple(float(b) for b in bounds))
-        down = self.stairs_down_scaling_bounds
-        if down != ():
-            if (not isinstance(down, (list, tuple)) or len(down) != 2
-                    or not all(isinstance(b, (int, float)) and math.isfinite(b) for b in down)
-                    or not 0 < down[0] <= down[1]):
-                bad("stairs_down_scaling_bounds", f"need [lower, upper] with 0 < lower <= "
-                                                  f"upper, got {down!r}")
-            object.__setattr__(self, "stairs_down_scaling_bounds", tuple(float(b) for b in down))
+        for name, unit in (("step_length_bounds", " m"), ("stairs_down_scaling_bounds", "")):
+            bounds = getattr(self, name)
+            if bounds != ():
+                if (not isinstance(bounds, (list, tuple)) or len(bounds) != 2
+                        or not all(isinstance(b, (int, float)) and math.isfinite(b)
+                                   for b in bounds)
+                        or not 0 < bounds[0] <= bounds[1]):
+                    bad(name, f"need [lower, upper]{unit} with 0 < lower <= upper, got "
+                              f"{bounds!r}")
+                object.__setattr__(self, name, tuple(float(b) for b in bounds))
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
                      "joint_speed_max", "speed", "speed_max", "twist_regularisation"):

@@ -298,15 +298,15 @@ class Planner:
                                                      p, totals)
         return (x, g, duals, status, success, p) if success else None
 
-    def _stair_start(self, scene: Scene, settings: GaitSettings, guess: str
+    def _stair_start(self, scene: Scene, settings: GaitSettings, guess: str, ng: int
                      ) -> tuple[StoredPlan | None, PlanResult]:
         """The start of a cold plan on stairs down: the same request on stairs at most
         `STAIR_COLD_MAX` deep with the edge margin and midpoint rows instead of the segment
         rows, and the scene's own scaling bounds (not `stairs_down_scaling_bounds`), planned
         warm from a plan of that problem this planner keeps, else cold from `guess` (its
         problem is kept for later plans). Returns (its stored plan, its multipliers of g
-        zeroed: the segment rows are not its rows; its result), or (None, a failed result
-        of `settings` saying so) if it failed."""
+        zeroed to the ng rows of `settings`' problem: the segment rows are not its rows;
+        its result), or (None, a failed result of `settings` saying so) if it failed."""
         lower = dataclasses.replace(
             settings, step_height=max(settings.step_height, -STAIR_COLD_MAX),
             stair_segment_rows=False, scaling_bounds=tuple(scene.gait.scaling_bounds))
@@ -317,7 +317,6 @@ class Planner:
                 f"margin that a {settings.step_height:g} m stair starts from failed: "
                 f"{result.message}")
         seed = self.stored_plans(scene, lower)[-1]
-        ng = int(self._build(scene, settings).tr.g.shape[0])
         return dataclasses.replace(seed, lam_g=np.zeros(ng)), result
 
     def plan(self, scene: Scene, settings: GaitSettings, *, warm_start: bool = True,
@@ -362,7 +361,7 @@ class Planner:
             duals_start = {"lam_x0": np.zeros(x_start.size),
                            "lam_g0": np.zeros(int(tr.g.shape[0]))}
         elif stairs_first:
-            seed, lower = self._stair_start(scene, settings, guess)
+            seed, lower = self._stair_start(scene, settings, guess, int(tr.g.shape[0]))
             if seed is None:
                 return lower
             x_start, qref = seed.x, seed.qref
