@@ -134,7 +134,8 @@ class MinimalModel:
                 R_rel = ca.mtimes([axis_rotation(E_Y, angles[0]), axis_rotation(E_X, angles[1]),
                                    axis_rotation(E_Z, angles[2])])
             else:
-                R_rel = axis_rotation(ca.DM(joint.axis), angles[0])
+                R_rel = ca.mtimes(axis_rotation(ca.DM(joint.axis), angles[0]),
+                                  ca.DM(joint.reference))
             phi_p, D_p = frames[joint.parent]
             D_c = ca.mtimes(D_p, R_rel)
             rho_p = ca.DM(scene.body(joint.parent).points[joint.parent_point])

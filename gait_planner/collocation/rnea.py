@@ -73,6 +73,8 @@ class _Kinematics:
                 axes, idx = [ca.DM(joint.axis)], [start]
             R, om, al = self._chain(Rp, self.om[P], self.al[P], axes, idx, rj, joint.child,
                                     theta, w, a)
+            if joint.type is JointType.REVOLUTE:  # R_rel = Rot(n, theta) R0
+                R = ca.mtimes(R, ca.DM(joint.reference))
             c = -ca.mtimes(R, ca.DM(scene.body(joint.child).points[joint.child_point]))
             self.R[joint.child], self.p[joint.child] = R, rj + c
             self.om[joint.child], self.al[joint.child] = om, al

@@ -47,8 +47,10 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from gait_planner.io.urdf import WORLD_FRAME, KinematicTree, kinematic_tree, scene_to_urdf
+from gait_planner.io.urdf import (WORLD_FRAME, KinematicJoint, KinematicTree, kinematic_tree,
+                                 scene_to_urdf)
 from gait_planner.model.angles import angle_names, conjugate_torques
+from gait_planner.model.rotations import rot_axis, rpy_matrix
 from gait_planner.result import PlanResult
 
 __all__ = ["check_result", "contact_forces", "contact_points", "fill_message", "foot_wrenches",
@@ -116,12 +118,16 @@ def quaternion_msg(R: np.ndarray) -> dict[str, float]:
     return {"x": sign * x / norm, "y": sign * y / norm, "z": sign * z / norm, "w": sign * w / norm}
 
 
-def _axis_quaternion(axis, angle: float) -> dict[str, float]:
-    a = np.asarray(axis, dtype=float)
+def _joint_quaternion(joint: KinematicJoint, angle: float) -> dict[str, float]:
+    """The rotation Rot(rpy) Rot(axis, angle) of a moving URDF joint (`KinematicJoint`)."""
+    a = np.asarray(joint.axis, dtype=float)
     a = a / np.linalg.norm(a)
     s = math.sin(0.5 * angle)
-    return {"x": float(a[0] * s), "y": float(a[1] * s), "z": float(a[2] * s),
+    turn = {"x": float(a[0] * s), "y": float(a[1] * s), "z": float(a[2] * s),
             "w": float(math.cos(0.5 * angle))}
+    if not any(joint.rpy):
+        return turn
+    return quaternion_msg(rpy_matrix(joint.rpy) @ rot_axis(a, angle))
 
 
 def vector3(v) -> dict[str, float]:
@@ -335,7 +341,7 @@ def tf_messages(result: PlanResult, start_ns: int,
         for joint in tree.moving_joints:
             angle = float(result.joint_angles[n][joint.angle_index])
             transforms.append(_transform(stamps[n], joint.parent, joint.child, joint.origin,
-                                         _axis_quaternion(joint.axis, angle)))
+                                         _joint_quaternion(joint, angle)))
         messages.append({"transforms": transforms})
     return messages
 

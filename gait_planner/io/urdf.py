@@ -22,7 +22,8 @@ Frame scheme (world x forward, y left, z up):
   child body's link. Both intermediate links sit at the joint point, so the composed rotation
   is exactly R_rel and /tf is exact for any angles.
 * A revolute joint becomes one revolute URDF joint named like the joint (= its angle name),
-  about the scene's body-fixed axis.
+  about the scene's axis in the child's directors, its origin rotated by the joint's
+  zero-angle reference (`rpy`).
 * Every contact point is a massless link named like the contact (e.g. ``foot_r_heel``),
   fixed to its body's link (a fixed joint ``<contact>_fixed``, published on /tf_static).
 
@@ -90,7 +91,9 @@ _GROUND_COLOR = (0.75, 0.75, 0.72, 1.0)
 
 @dataclass(frozen=True)
 class KinematicJoint:
-    """One URDF joint: the transform parent -> child is Trans(origin) Rot(axis, angle).
+    """One URDF joint: the transform parent -> child is Trans(origin) Rot(rpy) Rot(axis,
+    angle), `axis` in the child's link frame (URDF's convention); `rpy` is the scene joint's
+    zero-angle reference (`gait_planner.model.scene.Joint.reference_rpy`).
 
     `angle_index` indexes `PlanResult.joint_angles` columns (= the joint angle names);
     None for fixed joints (contact frames), whose rotation is the identity.
@@ -102,6 +105,7 @@ class KinematicJoint:
     origin: tuple[float, float, float]
     axis: tuple[float, float, float] | None
     angle_index: int | None
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     @property
     def fixed(self) -> bool:
@@ -161,7 +165,8 @@ def kinematic_tree(scene: Scene) -> KinematicTree:
             massless += links[:2]
         else:
             joints.append(KinematicJoint(joint.angle_names[0], joint.parent, joint.child,
-                                         origin, _vec(joint.axis), index))
+                                         origin, _vec(joint.child_axis), index,
+                                         _vec(joint.reference_rpy)))
             index += 1
     for contact in scene.contacts:
         point = np.array(scene.body(contact.body).points[contact.point])
@@ -242,8 +247,8 @@ def _xyz(v) -> str:
     return " ".join(_num(x) for x in v)
 
 
-def _origin(parent: ET.Element, xyz) -> None:
-    ET.SubElement(parent, "origin", xyz=_xyz(xyz), rpy="0 0 0")
+def _origin(parent: ET.Element, xyz, rpy=(0.0, 0.0, 0.0)) -> None:
+    ET.SubElement(parent, "origin", xyz=_xyz(xyz), rpy=_xyz(rpy))
 
 
 def realisable_inertia(inertia) -> tuple[float, float, float]:
@@ -354,7 +359,7 @@ def scene_to_urdf(scene: Scene, *, foot_breadth: float = FOOT_BREADTH) -> str:
                                 type="fixed" if joint.fixed else "continuous")
         ET.SubElement(element, "parent", link=joint.parent)
         ET.SubElement(element, "child", link=joint.child)
-        _origin(element, joint.origin)
+        _origin(element, joint.origin, joint.rpy)
         if not joint.fixed:
             ET.SubElement(element, "axis", xyz=_xyz(joint.axis))
     ET.indent(robot, space="  ")

@@ -14,7 +14,9 @@ upright pose, where all triads equal the world axes (x forward, y left, z up).
   it the angles still reproduce R_rel to round-off (tested), but pitch and yaw jump, so no
   optimiser works in them there.
 * Revolute joint (knee): one angle, right-handed about the joint axis (knees: about d2, so a
-  bent knee has a positive angle).
+  bent knee has a positive angle): R_rel = Rot(axis, angle) R0 with the joint's zero-angle
+  reference R0 (`Joint.reference`; the identity for the built-in walkers, the URDF's zero
+  pose for an imported robot, whose angles are then the URDF's).
 * Root orientation (for /tf only): R = Rz(yaw) Ry(pitch) Rx(roll).
 """
 
@@ -22,11 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from gait_planner.model.rotations import rot_axis, rot_x, rot_y, rot_z
+from gait_planner.model.rotations import GIMBAL_LOCK, matrix_rpy, rot_axis, rot_x, rot_y, rot_z
 from gait_planner.model.scene import InitialPose, JointType, Scene
 
-# cos(middle angle) at or below this counts as gimbal lock (within ~1e-15 rad of 90 deg).
-_GIMBAL_LOCK = 4 * np.finfo(float).eps
 
 
 def angle_names(scene: Scene) -> tuple[str, ...]:
@@ -56,7 +56,7 @@ def spherical_angles_rows(R: np.ndarray) -> np.ndarray:
     c_roll = np.hypot(R[:, 0, 2], R[:, 2, 2])
     roll = np.arctan2(-R[:, 1, 2], c_roll)
     # gimbal lock: only pitch -/+ yaw is defined; put it all into pitch
-    pitch = np.where(c_roll > _GIMBAL_LOCK, np.arctan2(R[:, 0, 2], R[:, 2, 2]),
+    pitch = np.where(c_roll > GIMBAL_LOCK, np.arctan2(R[:, 0, 2], R[:, 2, 2]),
                      np.arctan2(-R[:, 2, 0], R[:, 0, 0]))
     cp, sp, cr, sr = np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
     # first column of the remainder: (Ry(pitch)^T R) then Rx(roll)^T, rows 0 and 1
@@ -95,24 +95,16 @@ def joint_angles(scene: Scene, q: np.ndarray) -> np.ndarray:
     for joint in scene.joints:
         R = np.einsum("nji,njk->nik", frames[joint.parent], frames[joint.child])
         out.append(spherical_angles_rows(R) if joint.type is JointType.SPHERICAL
-                   else revolute_angle_rows(R, joint.axis)[:, None])
+                   else revolute_angle_rows(R @ joint.reference.T, joint.axis)[:, None])
     return np.concatenate(out, axis=1) if out else np.zeros((q.shape[0], 0))
 
 
 def root_angles(R: np.ndarray) -> tuple[float, float, float]:
-    """(yaw, pitch, roll) of R = Rz(yaw) Ry(pitch) Rx(roll); pitch in [-pi/2, pi/2].
-
-    As `spherical_angles`: accurate pitch from atan2, roll from the remainder, so the angles
-    rebuild R to round-off; at the gimbal lock (pitch = +-90 deg) roll is 0.
-    """
-    c_pitch = float(np.hypot(R[0, 0], R[1, 0]))
-    pitch = float(np.arctan2(-R[2, 0], c_pitch))
-    if c_pitch > _GIMBAL_LOCK:
-        yaw = float(np.arctan2(R[1, 0], R[0, 0]))
-    else:  # gimbal lock: only yaw -/+ roll is defined; put it all into yaw
-        yaw = float(np.arctan2(-R[0, 1], R[1, 1]))
-    rest = rot_y(pitch).T @ rot_z(yaw).T @ R
-    return yaw, pitch, float(np.arctan2(rest[2, 1], rest[1, 1]))
+    """(yaw, pitch, roll) of R = Rz(yaw) Ry(pitch) Rx(roll); pitch in [-pi/2, pi/2]
+    (`gait_planner.model.rotations.matrix_rpy`, reversed): the angles rebuild R to
+    round-off; at the gimbal lock (pitch = +-90 deg) roll is 0."""
+    roll, pitch, yaw = matrix_rpy(R)
+    return yaw, pitch, roll
 
 
 def configuration(scene: Scene, pose: InitialPose | None = None) -> np.ndarray:
@@ -129,7 +121,7 @@ def configuration(scene: Scene, pose: InitialPose | None = None) -> np.ndarray:
         if joint.type is JointType.SPHERICAL:
             R_rel = spherical_rotation(*values)
         else:
-            R_rel = rot_axis(np.asarray(joint.axis, float), values[0])
+            R_rel = rot_axis(np.asarray(joint.axis, float), values[0]) @ joint.reference
         phi_p, D_p = frames[joint.parent]
         D_c = D_p @ R_rel
         rho_p = np.asarray(scene.body(joint.parent).points[joint.parent_point])

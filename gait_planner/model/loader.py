@@ -23,7 +23,10 @@ YAML layout (exactly these keys; unknown keys are errors)::
     joints:                           # reordered depth-first from the root
       - {name: hip_r, type: spherical, parent: torso, parent_point: hip_r,
          child: thigh_r, child_point: hip}
-      - {name: knee_r, type: revolute, axis: [0, 1, 0], ...}   # axis normalised
+      - {name: knee_r, type: revolute, axis: [0, 1, 0], ...}   # axis normalised, in the
+                                      # parent's directors; optional reference_rpy:
+                                      # [r, p, y] rad, the child's directors in the parent's
+                                      # at zero angle (URDF rpy; default aligned)
     contacts:
       - {name: foot_r_heel, body: foot_r, point: heel}
     initial_pose:
@@ -379,7 +382,7 @@ def _joints(c: Checker, value: Any, bodies: tuple[Body, ...], root: Root) -> tup
             item,
             key,
             required=("name", "type", "parent", "parent_point", "child", "child_point"),
-            optional=("axis",),
+            optional=("axis", "reference_rpy"),
         )
         kind = c.choice(j["type"], join(key, "type"), JointType)
         ends = {}
@@ -390,6 +393,12 @@ def _joints(c: Checker, value: Any, bodies: tuple[Body, ...], root: Root) -> tup
         if ends["parent"] == ends["child"]:
             c.fail(join(key, "child"), f"a joint cannot connect body {ends['child']!r} to itself")
         axis = _joint_axis(c, j, key, kind, root)
+        reference = (0.0, 0.0, 0.0)
+        if "reference_rpy" in j:
+            if kind is not JointType.REVOLUTE:
+                c.fail(join(key, "reference_rpy"), "only a revolute joint takes a zero-angle "
+                       "reference (a spherical joint's angles are about its parent's directors)")
+            reference = c.vector(j["reference_rpy"], join(key, "reference_rpy"))
         name = j["name"]
         angles = (name,) if kind is JointType.REVOLUTE else tuple(
             f"{name}_{a}" for a in _SPHERICAL_ANGLES
@@ -399,7 +408,8 @@ def _joints(c: Checker, value: Any, bodies: tuple[Body, ...], root: Root) -> tup
                 c.fail(join(key, "name"), f"its angle name {angle!r} clashes with an angle of "
                                           f"joint {angle_owner[angle]!r}")
             angle_owner[angle] = name
-        joints.append(Joint(name=name, type=kind, axis=axis, angle_names=angles, **ends))
+        joints.append(Joint(name=name, type=kind, axis=axis, angle_names=angles,
+                            reference_rpy=reference, **ends))
     return _tree_order(c, joints, bodies, root)
 
 

@@ -209,9 +209,10 @@ class Multibody:
             )
             rows += [gap[i] for i in range(3)]
             if joint.type is JointType.REVOLUTE:
-                n = np.array(joint.axis)
-                a, b = _perpendicular_pair(n)
-                n_world = ca.mtimes(Dp, ca.DM(n))
+                # the parent's axis stays normal to two child vectors a, b normal to the
+                # child's axis R0^T n (a, b in child components)
+                a, b = _perpendicular_pair(np.array(joint.child_axis))
+                n_world = ca.mtimes(Dp, ca.DM(joint.axis))
                 rows += [
                     ca.dot(n_world, ca.mtimes(Dc, ca.DM(a))),
                     ca.dot(n_world, ca.mtimes(Dc, ca.DM(b))),

@@ -13,6 +13,8 @@ import numpy as np
 # map and all its derivatives stay finite at zero rotation (|theta| < 1e-2 rad: the
 # truncation error of the series used is below 1e-17).
 _SMALL_ANGLE_SQ = 1e-4
+# cos(middle angle) at or below this counts as gimbal lock (within ~1e-15 rad of 90 deg).
+GIMBAL_LOCK = 4 * np.finfo(float).eps
 
 
 def skew(w):
@@ -68,6 +70,25 @@ def rot_y(a: float) -> np.ndarray:
 def rot_z(a: float) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rpy_matrix(rpy) -> np.ndarray:
+    """R = Rz(yaw) Ry(pitch) Rx(roll) of rpy = (roll, pitch, yaw) rad, URDF's convention."""
+    roll, pitch, yaw = (float(a) for a in rpy)
+    return rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
+
+
+def matrix_rpy(R: np.ndarray) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) rad of a rotation R = Rz(yaw) Ry(pitch) Rx(roll), pitch in
+    [-pi/2, pi/2]; at pitch = +-pi/2 roll is 0. Rebuilds R to round-off (roll from the
+    remainder Ry(pitch)^T Rz(yaw)^T R, as `gait_planner.model.angles.root_angles`)."""
+    R = np.asarray(R, dtype=float)
+    c_pitch = float(np.hypot(R[0, 0], R[1, 0]))
+    pitch = float(np.arctan2(-R[2, 0], c_pitch))
+    yaw = float(np.arctan2(R[1, 0], R[0, 0])) if c_pitch > GIMBAL_LOCK else \
+        float(np.arctan2(-R[0, 1], R[1, 1]))
+    rest = rot_y(pitch).T @ rot_z(yaw).T @ R
+    return float(np.arctan2(rest[2, 1], rest[1, 1])), pitch, yaw
 
 
 def rot_axis(axis: np.ndarray, a: float) -> np.ndarray:

@@ -17,6 +17,10 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping
 
+import numpy as np
+
+from gait_planner.model.rotations import rpy_matrix
+
 Vec3 = tuple[float, float, float]
 
 
@@ -69,8 +73,14 @@ class Joint:
     """A joint connecting `parent.parent_point` with `child.child_point`.
 
     Attributes:
-        axis: revolute joints only; unit body-fixed axis, the same components in the
-            parent and the child (e.g. (0, 1, 0): the lateral d2 axis).
+        axis: revolute joints only; unit axis in the parent's director components (e.g.
+            (0, 1, 0): the lateral d2 axis); in the child's it is R0^T axis.
+        reference_rpy: revolute joints only; the zero-angle reference R0 = Rz(y) Ry(p) Rx(r)
+            of (r, p, y) rad (URDF's rpy): the child's directors in the parent's at zero
+            angle, so that R_rel = Rot(axis, angle) R0. (0, 0, 0), the default, aligns both
+            triads at zero angle (the built-in walkers); a URDF's joints, between bodies
+            whose directors are their own principal axes, need it
+            (`gait_planner.model.urdf_import`).
         angle_names: output names of the joint's angles (3 for spherical, 1 for revolute),
             in the order of `gait_planner.model.angles` (pitch, roll, yaw for spherical).
     """
@@ -83,6 +93,19 @@ class Joint:
     child_point: str
     axis: Vec3 | None = None
     angle_names: tuple[str, ...] = ()
+    reference_rpy: Vec3 = (0.0, 0.0, 0.0)
+
+    @property
+    def reference(self) -> np.ndarray:
+        """R0 (3, 3): the child's directors in the parent's components at zero angle."""
+        return rpy_matrix(self.reference_rpy)
+
+    @property
+    def child_axis(self) -> Vec3 | None:
+        """The revolute axis in the child's director components, R0^T axis."""
+        if self.axis is None:
+            return None
+        return tuple(float(x) for x in self.reference.T @ np.asarray(self.axis))
 
     @property
     def dof(self) -> int:

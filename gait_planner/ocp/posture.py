@@ -61,8 +61,9 @@ def _angle_parts(scene: Scene) -> dict[str, tuple[str, str, np.ndarray, np.ndarr
             yaw_s[1, 0], yaw_c[1, 1] = 1.0, 1.0
             parts = [(pitch_s, pitch_c), (roll, None), (yaw_s, yaw_c)]
         else:
-            b, c = _basis(j.axis)
-            parts = [(np.outer(c, b), np.outer(b, b))]
+            b, c = _basis(j.axis)  # Rot(n, theta) = R_rel R0^T (gait_planner.model.angles)
+            b_child = j.reference.T @ b
+            parts = [(np.outer(c, b_child), np.outer(b, b_child))]
         for name, (S, C) in zip(j.angle_names, parts):
             out[name] = (j.parent, j.child, S, C)
     return out

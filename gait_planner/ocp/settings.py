@@ -36,7 +36,9 @@ class GaitSettings:
     0 = off; the transcription takes its cosine); torso_height_min m (torso
     centre-of-mass height; 0 = off); joint_limits ((angle name, lower rad, upper rad), ...)
     from the option ``joint_limits: {name: [lo, hi]}`` in degrees, converted by
-    `gait_planner.model.posture.check_joint_limits` in `settings_for`; foot_half_width m
+    `gait_planner.model.posture.check_joint_limits` in `settings_for`; effort_limits
+    ((revolute joint, N m), ...) from ``effort_limits: {joint: N m}``: |tau| <= limit, as
+    bounds on the torque variables (`check_effort_limits`); foot_half_width m
     (|roll moment| <= half width * normal force of a full contact; the paper's foot breadth
     is 0.0915 m); ground_clearance: free contact points stay at or above the ground (off for
     the rigid-legged compass, which must scuff at mid-stance);
@@ -97,6 +99,7 @@ class GaitSettings:
     torso_lean_max: float = 0.0
     torso_height_min: float = 0.0
     joint_limits: tuple[tuple[str, float, float], ...] = ()
+    effort_limits: tuple[tuple[str, float], ...] = ()
     foot_half_width: float = 0.04575
     ground_clearance: bool = True
     swing_clearance: float = 0.0
@@ -168,6 +171,25 @@ class GaitSettings:
                      "joint_speed_max", "speed", "speed_max", "twist_regularisation"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")
+
+
+def check_effort_limits(scene: Scene, limits) -> tuple[tuple[str, float], ...]:
+    """((revolute joint, N m), ...) of the option ``effort_limits: {joint: N m}``: hard
+    bounds |tau| <= limit on that joint's torque at every node (a URDF's <limit effort>);
+    SettingsError naming an unknown or spherical joint or a limit that is not positive."""
+    if not isinstance(limits, Mapping):
+        raise SettingsError(f"effort_limits: need a mapping joint -> N m, got {limits!r}")
+    revolute = {j.name for j in scene.joints if j.axis is not None}
+    out = []
+    for name, value in limits.items():
+        if name not in revolute:
+            raise SettingsError(f"effort_limits.{name}: not a revolute joint of scene "
+                                f"{scene.name!r} (its revolute joints: {sorted(revolute)})")
+        if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            raise SettingsError(f"effort_limits.{name}: need a positive torque (N m), "
+                                f"got {value!r}")
+        out.append((str(name), float(value)))
+    return tuple(out)
 
 
 def duration_range(s: GaitSettings) -> tuple[float, float]:
@@ -264,6 +286,8 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
         if "phase_joint_limits" in options:
             options["phase_joint_limits"] = check_phase_joint_limits(
                 scene, options["phase_joint_limits"])
+        if "effort_limits" in options:
+            options["effort_limits"] = check_effort_limits(scene, options["effort_limits"])
         check_posture(scene, {"posture": options.get("posture", "paper")})
     except PostureError as err:
         raise SettingsError(str(err)) from None

@@ -8,9 +8,10 @@ ground forces; nothing here comes from gait_planner.model, .dynamics or .ocp (th
 
 * Model: the root body on a free-flyer joint at its centre of mass with its principal-axis
   frame (directors d1, d2, d3 = the body axes); every scene joint placed at its parent
-  point (measured from the parent joint's origin, identity rotation: all body frames are
-  aligned with the world upright), spherical (JointModelSpherical) or revolute about its
-  body-fixed axis; each child body's inertia (mass, diag(J1, J2, J3) at its centre of mass,
+  point (measured from the parent joint's origin, rotated by the joint's zero-angle
+  reference R0: the identity for the built-in walkers, whose body frames are all aligned
+  upright), spherical (JointModelSpherical) or revolute about its axis in the child's
+  directors (R0^T n); each child body's inertia (mass, diag(J1, J2, J3) at its centre of mass,
   which sits at minus the child point from the joint). RNEA needs no realisable inertia, so
   the paper's torso (J1 > J2 + J3) is accepted. Planar scenes get a free-flyer too, and only
   the in-plane base residual (world force x, z; moment y) is judged: the out-of-plane part is
@@ -156,8 +157,10 @@ def build_model(scene: SceneData) -> tuple[pin.Model, dict[str, int]]:
     model.appendBodyToJoint(joint_of[scene.root], inertia(scene.root, np.zeros(3)),
                             pin.SE3.Identity())
     for j in scene.joints:  # parents before children (parse_scene's order)
-        kind = pin.JointModelSpherical() if j.axis is None else _revolute(j.axis)
-        placement = pin.SE3(np.eye(3), j.parent_point - origin[j.parent])
+        # a revolute joint's frame: R_rel = R0 Rot(R0^T n, angle) = Rot(n, angle) R0
+        kind = pin.JointModelSpherical() if j.axis is None else \
+            _revolute(j.reference.T @ j.axis)
+        placement = pin.SE3(j.reference, j.parent_point - origin[j.parent])
         joint_of[j.child] = model.addJoint(joint_of[j.parent], kind, placement, j.name)
         origin[j.child] = np.asarray(j.child_point, dtype=float)
         model.appendBodyToJoint(joint_of[j.child], inertia(j.child, -origin[j.child]),
@@ -193,7 +196,7 @@ def pin_configuration(scene: SceneData, model: pin.Model, q_row: np.ndarray) -> 
         if j.axis is None:
             out[s:s + 4] = _quaternion(R_rel)
         else:
-            out[s] = _revolute_angle(R_rel, j.axis)
+            out[s] = _revolute_angle(R_rel @ j.reference.T, j.axis)
     return out
 
 

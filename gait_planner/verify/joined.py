@@ -56,8 +56,9 @@ def angle_mirror(scene: SceneData, names) -> np.ndarray:
         p, c = scene.mirror[j.parent], scene.mirror[j.child]
         partner, swapped = (by_bodies[(p, c)], 1.0) if (p, c) in by_bodies else \
             (by_bodies[(c, p)], -1.0)
-        if j.axis is not None:
-            P[names.index(partner.name), names.index(j.name)] = swapped
+        if j.axis is not None:  # a pseudo-vector component: axis n -> -F n (F = diag(1, -1, 1))
+            P[names.index(partner.name), names.index(j.name)] = \
+                swapped * float((-MIRROR * j.axis) @ partner.axis)
             continue
         for axis, sign in (("pitch", 1.0), ("roll", -1.0), ("yaw", -1.0)):
             P[names.index(f"{partner.name}_{axis}"), names.index(f"{j.name}_{axis}")] = \

@@ -29,7 +29,8 @@ class JointData:
     parent_point: np.ndarray
     child: str
     child_point: np.ndarray
-    axis: np.ndarray | None  # unit, body-fixed (revolute)
+    axis: np.ndarray | None  # unit, parent's director components (revolute)
+    reference: np.ndarray  # (3, 3) child's directors in the parent's at zero angle
 
 
 @dataclass(frozen=True)
@@ -67,7 +68,7 @@ def parse_scene(text: str) -> SceneData:
     by_name = {b.name: b for b in bodies}
     joints = []
     for j in data["joints"]:
-        axis = None
+        axis, reference = None, _rpy(j.get("reference_rpy") or (0.0, 0.0, 0.0))
         if j["type"] == "revolute":
             axis = np.asarray(j["axis"], dtype=float)
             axis = axis / np.linalg.norm(axis)
@@ -76,7 +77,7 @@ def parse_scene(text: str) -> SceneData:
         joints.append(JointData(
             str(j["name"]), str(j["type"]), str(j["parent"]),
             by_name[j["parent"]].points[j["parent_point"]], str(j["child"]),
-            by_name[j["child"]].points[j["child_point"]], axis))
+            by_name[j["child"]].points[j["child_point"]], axis, reference))
     root = str(data["root"]["body"])
     ordered, stack = [], [j for j in joints if j.parent == root][::-1]
     while stack:  # depth first from the root: parents before children
@@ -101,6 +102,14 @@ def parse_scene(text: str) -> SceneData:
         scaling_bounds=tuple(float(b) for b in bounds) if bounds else None,
         base_time_step=float(gait["base_time_step"]) if "base_time_step" in gait else None,
         options=dict(gait.get("options") or {}))
+
+
+def _rpy(rpy) -> np.ndarray:
+    """Rz(y) Ry(p) Rx(r) of a joint's reference_rpy (r, p, y) rad (URDF's convention)."""
+    (cr, sr), (cp, sp), (cy, sy) = ((np.cos(float(a)), np.sin(float(a))) for a in rpy)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
 
 
 # ----------------------------------------------------------------------------- mechanics
@@ -134,8 +143,8 @@ class Mechanics:
             self.gravity_gradient[12 * i + 2] = b.mass * scene.gravity
         self.frames = {}
         for joint in scene.joints:
-            if joint.axis is not None:
-                self.frames[joint.name] = _perpendicular(joint.axis)
+            if joint.axis is not None:  # normal to the axis in child components, R0^T n
+                self.frames[joint.name] = _perpendicular(joint.reference.T @ joint.axis)
         groups = [("internal", 6 * self.nb)]
         groups += [(f"joint {j.name}", 3 if j.type == "spherical" else 5) for j in scene.joints]
         if scene.planar:

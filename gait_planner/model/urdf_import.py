@@ -1,0 +1,550 @@
+"""A scene drafted from a robot's URDF: its legs as bodies and joints, every other joint
+locked, contact points from the feet's collision geometry (docs/user-guide.md, "Your robot").
+
+`draft_scene(urdf_text)` reads the description with Pinocchio (`buildModelFromXML`, the
+collision geometry with `buildGeomFromUrdfString`), so the URDF is parsed, its fixed joints
+merged and meshes read as the rest of the field does. The draft is the URDF's model, not an
+approximation of it:
+
+* **Legs.** The two chains from the floating base to the feet (`feet`, or the two lowest
+  leaves of the tree, left = +y). Every other joint is locked at `locked` (default: the
+  URDF's zero) and its links merged into their parent with `pinocchio.buildReducedModel`:
+  one rigid body with the combined mass and inertia.
+* **Bodies.** Each remaining joint's body; its directors are its principal axes of inertia
+  (the inertia at the centre of mass diagonalised; of the 24 right-handed orderings of the
+  eigenvectors the one nearest the link's own frame), joint points and contact points in
+  them, from the centre of mass.
+* **Joints.** Every leg joint is revolute: its axis in the parent's directors and its
+  zero-angle reference R0 (the child's directors in the parent's at the URDF's zero pose,
+  as `reference_rpy`), so the scene's joint angle is the URDF's (zero at the URDF's zero,
+  positive about its axis) and its name is the URDF joint's.
+* **Contacts.** Each foot's collision geometry at the URDF zero pose: a sphere's lowest
+  point, a box's lowest corners, a mesh's lowest vertices. With points ahead and behind
+  the foot's centre, the rear ones make the ``heel`` and the front ones the ``forefoot``
+  (each the centre of its group: two points per foot, as walker3d's foot, whose full
+  contact also holds the roll about the heel-forefoot line); a single point makes a
+  point foot (the compass's phases).
+* **Mirror.** Left and right bodies paired by their names (``left_``/``right_``,
+  ``l_``/``r_``, ``_l``/``_r``, ``FL_``/``FR_``, ...). The half-cycle's mirror periodicity
+  needs a symmetric robot: right and left data that differ by more than `MIRROR_TOLERANCE`
+  are refused, naming the body; below it the draft writes the left body's data mirrored
+  for the right one (the differences are URDF round-off, e.g. Bolt's 1.5e-6 kg).
+* **Limits.** The URDF's ranges (`joint_limits`, within +-89.5 deg of its zero: the range
+  rows take ranges narrower than 180 deg) and efforts (`effort_limits`, hard bounds on the
+  torques) per joint; its slowest velocity limit for every joint (`joint_speed_max`: the
+  planner's speed rows take one bound).
+* **Gait.** walker3d's five phases for feet with heel and forefoot, the compass's two for
+  point feet; the step length and the time step scaled from walker3d by the leg length L
+  (hip to sole): step = 0.7066 L (walker3d: 0.6338 m at L = 0.897 m), base time step
+  0.01 s sqrt(L / 0.897 m) (equal Froude number, so sigma's bounds keep their meaning).
+
+Refused before anything is built, with the joint or link named (`UrdfError`): an
+unreadable or closed-chain description, a leg joint that is not revolute (prismatic,
+planar, floating, spherical), a moving leg body without mass or with a non-physical inertia,
+fewer than two feet, a foot without collision geometry, a mesh that cannot be read.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Mapping, Sequence
+
+import numpy as np
+import yaml
+
+from gait_planner.model.rotations import matrix_rpy
+
+__all__ = ["UrdfDraft", "UrdfError", "draft_scene", "MIRROR_TOLERANCE"]
+
+MIRROR_TOLERANCE = 5e-2  # relative: a mass or inertia differing less is written symmetric
+MIRROR_COM_TOLERANCE = 1e-2  # m: a centre of mass differing less is written symmetric
+_SNAP_TOLERANCE = 1e-9  # relative: mirrored geometry (placements are exact) after symmetry
+_RANGE_MAX = 89.5  # deg from the zero pose: the joint-range rows take ranges under 180 deg
+_MIN_MASS = 1e-6  # kg: a moving body lighter than this is massless
+_INERTIA_TOLERANCE = 1e-9  # relative: eigenvalues and triangle inequality
+WALKER3D_LEG = 0.897  # m, walker3d's hip height standing (config/scenes/walker3d.yaml)
+WALKER3D_STEP_RATIO = 0.6338 / WALKER3D_LEG
+_SIDES = (("left_", "right_"), ("l_", "r_"), ("_left", "_right"), ("_l", "_r"),
+          ("L_", "R_"), ("_L", "_R"), ("FL_", "FR_"), ("HL_", "HR_"), ("left", "right"))
+
+
+class UrdfError(ValueError):
+    """A description the importer cannot plan for; the message names the joint or link."""
+
+
+@dataclass(frozen=True)
+class UrdfDraft:
+    """A drafted scene: `yaml` its text (load it with `scene_from_text`), the URDF joints
+    planned (`joints`, leg joints in scene order) and locked (`locked`: name -> angle rad)."""
+
+    yaml: str
+    joints: tuple[str, ...]
+    locked: Mapping[str, float] = field(default_factory=dict)
+
+
+def _pin():
+    import pinocchio as pin  # noqa: PLC0415 - only the importer needs it at import time
+
+    return pin
+
+
+# ----------------------------------------------------------------------------- reading
+
+
+def _read(urdf_text: str, package_dirs: Sequence[str]):
+    pin = _pin()
+    try:
+        model = pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
+    except Exception as error:  # Pinocchio raises ValueError/RuntimeError with urdfdom's text
+        raise UrdfError(f"the URDF cannot be read as a tree of links: {error}") from None
+    try:
+        geometry = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.COLLISION,
+                                               package_dirs=list(package_dirs))
+    except Exception as error:
+        raise UrdfError(f"the URDF's collision geometry cannot be read (a mesh file not "
+                        f"found or not readable; give its folder with --package-dir): "
+                        f"{error}") from None
+    return model, geometry
+
+
+def _joint_of_link(model, link: str) -> int:
+    if not model.existFrame(link):
+        raise UrdfError(f"no link {link!r} in the URDF")
+    return int(model.frames[model.getFrameId(link)].parentJoint)
+
+
+def _path(model, joint: int) -> list[int]:
+    out = []
+    while joint > 1:
+        out.append(joint)
+        joint = int(model.parents[joint])
+    return out[::-1]
+
+
+def _find_feet(model, feet: Sequence[str] | None) -> tuple[int, int]:
+    """(left, right) joint ids of the feet: given links, or the two lowest leaf joints."""
+    pin = _pin()
+    data = model.createData()
+    pin.forwardKinematics(model, data, pin.neutral(model))
+    if feet:
+        if len(feet) != 2:
+            raise UrdfError(f"--feet takes two links LEFT,RIGHT, got {list(feet)}")
+        ids = [_joint_of_link(model, f) for f in feet]
+        for link, joint in zip(feet, ids):
+            if joint <= 1:
+                raise UrdfError(f"foot link {link!r} is fixed to the floating base, not at "
+                                f"the end of a leg")
+        return ids[0], ids[1]
+    leaves = [j for j in range(2, model.njoints) if j not in set(model.parents[2:])]
+    if len(leaves) < 2:
+        raise UrdfError(f"no two feet found: the tree has {len(leaves)} leaf joint(s) below "
+                        f"the base; name the feet with --feet LEFT_LINK,RIGHT_LINK")
+    lowest = sorted(leaves, key=lambda j: data.oMi[j].translation[2])[:2]
+    left, right = sorted(lowest, key=lambda j: -data.oMi[j].translation[1])
+    if set(_path(model, left)) & set(_path(model, right)):
+        raise UrdfError(f"the two lowest leaves {model.names[left]!r} and "
+                        f"{model.names[right]!r} share joints; name the feet with --feet")
+    return left, right
+
+
+def _revolute_axis(model, joint: int) -> np.ndarray:
+    """The unit axis (joint frame) of a 1-dof revolute joint; UrdfError otherwise."""
+    joint_model = model.joints[joint]
+    name = model.names[joint]
+    data = joint_model.createData()
+    if joint_model.nv != 1:
+        raise UrdfError(f"joint {name!r} ({joint_model.shortname()}) has {joint_model.nv} "
+                        f"degrees of freedom; a leg's joints must be revolute or continuous")
+    q = np.zeros(joint_model.nq)
+    q[0] = 1.0 if joint_model.nq == 2 else 0.0  # continuous joints: (cos, sin)
+    joint_model.calc(data, q)
+    S = np.array(data.S).reshape(6, -1)[:, 0]
+    if np.linalg.norm(S[3:]) < 0.5 or np.linalg.norm(S[:3]) > 1e-12:
+        raise UrdfError(f"joint {name!r} ({joint_model.shortname()}) is not revolute: a "
+                        f"prismatic or helical joint inside a leg cannot be planned")
+    return S[3:] / np.linalg.norm(S[3:])
+
+
+# ----------------------------------------------------------------------------- bodies
+
+
+def _principal(name: str, mass: float, inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(moments (3,), R (3, 3)): principal moments and axes (columns, link frame) nearest
+    the link's frame; UrdfError for a body without mass or with a non-physical inertia."""
+    if not mass > _MIN_MASS:
+        raise UrdfError(f"link {name!r} moves with the leg but has no mass ({mass:g} kg): "
+                        f"give it an <inertial>, or merge it by making its joint fixed")
+    scale = max(float(np.trace(inertia)), 1e-300)
+    if np.abs(inertia - inertia.T).max() > _INERTIA_TOLERANCE * scale:
+        raise UrdfError(f"link {name!r}: its inertia is not symmetric")
+    if np.abs(inertia - np.diag(np.diag(inertia))).max() <= 1e-12 * scale:
+        values, vectors = np.diag(inertia).copy(), np.eye(3)  # already principal
+    else:
+        values, vectors = np.linalg.eigh(0.5 * (inertia + inertia.T))
+    best = None
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product((1.0, -1.0), repeat=3):
+            R = vectors[:, perm] * signs
+            if np.linalg.det(R) > 0 and (best is None or np.trace(R) > best[0] + 1e-12):
+                best = (np.trace(R), R, values[list(perm)])
+    _, R, moments = best
+    if moments.min() <= _INERTIA_TOLERANCE * scale or \
+            2 * moments.max() > moments.sum() * (1 + _INERTIA_TOLERANCE):
+        raise UrdfError(f"link {name!r} has a non-physical inertia (principal moments "
+                        f"{moments.round(9).tolist()} kg m^2: each must be positive and at "
+                        f"most the sum of the other two)")
+    return moments, R
+
+
+def _mirror_name(name: str) -> tuple[str, str] | tuple[None, None]:
+    """(the name with its side swapped, "left" or "right": the side of `name`), or
+    (None, None) for a name without a side token (`_SIDES`)."""
+    for left, right in _SIDES:
+        for a, b, side in ((left, right, "left"), (right, left, "right")):
+            for pattern in (rf"^{a}", rf"{a}$", rf"(?<=[_\W]){a}"):
+                if re.search(pattern, name):
+                    return re.sub(pattern, b, name, count=1), side
+    return None, None
+
+
+# ----------------------------------------------------------------------------- the draft
+
+
+@dataclass
+class _Body:
+    name: str  # the URDF link carried by the joint (the scene's body name)
+    joint: int
+    mass: float
+    moments: np.ndarray
+    com: np.ndarray  # in the joint frame
+    R: np.ndarray  # principal axes (columns) in the joint frame
+    points: dict[str, np.ndarray] = field(default_factory=dict)  # in the joint frame
+
+    def local(self, p: np.ndarray) -> list[float]:
+        return [float(x) for x in self.R.T @ (np.asarray(p) - self.com)]
+
+
+def _link_name(model, joint: int) -> str:
+    """The URDF link a joint carries (its first BODY frame)."""
+    pin = _pin()
+    for frame in model.frames:
+        if frame.parentJoint == joint and frame.type == pin.FrameType.BODY:
+            return frame.name
+    return model.names[joint]
+
+
+def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
+                locked: Mapping[str, float] | None = None, name: str | None = None,
+                package_dirs: Sequence[str | Path] = ()) -> UrdfDraft:
+    """The scene of a URDF's legs (module docstring); UrdfError naming what is refused."""
+    pin = _pin()
+    full, geometry = _read(urdf_text, [str(p) for p in package_dirs])
+    left_foot, right_foot = _find_feet(full, feet)
+    legs = _path(full, left_foot) + _path(full, right_foot)
+    for joint in legs:
+        _revolute_axis(full, joint)
+    locked = dict(locked or {})
+    q_lock = pin.neutral(full)
+    for joint_name, angle in locked.items():
+        if not full.existJointName(joint_name):
+            raise UrdfError(f"--lock names no joint of the URDF: {joint_name!r}")
+        jid = full.getJointId(joint_name)
+        if jid in legs:
+            raise UrdfError(f"joint {joint_name!r} is a leg joint: it is planned, not locked")
+        q_lock[full.joints[jid].idx_q] = float(angle)
+    others = [j for j in range(2, full.njoints) if j not in legs]
+    lock_angles = {full.names[j]: float(q_lock[full.joints[j].idx_q]) for j in others}
+    model, geometry = pin.buildReducedModel(full, geometry, others, q_lock)
+    ids = {full.names[j]: model.getJointId(full.names[j]) for j in legs}
+    foot_ids = (ids[full.names[left_foot]], ids[full.names[right_foot]])
+
+    order = [1] + list(ids.values())
+    links = {j: _link_name(model, j) for j in order}
+    bodies: dict[int, _Body] = {}
+    changes: list[str] = []
+    inertias, left_of = _mirrored_inertias(model, links, changes)
+    S = np.diag([1.0, -1.0, 1.0])
+    for joint, (mass, com, inertia) in inertias.items():
+        if joint in left_of:  # a right link: the left one's principal axes mirrored
+            left = bodies[left_of[joint]]
+            moments, R = left.moments.copy(), S @ left.R @ S
+        else:
+            moments, R = _principal(links[joint], mass, inertia)
+        bodies[joint] = _Body(links[joint], joint, mass, moments, com, R)
+    data = model.createData()
+    q0 = pin.neutral(model)
+    pin.forwardKinematics(model, data, q0)
+    contacts = _foot_contacts(model, geometry, data, foot_ids, bodies)
+    return _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles,
+                  name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"), changes)
+
+
+def _mirrored_inertias(model, links: dict[int, str], changes: list[str]
+                       ) -> tuple[dict[int, tuple], dict[int, int]]:
+    """(joint -> (mass, COM (3,), inertia at the COM (3, 3)), right joint -> its left
+    partner), joint frames, left links before their right partners: a right link's the
+    mirror image of its left partner's (S = diag(1, -1, 1): COM S c, inertia S I S), a
+    link without a partner (the base) made symmetric about its own xz-plane ((I + S I S)/2,
+    c_y = 0); UrdfError where the URDF's data differ from that by more than MIRROR_TOLERANCE
+    (inertia, relative to the link's largest moment; mass, relative) or MIRROR_COM_TOLERANCE
+    (COM). G1's right knee, whose Ixz has the wrong sign (9e-5 kg m^2), Talos's leg links
+    (COM 0.4 mm, inertia 2.3e-4 kg m^2 apart) and its base with the locked torso and arms
+    (COM 2.05 mm off the mid-plane) are written symmetric; `changes` collects what moved."""
+    S = np.diag([1.0, -1.0, 1.0])
+    raw = {j: (float(model.inertias[j].mass), np.array(model.inertias[j].lever),
+               np.array(model.inertias[j].inertia)) for j in links}
+    by_name = {name: j for j, name in links.items()}
+    out, left_of = {}, {}
+    for joint, name in links.items():
+        image_name, side = _mirror_name(name)
+        other = by_name.get(image_name or "", joint)
+        mass, com, inertia = raw[joint]
+        m2, c2, i2 = raw[other]
+        if (side == "right" and other != joint) or other == joint:  # a right link, the base
+            image = (m2, S @ c2, S @ i2 @ S)
+            if other == joint:
+                image = (mass, np.array([com[0], 0.0, com[2]]), 0.5 * (inertia + S @ inertia @ S))
+            scale = max(np.abs(np.linalg.eigvalsh(inertia)).max(), 1e-300)
+            for what, a, b, tol in (("mass", mass, image[0], MIRROR_TOLERANCE * mass),
+                                    ("centre of mass", com, image[1], MIRROR_COM_TOLERANCE),
+                                    ("inertia", inertia, image[2], MIRROR_TOLERANCE * scale)):
+                gap = float(np.max(np.abs(np.asarray(a) - np.asarray(b))))
+                if gap > 1e-12 * max(tol, 1e-300) * 1e6:
+                    changes.append(f"{name}: {what} moved by {gap:.3g} to be "
+                                   + ("symmetric" if other == joint else
+                                      f"{links[other]}'s mirror image"))
+                if gap > tol:
+                    partner = "its own mirror image" if other == joint else \
+                        f"the mirror image of {links[other]!r}"
+                    raise UrdfError(
+                        f"link {name!r}: its {what} is not {partner} ({gap:.3g} apart, more "
+                        f"than {tol:.3g}): the half cycle's mirror periodicity needs a "
+                        f"left-right symmetric robot")
+            out[joint] = image
+            if other != joint:
+                left_of[joint] = other
+        else:
+            out[joint] = raw[joint]
+    return {j: out[j] for j in sorted(out, key=lambda j: j in left_of)}, left_of
+
+
+def _foot_contacts(model, geometry, data, foot_ids, bodies) -> dict[int, dict[str, np.ndarray]]:
+    """foot joint -> {"heel": p, "forefoot": p} or {"foot": p}, joint-frame points."""
+    pin = _pin()
+    out = {}
+    for foot in foot_ids:
+        lowest: list[np.ndarray] = []  # joint-frame points
+        for obj in geometry.geometryObjects:
+            if obj.parentJoint != foot:
+                continue
+            lowest += _lowest_points(obj, data.oMi[foot])
+        link = bodies[foot].name
+        if not lowest:
+            raise UrdfError(f"foot link {link!r} has no collision geometry: its contact "
+                            f"points come from its <collision> spheres, boxes or meshes")
+        world = np.array([data.oMi[foot].act(p) for p in lowest])
+        z0 = world[:, 2].min()
+        on_sole = world[:, 2] <= z0 + 1e-3
+        pts, wpts = np.array(lowest)[on_sole], world[on_sole]
+        span = np.ptp(wpts[:, 0])
+        if span < 0.02:  # a point foot
+            out[foot] = {"foot": pts.mean(axis=0)}
+            continue
+        middle = 0.5 * (wpts[:, 0].min() + wpts[:, 0].max())
+        out[foot] = {"heel": pts[wpts[:, 0] < middle].mean(axis=0),
+                     "forefoot": pts[wpts[:, 0] >= middle].mean(axis=0)}
+    del pin
+    return out
+
+
+def _lowest_points(obj, oMi) -> list[np.ndarray]:
+    """The lowest points at the zero pose (joint frame) of one collision object."""
+    geom, placement = obj.geometry, obj.placement
+    kind = type(geom).__name__
+    down = placement.rotation.T @ oMi.rotation.T @ np.array([0.0, 0.0, -1.0])  # local
+    if kind == "Sphere":
+        return [placement.act(geom.radius * down)]
+    if kind in ("Capsule", "Cylinder"):
+        ends = [np.array([0.0, 0.0, s * geom.halfLength]) for s in (-1.0, 1.0)]
+        r = geom.radius
+        if kind == "Capsule":
+            return [placement.act(e + r * down) for e in ends]
+        radial = down - down[2] * np.array([0, 0, 1.0])
+        n = np.linalg.norm(radial)
+        return [placement.act(e + (r * radial / n if n > 1e-9 else 0)) for e in ends]
+    if kind == "Box":
+        half = np.array(geom.halfSide)
+        corners = [np.array(s) * half for s in itertools.product((-1.0, 1.0), repeat=3)]
+    elif hasattr(geom, "vertices"):
+        corners = [np.array(v) for v in np.asarray(geom.vertices())]
+    else:
+        raise UrdfError(f"collision geometry {obj.name!r} is a {kind}, which the importer "
+                        f"does not read (spheres, boxes, capsules, cylinders and meshes)")
+    local = np.array([placement.act(c) for c in corners])
+    height = (oMi.rotation @ local.T)[2]
+    return list(local[height <= height.min() + 1e-3])
+
+
+def _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles, name,
+           changes) -> UrdfDraft:
+    order = [1] + list(ids.values())
+    for foot, points in contacts.items():
+        bodies[foot].points.update(points)
+    joints, limits, efforts, speeds = {}, {}, {}, {}
+    for jname, jid in ids.items():
+        parent = int(model.parents[jid])
+        placement = model.jointPlacements[jid]
+        bp, bc = bodies[parent], bodies[jid]
+        axis = _revolute_axis(model, jid)
+        bp.points[jname] = placement.translation
+        bc.points[jname] = np.zeros(3)
+        joints[jname] = {"parent": bp.name, "child": bc.name,
+                         "axis": bp.R.T @ placement.rotation @ axis,
+                         "reference": bp.R.T @ placement.rotation @ bc.R}
+        jm = model.joints[jid]
+        lo, hi = float(model.lowerPositionLimit[jm.idx_q]), float(model.upperPositionLimit[jm.idx_q])
+        if jm.nq == 1 and abs(lo) < 1e10 and abs(hi) < 1e10:
+            limits[jname] = [round(max(math.degrees(lo), -_RANGE_MAX), 6),
+                             round(min(math.degrees(hi), _RANGE_MAX), 6)]
+        if 0 < model.effortLimit[jm.idx_v] < 1e10:
+            efforts[jname] = float(model.effortLimit[jm.idx_v])
+        if 0 < model.velocityLimit[jm.idx_v] < 1e10:
+            speeds[jname] = round(math.degrees(model.velocityLimit[jm.idx_v]), 6)
+    local = {j: {p: np.array(bodies[j].local(v)) for p, v in bodies[j].points.items()}
+             for j in order}
+    mirror = _symmetrise(bodies, order, local, joints)
+    z_sole = min(float(data.oMi[f].act(p)[2]) for f in foot_ids for p in contacts[f].values())
+    hip = [data.oMi[_path(model, f)[0]].translation[2] for f in foot_ids]
+    leg = float(np.mean(hip)) - z_sole
+    root = bodies[1]
+    com_world = root.com - np.array([0.0, 0.0, z_sole])  # base at identity, sole at z = 0
+    point_feet = all("foot" in contacts[f] for f in foot_ids)
+    side = {foot_ids[0]: "l", foot_ids[1]: "r"}
+    contact_yaml, contact_names = [], {}
+    for foot in (foot_ids[1], foot_ids[0]):
+        for point in contacts[foot]:
+            cname = f"foot_{side[foot]}" if point_feet else f"foot_{side[foot]}_{point}"
+            contact_names[(side[foot], point)] = cname
+            contact_yaml.append({"name": cname, "body": bodies[foot].name, "point": point})
+    step = round(WALKER3D_STEP_RATIO * leg, 4)
+    scene = {
+        "name": name,
+        "description": f"Legs of the URDF robot {full.name!r}: {len(ids)} revolute joints "
+                       f"planned, {len(lock_angles)} locked (gait-planner scene from-urdf).",
+        "gravity": 9.81,
+        "root": {"body": root.name, "type": "free"},
+        "bodies": [{"name": bodies[j].name, "mass": round(bodies[j].mass, 12),
+                    "inertia": _round(bodies[j].moments),
+                    "points": {p: _round(v) for p, v in local[j].items()}} for j in order],
+        "joints": [{"name": jname, "type": "revolute", "axis": _round(j["axis"]),
+                    "reference_rpy": _round(matrix_rpy(j["reference"])),
+                    "parent": j["parent"], "parent_point": jname, "child": j["child"],
+                    "child_point": jname} for jname, j in joints.items()],
+        "contacts": contact_yaml,
+        "initial_pose": {"root_position": _round(com_world),
+                         "root_angles": _round(matrix_rpy(root.R)[::-1])},
+        "gait": {
+            "step_length": step, "base_time_step": round(0.01 * math.sqrt(leg / WALKER3D_LEG), 5),
+            "scaling_bounds": [0.5, 1.5], "friction_coefficient": 0.8,
+            "cost": "kinetic_energy", "mirror": mirror,
+            "phases": _phases(contact_names, point_feet),
+            "options": {"joint_limits": limits, "effort_limits": efforts,
+                        **({"joint_speed_max": min(speeds.values())} if speeds else {}),
+                        "step_length_bounds": [round(0.6 * step, 4), round(1.4 * step, 4)]},
+        },
+    }
+    header = (f"# Drafted by `gait-planner scene from-urdf` from the URDF robot {full.name!r}\n"
+              f"# (gait_planner.model.urdf_import). Bodies: the leg links, directors their "
+              f"principal axes;\n# joints: the URDF's, zero and sign as the URDF's. Leg length "
+              f"(hip to sole) L = {leg:.4f} m:\n# step_length = 0.7066 L, base_time_step = "
+              f"0.01 s sqrt(L / 0.897 m) (walker3d scaled).\n# Joint ranges: the URDF's within "
+              f"+-{_RANGE_MAX} deg of its zero pose (the planner's range rows);\n# joint_speed_max: "
+              f"the slowest joint's velocity limit (one bound for every joint).\n")
+    if lock_angles:
+        header += "# Locked joints (merged into their parent): " + ", ".join(
+            f"{k} = {v:g} rad" for k, v in lock_angles.items()) + "\n"
+    if changes:
+        header += "# Made mirror-symmetric (the URDF's own data differ):\n" + "".join(
+            f"#   {change}\n" for change in changes)
+    text = header + yaml.safe_dump(scene, sort_keys=False, width=100, default_flow_style=None)
+    return UrdfDraft(text, tuple(ids), lock_angles)
+
+
+def _symmetrise(bodies, order, local, joints) -> dict[str, str]:
+    """Pair left and right bodies and joints by name and write the right ones as the left
+    ones' mirror images (S = diag(1, -1, 1): a point (X1, X2, X3) -> (X1, -X2, X3), an
+    axis n -> +-(-S n), a reference R0 -> S R0 S); a body without a partner keeps its
+    points with their own images. UrdfError where the URDF's data differ by more than
+    MIRROR_TOLERANCE (relative). Returns the mirror map (left -> right)."""
+    S = np.diag([1.0, -1.0, 1.0])
+    by_name = {bodies[j].name: j for j in order}
+    mirror = {}
+    for j in order:
+        other, side = _mirror_name(bodies[j].name)
+        if other in by_name and side == "left":
+            mirror[bodies[j].name] = other
+    pairs = [(by_name[a], by_name[b]) for a, b in mirror.items()]
+    pairs += [(j, j) for j in order if bodies[j].name not in mirror
+              and bodies[j].name not in mirror.values()]
+    for left, right in pairs:
+        a, b = bodies[left], bodies[right]
+        _close(f"links {a.name!r} and {b.name!r}: mass", a.mass, b.mass, a.mass)
+        _close(f"links {a.name!r} and {b.name!r}: principal moments", a.moments, b.moments,
+               a.moments.max())
+        b.mass, b.moments = a.mass, a.moments.copy()
+        for point, X in list(local[left].items()):
+            image = _mirror_name(point)[0]
+            if image is None or image not in local[right]:
+                image = point  # a contact (heel, forefoot) or a point on the mirror plane
+            if image not in local[right]:
+                raise UrdfError(f"link {b.name!r} has no point {image!r} to mirror "
+                                f"{a.name!r}'s {point!r}")
+            scale = max(np.linalg.norm(X), 0.01)
+            _close(f"link {b.name!r}: point {image!r}", S @ X, local[right][image], scale)
+            if left != right or image != point or abs(X[1]) > 0:
+                local[right][image] = S @ X
+    for name, joint in joints.items():
+        other = _mirror_name(name)[0]
+        if other not in joints or joint["parent"] not in mirror.values() and \
+                joint["child"] not in mirror.values():
+            continue
+        left, right = joints[other], joint
+        image = -S @ left["axis"]
+        sign = 1.0 if image @ right["axis"] >= 0 else -1.0
+        _close(f"joint {name!r}: axis", sign * image, right["axis"], 1.0)
+        _close(f"joint {name!r}: zero-angle reference", S @ left["reference"] @ S,
+               right["reference"], 1.0)
+        right["axis"], right["reference"] = sign * image, S @ left["reference"] @ S
+    return mirror
+
+
+def _close(what: str, a, b, scale: float) -> None:
+    gap = float(np.max(np.abs(np.asarray(a, float) - np.asarray(b, float))))
+    if gap > _SNAP_TOLERANCE * max(float(scale), 1e-300):
+        raise UrdfError(f"{what} are not mirror images ({gap:.3g} apart, more than "
+                        f"{_SNAP_TOLERANCE:g} relative): the half cycle's mirror "
+                        f"periodicity needs a left-right symmetric robot (its joint "
+                        f"placements, axes and collision geometry mirrored)")
+
+
+def _phases(names: dict[tuple[str, str], str], point_feet: bool) -> list[dict]:
+    if point_feet:
+        return [{"name": "stance_r", "contacts": [names[("r", "foot")]], "scaling": 0,
+                 "intervals": 20},
+                {"name": "stance_l", "contacts": [names[("l", "foot")]], "scaling": 0,
+                 "intervals": 1}]
+    rh, rf = names[("r", "heel")], names[("r", "forefoot")]
+    lh, lf = names[("l", "heel")], names[("l", "forefoot")]
+    return [{"name": "right_full", "contacts": [rh, rf], "scaling": 0, "intervals": 8},
+            {"name": "right_forefoot", "contacts": [rf], "scaling": 1, "intervals": 8},
+            {"name": "double_heel", "contacts": [rf, lh], "scaling": 2, "intervals": 8},
+            {"name": "double_full", "contacts": [rf, lh, lf], "scaling": 3, "intervals": 8},
+            {"name": "left_full", "contacts": [lh, lf], "scaling": 0, "intervals": 8}]
+
+
+def _round(v, digits: int = 12) -> list[float]:
+    return [round(float(x), digits) + 0.0 for x in v]
