@@ -23,6 +23,7 @@ from typing import Callable, NoReturn, Sequence
 
 from gait_planner.cli.errors import CliError
 from gait_planner.cli.library import add_library_parser
+from gait_planner.cli.robot import URDF_HELP, add_scene_parser, add_urdf_options
 from gait_planner.cli.ros_commands import (GAIT_HELP, SLOPE_HELP, SPEED_HELP, STEP_HEIGHT_HELP,
                                           add_call_parser, add_node_parser)
 from gait_planner.cli.simulate import add_simulate_parser
@@ -59,7 +60,7 @@ SCENE_HELP = ("a scene: a name (the file NAME.yaml in config/scenes or in a fold
 
 
 def _add_plan_options(parser: argparse.ArgumentParser, scene_default: str | None) -> None:
-    parser.add_argument("--scene", default=scene_default, required=scene_default is None,
+    parser.add_argument("--scene", default=scene_default, required=False,
                         metavar="NAME|FILE.yaml", help=SCENE_HELP)
     parser.add_argument("--step-length", type=float, help="m (default: the scene's)")
     parser.add_argument("--speed", type=float, metavar="M/S", help=SPEED_HELP)
@@ -105,6 +106,9 @@ def _add_plan(commands: argparse._SubParsersAction) -> None:
         "write OUT (MCAP, ROS 2 profile) and OUT with .rrd.")
     _add_plan_options(parser, None)
     parser.add_argument("--out", required=True, help="the recording, e.g. runs/walk.mcap")
+    parser.add_argument("--urdf", metavar="ROBOT.urdf", help=URDF_HELP + "; the drafted "
+                        "scene is written beside --out as NAME.yaml and planned")
+    add_urdf_options(parser)
     parser.set_defaults(handler=_plan)
 
 
@@ -135,6 +139,15 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     if args.walk < 0:
         raise CliError(f"--walk must be a number of half cycles >= 0 (0: no walk), "
                        f"got {args.walk}")
+    if getattr(args, "urdf", None):
+        from gait_planner.cli.robot import draft_of, write_draft
+        from gait_planner.model.loader import parse_yaml
+
+        draft = draft_of(args)  # written where the recording goes (its name is checked there)
+        name = parse_yaml(draft.yaml, args.urdf)["name"]
+        args.scene = str(write_draft(draft, target.parent / f"{name}.yaml"))
+    elif args.scene is None:
+        raise CliError("plan needs --scene or --urdf")
     request = PlanRequest(scene=args.scene, step_length=args.step_length, cost=args.cost,
                           friction_coefficient=args.mu, intervals_per_phase=args.intervals,
                           max_solve_time=args.max_time, output_name=target.stem,
@@ -339,7 +352,7 @@ def _prepare(args: argparse.Namespace) -> int:
 COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
     _add_run, _add_plan, _add_report, add_node_parser, add_call_parser, add_simulate_parser,
     add_walk_parser,
-    _add_urdf, _add_prepare, add_library_parser)
+    _add_urdf, add_scene_parser, _add_prepare, add_library_parser)
 
 
 # --- entry point -------------------------------------------------------------------------

@@ -34,7 +34,8 @@ approximation of it:
   torques) per joint; its slowest velocity limit for every joint (`joint_speed_max`: the
   planner's speed rows take one bound).
 * **Gait.** walker3d's five phases for feet with heel and forefoot, the compass's two for
-  point feet; the step length and the time step scaled from walker3d by the leg length L
+  point feet; walker3d's swing clearance and strike speed, the step length and the time
+  step scaled from walker3d by the leg length L
   (hip to sole): step = 0.7066 L (walker3d: 0.6338 m at L = 0.897 m), base time step
   0.01 s sqrt(L / 0.897 m) (equal Froude number, so sigma's bounds keep their meaning).
 
@@ -49,6 +50,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Sequence
@@ -95,8 +97,35 @@ def _pin():
 # ----------------------------------------------------------------------------- reading
 
 
+def _check_tree(urdf_text: str) -> None:
+    """UrdfError naming the link of a closed chain (a link that is the child of two joints:
+    Pinocchio's own error then names neither) or a joint whose parent link is missing."""
+    try:
+        robot = ET.fromstring(urdf_text)
+    except ET.ParseError as error:
+        raise UrdfError(f"the URDF is not well-formed XML: {error}") from None
+    parent_of: dict[str, str] = {}
+    links = {link.get("name") for link in robot.findall("link")}
+    for joint in robot.findall("joint"):
+        parent, child = joint.find("parent"), joint.find("child")
+        name = joint.get("name")
+        if parent is None or child is None:
+            raise UrdfError(f"joint {name!r} lacks its <parent> or <child>")
+        p, c = parent.get("link"), child.get("link")
+        if c in parent_of:
+            raise UrdfError(f"link {c!r} is the child of two joints ({parent_of[c]!r} and "
+                            f"{name!r}): a closed chain, which the planner's tree of bodies "
+                            f"cannot express")
+        parent_of[c] = name
+        for link in (p, c):
+            if link not in links:
+                raise UrdfError(f"joint {name!r} names the link {link!r}, which the URDF "
+                                f"does not declare")
+
+
 def _read(urdf_text: str, package_dirs: Sequence[str]):
     pin = _pin()
+    _check_tree(urdf_text)
     try:
         model = pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
     except Exception as error:  # Pinocchio raises ValueError/RuntimeError with urdfdom's text
@@ -356,7 +385,8 @@ def _foot_contacts(model, geometry, data, foot_ids, bodies) -> dict[int, dict[st
             continue
         middle = 0.5 * (wpts[:, 0].min() + wpts[:, 0].max())
         out[foot] = {"heel": pts[wpts[:, 0] < middle].mean(axis=0),
-                     "forefoot": pts[wpts[:, 0] >= middle].mean(axis=0)}
+                     "forefoot": pts[wpts[:, 0] >= middle].mean(axis=0),
+                     "half_width": 0.5 * float(np.ptp(wpts[:, 1]))}
     del pin
     return out
 
@@ -393,7 +423,7 @@ def _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles, name
            changes) -> UrdfDraft:
     order = [1] + list(ids.values())
     for foot, points in contacts.items():
-        bodies[foot].points.update(points)
+        bodies[foot].points.update({k: v for k, v in points.items() if k != "half_width"})
     joints, limits, efforts, speeds = {}, {}, {}, {}
     for jname, jid in ids.items():
         parent = int(model.parents[jid])
@@ -417,16 +447,17 @@ def _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles, name
     local = {j: {p: np.array(bodies[j].local(v)) for p, v in bodies[j].points.items()}
              for j in order}
     mirror = _symmetrise(bodies, order, local, joints)
-    z_sole = min(float(data.oMi[f].act(p)[2]) for f in foot_ids for p in contacts[f].values())
+    z_sole = min(float(data.oMi[f].act(p)[2]) for f in foot_ids
+                 for k, p in contacts[f].items() if k != "half_width")
     hip = [data.oMi[_path(model, f)[0]].translation[2] for f in foot_ids]
     leg = float(np.mean(hip)) - z_sole
     root = bodies[1]
     com_world = root.com - np.array([0.0, 0.0, z_sole])  # base at identity, sole at z = 0
-    point_feet = all("foot" in contacts[f] for f in foot_ids)
+    point_feet = all("foot" in contacts[f] for f in foot_ids)  # else heel, forefoot
     side = {foot_ids[0]: "l", foot_ids[1]: "r"}
     contact_yaml, contact_names = [], {}
     for foot in (foot_ids[1], foot_ids[0]):
-        for point in contacts[foot]:
+        for point in (p for p in contacts[foot] if p != "half_width"):
             cname = f"foot_{side[foot]}" if point_feet else f"foot_{side[foot]}_{point}"
             contact_names[(side[foot], point)] = cname
             contact_yaml.append({"name": cname, "body": bodies[foot].name, "point": point})
@@ -452,7 +483,8 @@ def _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles, name
             "scaling_bounds": [0.5, 1.5], "friction_coefficient": 0.8,
             "cost": "kinetic_energy", "mirror": mirror,
             "phases": _phases(contact_names, point_feet),
-            "options": {"joint_limits": limits, "effort_limits": efforts,
+            "options": {**_swing_options(leg, contacts, foot_ids),
+                        "joint_limits": limits, "effort_limits": efforts,
                         **({"joint_speed_max": min(speeds.values())} if speeds else {}),
                         "step_length_bounds": [round(0.6 * step, 4), round(1.4 * step, 4)]},
         },
@@ -529,6 +561,21 @@ def _close(what: str, a, b, scale: float) -> None:
                         f"{_SNAP_TOLERANCE:g} relative): the half cycle's mirror "
                         f"periodicity needs a left-right symmetric robot (its joint "
                         f"placements, axes and collision geometry mirrored)")
+
+
+def _swing_options(leg: float, contacts, foot_ids) -> dict[str, float]:
+    """walker3d's swing options (config/scenes/walker3d.yaml: 1 cm clearance reached over
+    0.03 s, strikes slower than 1 m/s) scaled by the leg length L (lengths by L / 0.897 m,
+    times by sqrt(L / 0.897 m)); for flat feet the roll moment's bound from the sole's
+    half width (the contact geometry's lateral spread)."""
+    scale = leg / WALKER3D_LEG
+    out = {"swing_clearance": round(0.01 * scale, 5),
+           "swing_clearance_ramp": round(0.03 * math.sqrt(scale), 5),
+           "strike_speed_max": round(1.0 * math.sqrt(scale), 4)}
+    widths = [contacts[f]["half_width"] for f in foot_ids if "half_width" in contacts[f]]
+    if widths:
+        out["foot_half_width"] = round(min(widths), 5)
+    return out
 
 
 def _phases(names: dict[tuple[str, str], str], point_feet: bool) -> list[dict]:

@@ -1,0 +1,222 @@
+"""A scene drafted from a URDF (`gait_planner.model.urdf_import`) is the URDF's model.
+
+* Exactness, against Pinocchio's forward kinematics on the original URDF: for any joint
+  angles (hypothesis), the drafted scene's configuration puts every joint point and contact
+  point where Pinocchio puts it (1e-9 m), for small synthetic bipeds whose joint origins
+  turn the link frames (rpy), whose axes are x, y or z of either sign and whose inertias
+  are not diagonal in the link frames; every constraint of the drafted multibody holds.
+* The angles are the URDF's: zero at the URDF's zero, the scene's joint_angles of that
+  configuration return the angles given, the joint names are the URDF's.
+* Each refusal names the joint or link and the rule, in well under a second.
+* The example robots of example-robot-data (a test dependency): G1 and Bolt are drafted
+  (G1's right knee, whose inertia is not its left partner's mirror image in the URDF, is
+  written symmetric and the draft says so), Talos is refused as asymmetric.
+"""
+
+from __future__ import annotations
+
+import time
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from gait_planner.model.angles import configuration, joint_angles
+from gait_planner.model.loader import scene_from_text
+from gait_planner.model.multibody import Multibody
+from gait_planner.model.scene import InitialPose
+from gait_planner.model.urdf_import import UrdfError, draft_scene
+
+ROUND_OFF = 1e-9
+AXES = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1", "-y": "0 -1 0"}
+
+
+def _inertial(mass: float, rpy: str, xyz: str,
+              moments=(0.02, 0.03, 0.04)) -> str:
+    return (f'<inertial><origin xyz="{xyz}" rpy="{rpy}"/><mass value="{mass}"/>'
+            f'<inertia ixx="{moments[0]}" iyy="{moments[1]}" izz="{moments[2]}" ixy="0" '
+            f'ixz="0" iyz="0"/></inertial>')
+
+
+def biped(tilt: float = 0.2, knee_axis: str = "y", foot_geometry: str | None = None,
+          knee_type: str = "revolute", knee_mass: float = 1.0, base_y: float = 0.0,
+          right_knee_mass: float | None = None) -> str:
+    """A three-joint-per-leg biped whose hip-roll frame is pitched by `tilt` (as G1's) and
+    whose feet carry `foot_geometry` (default: four small spheres at the sole's corners)."""
+    sphere = '<collision><origin xyz="{x} {y} -0.06"/><geometry><sphere radius="0.005"/>' \
+             '</geometry></collision>'
+    feet = foot_geometry if foot_geometry is not None else "".join(
+        sphere.format(x=x, y=y) for x in (-0.05, 0.12) for y in (-0.03, 0.03))
+    legs = []
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        mass = knee_mass if side == "left" or right_knee_mass is None else right_knee_mass
+        legs.append(f"""
+  <link name="{side}_hip_link">{_inertial(1.5, xyz=f"0 {0.02 * sign} -0.02", rpy=f"{0.1 * sign} -0.2 {0.3 * sign}")}</link>
+  <link name="{side}_thigh_link">{_inertial(2.0, xyz="0 0 -0.15", rpy=f"{0.1 * sign} 0.1 0")}</link>
+  <link name="{side}_shin_link">{_inertial(mass, xyz="0 0 -0.15", rpy=f"{0.1 * sign} -0.2 {0.3 * sign}")}</link>
+  <link name="{side}_foot_link">{_inertial(0.5, xyz="0.03 0 -0.04", rpy=f"0 0.05 {0.2 * sign}")}{feet}</link>
+  <joint name="{side}_hip_roll_joint" type="revolute">
+    <parent link="base_link"/><child link="{side}_hip_link"/>
+    <origin xyz="0 {0.1 * sign} -0.1" rpy="0 {-tilt} 0"/><axis xyz="1 0 0"/>
+    <limit lower="-0.5" upper="0.5" effort="80" velocity="20"/></joint>
+  <joint name="{side}_hip_pitch_joint" type="revolute">
+    <parent link="{side}_hip_link"/><child link="{side}_thigh_link"/>
+    <origin xyz="0 {0.05 * sign} -0.05" rpy="0 {tilt} 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="100" velocity="20"/></joint>
+  <joint name="{side}_knee_joint" type="{knee_type}">
+    <parent link="{side}_thigh_link"/><child link="{side}_shin_link"/>
+    <origin xyz="0 0 -0.3"/><axis xyz="{AXES[knee_axis]}"/>
+    <limit lower="-0.1" upper="2.5" effort="120" velocity="20"/></joint>
+  <joint name="{side}_ankle_joint" type="revolute">
+    <parent link="{side}_shin_link"/><child link="{side}_foot_link"/>
+    <origin xyz="0 0 -0.3"/><axis xyz="0 1 0"/>
+    <limit lower="-0.8" upper="0.6" effort="40" velocity="20"/></joint>""")
+    return f"""<?xml version="1.0"?>
+<robot name="biped">
+  <link name="base_link">{_inertial(10.0, xyz=f"0 {base_y} 0.1", rpy="0 0 0", moments=(0.3, 0.2, 0.15))}</link>
+  <link name="arm_link">{_inertial(1.0, xyz="0 0 0.2", rpy="0 0 0")}</link>
+  <joint name="waist_joint" type="revolute"><parent link="base_link"/><child link="arm_link"/>
+    <origin xyz="0 0 0.2"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="10" velocity="5"/></joint>
+  {"".join(legs)}
+</robot>"""
+
+
+def _scene_and_model(urdf: str):
+    draft = draft_scene(urdf)
+    scene = scene_from_text(draft.yaml, "biped.yaml")
+    model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
+    return draft, scene, model
+
+
+ANGLE = st.floats(-1.0, 1.0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(tilt=st.floats(-0.6, 0.6), knee_axis=st.sampled_from(sorted(AXES)),
+       angles=st.lists(ANGLE, min_size=8, max_size=8))
+def test_drafted_kinematics_are_the_urdfs(tilt, knee_axis, angles):
+    urdf = biped(tilt=tilt, knee_axis=knee_axis)
+    draft, scene, model = _scene_and_model(urdf)
+    assert set(draft.joints) == {j.name for j in scene.joints}
+    assert draft.locked == {"waist_joint": 0.0}
+    values = dict(zip(draft.joints, angles))
+    pose = InitialPose(root_position=scene.initial_pose.root_position,
+                       root_angles=scene.initial_pose.root_angles,
+                       joint_angles={name: (a,) for name, a in values.items()})
+    q = configuration(scene, pose)
+    mb = Multibody(scene)
+    assert np.abs(np.asarray(mb.constraints(q))).max() < ROUND_OFF
+    # the scene's angles of that configuration are the ones given (the URDF's convention)
+    got = dict(zip([j.name for j in scene.joints], joint_angles(scene, q)))
+    assert max(abs(got[n] - values[n]) for n in values) < ROUND_OFF
+    # Pinocchio on the original URDF: its base at identity, as the draft's root is in the
+    # initial pose (whose root angles are kept), so joint positions agree relative to a hip
+    q_pin = pin.neutral(model)
+    for name, a in values.items():
+        q_pin[model.joints[model.getJointId(name)].idx_q] = a
+    data = model.createData()
+    pin.forwardKinematics(model, data, q_pin)
+    world = {}
+    for joint in scene.joints:
+        s = mb.block(joint.child).start
+        D = q[s + 3:s + 12].reshape(3, 3).T
+        world[joint.name] = q[s:s + 3] + D @ np.asarray(scene.body(joint.child).points[
+            joint.child_point])
+    origin = "left_hip_roll_joint"
+    for name in values:
+        mine = world[name] - world[origin]
+        theirs = data.oMi[model.getJointId(name)].translation - \
+            data.oMi[model.getJointId(origin)].translation
+        assert np.abs(mine - theirs).max() < ROUND_OFF, name
+
+
+def test_contact_points_lie_on_the_soles():
+    draft, scene, model = _scene_and_model(biped())
+    q = configuration(scene)
+    mb = Multibody(scene)
+    heights = [float((mb.point_matrix(c.body, c.point) @ q)[2]) for c in scene.contacts]
+    assert max(abs(h) for h in heights) < ROUND_OFF  # standing: every contact on z = 0
+    names = {c.name for c in scene.contacts}
+    assert names == {"foot_l_heel", "foot_l_forefoot", "foot_r_heel", "foot_r_forefoot"}
+    assert [p.name for p in scene.gait.phases][0] == "right_full"
+
+
+def test_effort_limits_and_ranges_come_from_the_urdf():
+    draft, scene, _ = _scene_and_model(biped())
+    options = scene.gait.options
+    assert options["effort_limits"]["left_knee_joint"] == 120.0
+    assert options["joint_limits"]["left_ankle_joint"] == pytest.approx(
+        [np.degrees(-0.8), np.degrees(0.6)], abs=1e-5)
+    assert options["joint_speed_max"] == pytest.approx(np.degrees(20.0), abs=1e-5)
+
+
+@pytest.mark.parametrize("urdf, named", [
+    (biped().replace('<joint name="waist_joint"',
+                     '<joint name="extra" type="fixed"><parent link="left_hip_link"/>'
+                     '<child link="right_foot_link"/></joint><joint name="waist_joint"'),
+     "right_foot_link"),
+    (biped(knee_type="prismatic"), "left_knee_joint"),
+    (biped(knee_mass=0.0), "left_shin_link"),
+    (biped(foot_geometry=""), "foot_link"),
+    (biped(foot_geometry='<collision><geometry><mesh filename="package://nowhere/foot.stl"/>'
+                         '</geometry></collision>'), "foot.stl"),
+    (biped(right_knee_mass=1.5), "right_shin_link"),
+    (biped(base_y=0.05), "base_link"),
+    ('<robot name="r"><link name="a"/></robot>', "feet"),
+    ("<robot", "XML"),
+])
+def test_refusals_name_the_joint_or_link(urdf, named):
+    start = time.perf_counter()
+    with pytest.raises(UrdfError, match=named):
+        draft_scene(urdf)
+    assert time.perf_counter() - start < 5.0  # before anything is built
+
+
+def test_non_physical_inertia_is_refused():
+    urdf = biped().replace('<mass value="1.0"/><inertia ixx="0.02" iyy="0.03" izz="0.04"',
+                           '<mass value="1.0"/><inertia ixx="0.02" iyy="0.03" izz="0.09"')
+    with pytest.raises(UrdfError, match="link 'left_shin_link' has a non-physical inertia"):
+        draft_scene(urdf)
+
+
+# ----------------------------------------------------------------------------- example robots
+
+
+def _robots() -> Path | None:
+    """The robots folder of the example-robot-data wheel (a test dependency), or None."""
+    try:
+        dist = metadata.distribution("example-robot-data")
+    except metadata.PackageNotFoundError:
+        return None
+    return Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
+
+
+ROBOTS = _robots()
+needs_robots = pytest.mark.skipif(ROBOTS is None, reason="example-robot-data not installed")
+
+
+@needs_robots
+@pytest.mark.parametrize("path, joints", [
+    ("g1_description/urdf/g1_29dof_rev_1_0.urdf", 12),
+    ("bolt_description/robots/bolt.urdf", 6),
+])
+def test_example_robots_are_drafted(path, joints):
+    urdf = (ROBOTS / path).read_text()
+    draft = draft_scene(urdf, package_dirs=[str(ROBOTS.parents[1])])
+    scene = scene_from_text(draft.yaml, path)
+    assert len(scene.joints) == joints
+    model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
+    assert all(model.existJointName(j.name) for j in scene.joints)
+    q = configuration(scene)
+    assert np.abs(np.asarray(Multibody(scene).constraints(q))).max() < ROUND_OFF
+
+
+@needs_robots
+def test_talos_is_refused_as_asymmetric():
+    urdf = (ROBOTS / "talos_data/robots/talos_reduced.urdf").read_text()
+    with pytest.raises(UrdfError, match="leg_right_2_link.*mirror image"):
+        draft_scene(urdf, package_dirs=[str(ROBOTS.parents[1])])
