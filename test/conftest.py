@@ -16,6 +16,8 @@ from __future__ import annotations
 import gait_planner  # noqa: F401  (first: pins numpy's BLAS kernels before numpy loads)
 
 import functools
+from importlib import metadata
+from pathlib import Path
 from typing import Callable, Iterator, NamedTuple
 
 import numpy as np
@@ -64,3 +66,15 @@ def model() -> Callable[[str], Model]:
 def any_model(request: pytest.FixtureRequest) -> Model:
     """Each scene of `SCENES` in turn."""
     return _model(request.param)
+
+
+@pytest.fixture(scope="session")
+def example_robots() -> Path:
+    """The robots folder of the example-robot-data wheel (a test dependency pinned in
+    requirements.txt: URDFs of Unitree G1, Talos, Bolt); the test is skipped without it.
+    Its parents[1] is the folder `package://example-robot-data/...` paths resolve in."""
+    try:
+        dist = metadata.distribution("example-robot-data")
+    except metadata.PackageNotFoundError:
+        pytest.skip("example-robot-data is not installed")
+    return Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))

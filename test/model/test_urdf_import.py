@@ -16,8 +16,6 @@
 from __future__ import annotations
 
 import time
-from importlib import metadata
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -186,27 +184,13 @@ def test_non_physical_inertia_is_refused():
 # ----------------------------------------------------------------------------- example robots
 
 
-def _robots() -> Path | None:
-    """The robots folder of the example-robot-data wheel (a test dependency), or None."""
-    try:
-        dist = metadata.distribution("example-robot-data")
-    except metadata.PackageNotFoundError:
-        return None
-    return Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
-
-
-ROBOTS = _robots()
-needs_robots = pytest.mark.skipif(ROBOTS is None, reason="example-robot-data not installed")
-
-
-@needs_robots
 @pytest.mark.parametrize("path, joints", [
     ("g1_description/urdf/g1_29dof_rev_1_0.urdf", 12),
     ("bolt_description/robots/bolt.urdf", 6),
 ])
-def test_example_robots_are_drafted(path, joints):
-    urdf = (ROBOTS / path).read_text()
-    draft = draft_scene(urdf, package_dirs=[str(ROBOTS.parents[1])])
+def test_example_robots_are_drafted(example_robots, path, joints):
+    urdf = (example_robots / path).read_text()
+    draft = draft_scene(urdf, package_dirs=[str(example_robots.parents[1])])
     scene = scene_from_text(draft.yaml, path)
     assert len(scene.joints) == joints
     model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
@@ -215,8 +199,7 @@ def test_example_robots_are_drafted(path, joints):
     assert np.abs(np.asarray(Multibody(scene).constraints(q))).max() < ROUND_OFF
 
 
-@needs_robots
-def test_talos_is_refused_as_asymmetric():
-    urdf = (ROBOTS / "talos_data/robots/talos_reduced.urdf").read_text()
+def test_talos_is_refused_as_asymmetric(example_robots):
+    urdf = (example_robots / "talos_data/robots/talos_reduced.urdf").read_text()
     with pytest.raises(UrdfError, match="leg_right_2_link.*mirror image"):
-        draft_scene(urdf, package_dirs=[str(ROBOTS.parents[1])])
+        draft_scene(urdf, package_dirs=[str(example_robots.parents[1])])

@@ -15,7 +15,6 @@ Slow: Bolt's problem builds in ~15 s and solves in ~10 s (refined once) without 
 from __future__ import annotations
 
 import functools
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -34,23 +33,13 @@ from gait_planner.request import PlanRequest
 from gait_planner.verify import verify_recording
 
 
-def _robots() -> Path | None:
-    try:
-        dist = metadata.distribution("example-robot-data")
-    except metadata.PackageNotFoundError:
-        return None
-    return Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
-
-
-ROBOTS = _robots()
-pytestmark = [pytest.mark.slow,
-              pytest.mark.skipif(ROBOTS is None, reason="example-robot-data not installed")]
+pytestmark = pytest.mark.slow
 
 
 @functools.cache
-def _bolt(folder: str):
-    urdf = (ROBOTS / "bolt_description/robots/bolt.urdf").read_text()
-    draft = draft_scene(urdf, package_dirs=[str(ROBOTS.parents[1])])
+def _bolt(robots: Path, folder: str):
+    urdf = (robots / "bolt_description/robots/bolt.urdf").read_text()
+    draft = draft_scene(urdf, package_dirs=[str(robots.parents[1])])
     scene_file = write_draft(draft, Path(folder) / "bolt.yaml")
     outcome = plan_and_record(Planner(), PlanRequest(scene=str(scene_file), output_name="bolt",
                                                      compiled=False),
@@ -59,8 +48,8 @@ def _bolt(folder: str):
 
 
 @pytest.fixture(scope="module")
-def bolt(tmp_path_factory):
-    return _bolt(str(tmp_path_factory.mktemp("bolt")))
+def bolt(example_robots, tmp_path_factory):
+    return _bolt(example_robots, str(tmp_path_factory.mktemp("bolt")))
 
 
 @pytest.mark.xfail(strict=True, reason="measured 2026-11-28: every check passes but one, "
