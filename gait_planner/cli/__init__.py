@@ -141,11 +141,8 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
                        f"got {args.walk}")
     if getattr(args, "urdf", None):
         from gait_planner.cli.robot import draft_of, write_draft
-        from gait_planner.model.loader import parse_yaml
-
         draft = draft_of(args)  # written where the recording goes (its name is checked there)
-        name = parse_yaml(draft.yaml, args.urdf)["name"]
-        args.scene = str(write_draft(draft, target.parent / f"{name}.yaml"))
+        args.scene = str(write_draft(draft, target.parent / f"{draft.name}.yaml"))
     elif args.scene is None:
         raise CliError("plan needs --scene or --urdf")
     request = PlanRequest(scene=args.scene, step_length=args.step_length, cost=args.cost,

@@ -26,9 +26,10 @@ approximation of it:
   point foot (the compass's phases).
 * **Mirror.** Left and right bodies paired by their names (``left_``/``right_``,
   ``l_``/``r_``, ``_l``/``_r``, ``FL_``/``FR_``, ...). The half-cycle's mirror periodicity
-  needs a symmetric robot: right and left data that differ by more than `MIRROR_TOLERANCE`
-  are refused, naming the body; below it the draft writes the left body's data mirrored
-  for the right one (the differences are URDF round-off, e.g. Bolt's 1.5e-6 kg).
+  needs a symmetric robot: right and left data that differ by more than
+  `gait_planner.model.urdf_mirror`'s tolerances are refused, naming the link; below them
+  the draft writes the left link's data mirrored for the right one and lists what moved
+  (G1's right knee inertia, Bolt's 1.5e-6 kg).
 * **Limits.** The URDF's ranges (`joint_limits`, within +-89.5 deg of its zero: the range
   rows take ranges narrower than 180 deg) and efforts (`effort_limits`, hard bounds on the
   torques) per joint; its slowest velocity limit for every joint (`joint_speed_max`: the
@@ -59,31 +60,26 @@ import numpy as np
 import yaml
 
 from gait_planner.model.rotations import matrix_rpy
+from gait_planner.model.urdf_errors import UrdfError
+from gait_planner.model.urdf_mirror import S, mirror_geometry, mirrored_inertias
 
-__all__ = ["UrdfDraft", "UrdfError", "draft_scene", "MIRROR_TOLERANCE"]
+__all__ = ["UrdfDraft", "UrdfError", "draft_scene"]
 
-MIRROR_TOLERANCE = 5e-2  # relative: a mass or inertia differing less is written symmetric
-MIRROR_COM_TOLERANCE = 1e-2  # m: a centre of mass differing less is written symmetric
-_SNAP_TOLERANCE = 1e-9  # relative: mirrored geometry (placements are exact) after symmetry
 _RANGE_MAX = 89.5  # deg from the zero pose: the joint-range rows take ranges under 180 deg
 _MIN_MASS = 1e-6  # kg: a moving body lighter than this is massless
 _INERTIA_TOLERANCE = 1e-9  # relative: eigenvalues and triangle inequality
 WALKER3D_LEG = 0.897  # m, walker3d's hip height standing (config/scenes/walker3d.yaml)
 WALKER3D_STEP_RATIO = 0.6338 / WALKER3D_LEG
-_SIDES = (("left_", "right_"), ("l_", "r_"), ("_left", "_right"), ("_l", "_r"),
-          ("L_", "R_"), ("_L", "_R"), ("FL_", "FR_"), ("HL_", "HR_"), ("left", "right"))
-
-
-class UrdfError(ValueError):
-    """A description the importer cannot plan for; the message names the joint or link."""
 
 
 @dataclass(frozen=True)
 class UrdfDraft:
-    """A drafted scene: `yaml` its text (load it with `scene_from_text`), the URDF joints
-    planned (`joints`, leg joints in scene order) and locked (`locked`: name -> angle rad)."""
+    """A drafted scene: `yaml` its text (load it with `scene_from_text`), `name` the
+    scene's name, the URDF joints planned (`joints`, leg joints in scene order) and locked
+    (`locked`: name -> angle rad)."""
 
     yaml: str
+    name: str
     joints: tuple[str, ...]
     locked: Mapping[str, float] = field(default_factory=dict)
 
@@ -156,9 +152,6 @@ def _path(model, joint: int) -> list[int]:
 
 def _find_feet(model, feet: Sequence[str] | None) -> tuple[int, int]:
     """(left, right) joint ids of the feet: given links, or the two lowest leaf joints."""
-    pin = _pin()
-    data = model.createData()
-    pin.forwardKinematics(model, data, pin.neutral(model))
     if feet:
         if len(feet) != 2:
             raise UrdfError(f"--feet takes two links LEFT,RIGHT, got {list(feet)}")
@@ -168,6 +161,9 @@ def _find_feet(model, feet: Sequence[str] | None) -> tuple[int, int]:
                 raise UrdfError(f"foot link {link!r} is fixed to the floating base, not at "
                                 f"the end of a leg")
         return ids[0], ids[1]
+    pin = _pin()
+    data = model.createData()
+    pin.forwardKinematics(model, data, pin.neutral(model))
     leaves = [j for j in range(2, model.njoints) if j not in set(model.parents[2:])]
     if len(leaves) < 2:
         raise UrdfError(f"no two feet found: the tree has {len(leaves)} leaf joint(s) below "
@@ -191,11 +187,11 @@ def _revolute_axis(model, joint: int) -> np.ndarray:
     q = np.zeros(joint_model.nq)
     q[0] = 1.0 if joint_model.nq == 2 else 0.0  # continuous joints: (cos, sin)
     joint_model.calc(data, q)
-    S = np.array(data.S).reshape(6, -1)[:, 0]
-    if np.linalg.norm(S[3:]) < 0.5 or np.linalg.norm(S[:3]) > 1e-12:
+    motion = np.array(data.S).reshape(6, -1)[:, 0]  # (linear, angular)
+    if np.linalg.norm(motion[3:]) < 0.5 or np.linalg.norm(motion[:3]) > 1e-12:
         raise UrdfError(f"joint {name!r} ({joint_model.shortname()}) is not revolute: a "
                         f"prismatic or helical joint inside a leg cannot be planned")
-    return S[3:] / np.linalg.norm(S[3:])
+    return motion[3:] / np.linalg.norm(motion[3:])
 
 
 # ----------------------------------------------------------------------------- bodies
@@ -229,17 +225,6 @@ def _principal(name: str, mass: float, inertia: np.ndarray) -> tuple[np.ndarray,
     return moments, R
 
 
-def _mirror_name(name: str) -> tuple[str, str] | tuple[None, None]:
-    """(the name with its side swapped, "left" or "right": the side of `name`), or
-    (None, None) for a name without a side token (`_SIDES`)."""
-    for left, right in _SIDES:
-        for a, b, side in ((left, right, "left"), (right, left, "right")):
-            for pattern in (rf"^{a}", rf"{a}$", rf"(?<=[_\W]){a}"):
-                if re.search(pattern, name):
-                    return re.sub(pattern, b, name, count=1), side
-    return None, None
-
-
 # ----------------------------------------------------------------------------- the draft
 
 
@@ -253,8 +238,9 @@ class _Body:
     R: np.ndarray  # principal axes (columns) in the joint frame
     points: dict[str, np.ndarray] = field(default_factory=dict)  # in the joint frame
 
-    def local(self, p: np.ndarray) -> list[float]:
-        return [float(x) for x in self.R.T @ (np.asarray(p) - self.com)]
+    def local(self, p: np.ndarray) -> np.ndarray:
+        """A joint-frame point in director components from the centre of mass."""
+        return self.R.T @ (np.asarray(p) - self.com)
 
 
 def _link_name(model, joint: int) -> str:
@@ -274,8 +260,8 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     full, geometry = _read(urdf_text, [str(p) for p in package_dirs])
     left_foot, right_foot = _find_feet(full, feet)
     legs = _path(full, left_foot) + _path(full, right_foot)
-    for joint in legs:
-        _revolute_axis(full, joint)
+    axes = {full.names[j]: _revolute_axis(full, j) for j in legs}  # joint frame: kept by
+    # the reduction, which changes placements only
     locked = dict(locked or {})
     q_lock = pin.neutral(full)
     for joint_name, angle in locked.items():
@@ -295,8 +281,7 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     links = {j: _link_name(model, j) for j in order}
     bodies: dict[int, _Body] = {}
     changes: list[str] = []
-    inertias, left_of = _mirrored_inertias(model, links, changes)
-    S = np.diag([1.0, -1.0, 1.0])
+    inertias, left_of = mirrored_inertias(model, links, changes)
     for joint, (mass, com, inertia) in inertias.items():
         if joint in left_of:  # a right link: the left one's principal axes mirrored
             left = bodies[left_of[joint]]
@@ -307,71 +292,23 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     data = model.createData()
     q0 = pin.neutral(model)
     pin.forwardKinematics(model, data, q0)
-    contacts = _foot_contacts(model, geometry, data, foot_ids, bodies)
-    return _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles,
+    contacts, half_widths = _foot_contacts(geometry, data, foot_ids, links)
+    return _write(model, data, full, bodies, ids, axes, foot_ids, contacts, half_widths,
+                  lock_angles, left_of,
                   name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"), changes)
 
 
-def _mirrored_inertias(model, links: dict[int, str], changes: list[str]
-                       ) -> tuple[dict[int, tuple], dict[int, int]]:
-    """(joint -> (mass, COM (3,), inertia at the COM (3, 3)), right joint -> its left
-    partner), joint frames, left links before their right partners: a right link's the
-    mirror image of its left partner's (S = diag(1, -1, 1): COM S c, inertia S I S), a
-    link without a partner (the base) made symmetric about its own xz-plane ((I + S I S)/2,
-    c_y = 0); UrdfError where the URDF's data differ from that by more than MIRROR_TOLERANCE
-    (inertia, relative to the link's largest moment; mass, relative) or MIRROR_COM_TOLERANCE
-    (COM). G1's right knee, whose Ixz has the wrong sign (9e-5 kg m^2), Talos's leg links
-    (COM 0.4 mm, inertia 2.3e-4 kg m^2 apart) and its base with the locked torso and arms
-    (COM 2.05 mm off the mid-plane) are written symmetric; `changes` collects what moved."""
-    S = np.diag([1.0, -1.0, 1.0])
-    raw = {j: (float(model.inertias[j].mass), np.array(model.inertias[j].lever),
-               np.array(model.inertias[j].inertia)) for j in links}
-    by_name = {name: j for j, name in links.items()}
-    out, left_of = {}, {}
-    for joint, name in links.items():
-        image_name, side = _mirror_name(name)
-        other = by_name.get(image_name or "", joint)
-        mass, com, inertia = raw[joint]
-        m2, c2, i2 = raw[other]
-        if (side == "right" and other != joint) or other == joint:  # a right link, the base
-            image = (m2, S @ c2, S @ i2 @ S)
-            if other == joint:
-                image = (mass, np.array([com[0], 0.0, com[2]]), 0.5 * (inertia + S @ inertia @ S))
-            scale = max(np.abs(np.linalg.eigvalsh(inertia)).max(), 1e-300)
-            for what, a, b, tol in (("mass", mass, image[0], MIRROR_TOLERANCE * mass),
-                                    ("centre of mass", com, image[1], MIRROR_COM_TOLERANCE),
-                                    ("inertia", inertia, image[2], MIRROR_TOLERANCE * scale)):
-                gap = float(np.max(np.abs(np.asarray(a) - np.asarray(b))))
-                if gap > 1e-12 * max(tol, 1e-300) * 1e6:
-                    changes.append(f"{name}: {what} moved by {gap:.3g} to be "
-                                   + ("symmetric" if other == joint else
-                                      f"{links[other]}'s mirror image"))
-                if gap > tol:
-                    partner = "its own mirror image" if other == joint else \
-                        f"the mirror image of {links[other]!r}"
-                    raise UrdfError(
-                        f"link {name!r}: its {what} is not {partner} ({gap:.3g} apart, more "
-                        f"than {tol:.3g}): the half cycle's mirror periodicity needs a "
-                        f"left-right symmetric robot")
-            out[joint] = image
-            if other != joint:
-                left_of[joint] = other
-        else:
-            out[joint] = raw[joint]
-    return {j: out[j] for j in sorted(out, key=lambda j: j in left_of)}, left_of
-
-
-def _foot_contacts(model, geometry, data, foot_ids, bodies) -> dict[int, dict[str, np.ndarray]]:
-    """foot joint -> {"heel": p, "forefoot": p} or {"foot": p}, joint-frame points."""
-    pin = _pin()
-    out = {}
+def _foot_contacts(geometry, data, foot_ids, links) -> tuple[dict, dict[int, float]]:
+    """(foot joint -> {"heel": p, "forefoot": p} or {"foot": p}, joint-frame points; foot
+    joint -> the sole's half width (its points' lateral spread), flat feet only)."""
+    out, half_widths = {}, {}
     for foot in foot_ids:
         lowest: list[np.ndarray] = []  # joint-frame points
         for obj in geometry.geometryObjects:
             if obj.parentJoint != foot:
                 continue
             lowest += _lowest_points(obj, data.oMi[foot])
-        link = bodies[foot].name
+        link = links[foot]
         if not lowest:
             raise UrdfError(f"foot link {link!r} has no collision geometry: its contact "
                             f"points come from its <collision> spheres, boxes or meshes")
@@ -385,10 +322,9 @@ def _foot_contacts(model, geometry, data, foot_ids, bodies) -> dict[int, dict[st
             continue
         middle = 0.5 * (wpts[:, 0].min() + wpts[:, 0].max())
         out[foot] = {"heel": pts[wpts[:, 0] < middle].mean(axis=0),
-                     "forefoot": pts[wpts[:, 0] >= middle].mean(axis=0),
-                     "half_width": 0.5 * float(np.ptp(wpts[:, 1]))}
-    del pin
-    return out
+                     "forefoot": pts[wpts[:, 0] >= middle].mean(axis=0)}
+        half_widths[foot] = 0.5 * float(np.ptp(wpts[:, 1]))
+    return out, half_widths
 
 
 def _lowest_points(obj, oMi) -> list[np.ndarray]:
@@ -419,17 +355,17 @@ def _lowest_points(obj, oMi) -> list[np.ndarray]:
     return list(local[height <= height.min() + 1e-3])
 
 
-def _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles, name,
-           changes) -> UrdfDraft:
+def _write(model, data, full, bodies, ids, axes, foot_ids, contacts, half_widths,
+           lock_angles, left_of, name, changes) -> UrdfDraft:
     order = [1] + list(ids.values())
     for foot, points in contacts.items():
-        bodies[foot].points.update({k: v for k, v in points.items() if k != "half_width"})
+        bodies[foot].points.update(points)
     joints, limits, efforts, speeds = {}, {}, {}, {}
     for jname, jid in ids.items():
         parent = int(model.parents[jid])
         placement = model.jointPlacements[jid]
         bp, bc = bodies[parent], bodies[jid]
-        axis = _revolute_axis(model, jid)
+        axis = axes[jname]
         bp.points[jname] = placement.translation
         bc.points[jname] = np.zeros(3)
         joints[jname] = {"parent": bp.name, "child": bc.name,
@@ -444,11 +380,10 @@ def _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles, name
             efforts[jname] = float(model.effortLimit[jm.idx_v])
         if 0 < model.velocityLimit[jm.idx_v] < 1e10:
             speeds[jname] = round(math.degrees(model.velocityLimit[jm.idx_v]), 6)
-    local = {j: {p: np.array(bodies[j].local(v)) for p, v in bodies[j].points.items()}
-             for j in order}
-    mirror = _symmetrise(bodies, order, local, joints)
-    z_sole = min(float(data.oMi[f].act(p)[2]) for f in foot_ids
-                 for k, p in contacts[f].items() if k != "half_width")
+    local = {j: {p: bodies[j].local(v) for p, v in bodies[j].points.items()} for j in order}
+    mirror_geometry({j: bodies[j].name for j in order}, left_of, local, joints)
+    mirror = {bodies[left_of[j]].name: bodies[j].name for j in order if j in left_of}
+    z_sole = min(float(data.oMi[f].act(p)[2]) for f in foot_ids for p in contacts[f].values())
     hip = [data.oMi[_path(model, f)[0]].translation[2] for f in foot_ids]
     leg = float(np.mean(hip)) - z_sole
     root = bodies[1]
@@ -457,7 +392,7 @@ def _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles, name
     side = {foot_ids[0]: "l", foot_ids[1]: "r"}
     contact_yaml, contact_names = [], {}
     for foot in (foot_ids[1], foot_ids[0]):
-        for point in (p for p in contacts[foot] if p != "half_width"):
+        for point in contacts[foot]:
             cname = f"foot_{side[foot]}" if point_feet else f"foot_{side[foot]}_{point}"
             contact_names[(side[foot], point)] = cname
             contact_yaml.append({"name": cname, "body": bodies[foot].name, "point": point})
@@ -483,7 +418,7 @@ def _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles, name
             "scaling_bounds": [0.5, 1.5], "friction_coefficient": 0.8,
             "cost": "kinetic_energy", "mirror": mirror,
             "phases": _phases(contact_names, point_feet),
-            "options": {**_swing_options(leg, contacts, foot_ids),
+            "options": {**_swing_options(leg, half_widths),
                         "joint_limits": limits, "effort_limits": efforts,
                         **({"joint_speed_max": min(speeds.values())} if speeds else {}),
                         "step_length_bounds": [round(0.6 * step, 4), round(1.4 * step, 4)]},
@@ -503,67 +438,10 @@ def _write(model, data, full, bodies, ids, foot_ids, contacts, lock_angles, name
         header += "# Made mirror-symmetric (the URDF's own data differ):\n" + "".join(
             f"#   {change}\n" for change in changes)
     text = header + yaml.safe_dump(scene, sort_keys=False, width=100, default_flow_style=None)
-    return UrdfDraft(text, tuple(ids), lock_angles)
+    return UrdfDraft(text, name, tuple(ids), lock_angles)
 
 
-def _symmetrise(bodies, order, local, joints) -> dict[str, str]:
-    """Pair left and right bodies and joints by name and write the right ones as the left
-    ones' mirror images (S = diag(1, -1, 1): a point (X1, X2, X3) -> (X1, -X2, X3), an
-    axis n -> +-(-S n), a reference R0 -> S R0 S); a body without a partner keeps its
-    points with their own images. UrdfError where the URDF's data differ by more than
-    MIRROR_TOLERANCE (relative). Returns the mirror map (left -> right)."""
-    S = np.diag([1.0, -1.0, 1.0])
-    by_name = {bodies[j].name: j for j in order}
-    mirror = {}
-    for j in order:
-        other, side = _mirror_name(bodies[j].name)
-        if other in by_name and side == "left":
-            mirror[bodies[j].name] = other
-    pairs = [(by_name[a], by_name[b]) for a, b in mirror.items()]
-    pairs += [(j, j) for j in order if bodies[j].name not in mirror
-              and bodies[j].name not in mirror.values()]
-    for left, right in pairs:
-        a, b = bodies[left], bodies[right]
-        _close(f"links {a.name!r} and {b.name!r}: mass", a.mass, b.mass, a.mass)
-        _close(f"links {a.name!r} and {b.name!r}: principal moments", a.moments, b.moments,
-               a.moments.max())
-        b.mass, b.moments = a.mass, a.moments.copy()
-        for point, X in list(local[left].items()):
-            image = _mirror_name(point)[0]
-            if image is None or image not in local[right]:
-                image = point  # a contact (heel, forefoot) or a point on the mirror plane
-            if image not in local[right]:
-                raise UrdfError(f"link {b.name!r} has no point {image!r} to mirror "
-                                f"{a.name!r}'s {point!r}")
-            scale = max(np.linalg.norm(X), 0.01)
-            _close(f"link {b.name!r}: point {image!r}", S @ X, local[right][image], scale)
-            if left != right or image != point or abs(X[1]) > 0:
-                local[right][image] = S @ X
-    for name, joint in joints.items():
-        other = _mirror_name(name)[0]
-        if other not in joints or joint["parent"] not in mirror.values() and \
-                joint["child"] not in mirror.values():
-            continue
-        left, right = joints[other], joint
-        image = -S @ left["axis"]
-        sign = 1.0 if image @ right["axis"] >= 0 else -1.0
-        _close(f"joint {name!r}: axis", sign * image, right["axis"], 1.0)
-        _close(f"joint {name!r}: zero-angle reference", S @ left["reference"] @ S,
-               right["reference"], 1.0)
-        right["axis"], right["reference"] = sign * image, S @ left["reference"] @ S
-    return mirror
-
-
-def _close(what: str, a, b, scale: float) -> None:
-    gap = float(np.max(np.abs(np.asarray(a, float) - np.asarray(b, float))))
-    if gap > _SNAP_TOLERANCE * max(float(scale), 1e-300):
-        raise UrdfError(f"{what} are not mirror images ({gap:.3g} apart, more than "
-                        f"{_SNAP_TOLERANCE:g} relative): the half cycle's mirror "
-                        f"periodicity needs a left-right symmetric robot (its joint "
-                        f"placements, axes and collision geometry mirrored)")
-
-
-def _swing_options(leg: float, contacts, foot_ids) -> dict[str, float]:
+def _swing_options(leg: float, half_widths: dict[int, float]) -> dict[str, float]:
     """walker3d's swing options (config/scenes/walker3d.yaml: 1 cm clearance reached over
     0.03 s, strikes slower than 1 m/s) scaled by the leg length L (lengths by L / 0.897 m,
     times by sqrt(L / 0.897 m)); for flat feet the roll moment's bound from the sole's
@@ -572,9 +450,8 @@ def _swing_options(leg: float, contacts, foot_ids) -> dict[str, float]:
     out = {"swing_clearance": round(0.01 * scale, 5),
            "swing_clearance_ramp": round(0.03 * math.sqrt(scale), 5),
            "strike_speed_max": round(1.0 * math.sqrt(scale), 4)}
-    widths = [contacts[f]["half_width"] for f in foot_ids if "half_width" in contacts[f]]
-    if widths:
-        out["foot_half_width"] = round(min(widths), 5)
+    if half_widths:
+        out["foot_half_width"] = round(min(half_widths.values()), 5)
     return out
 
 

@@ -14,8 +14,6 @@ Slow: Bolt's problem builds in ~15 s and solves in ~10 s (refined once) without 
 
 from __future__ import annotations
 
-import functools
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -36,20 +34,17 @@ from gait_planner.verify import verify_recording
 pytestmark = pytest.mark.slow
 
 
-@functools.cache
-def _bolt(robots: Path, folder: str):
-    urdf = (robots / "bolt_description/robots/bolt.urdf").read_text()
-    draft = draft_scene(urdf, package_dirs=[str(robots.parents[1])])
-    scene_file = write_draft(draft, Path(folder) / "bolt.yaml")
+@pytest.fixture(scope="module")
+def bolt(example_robots, tmp_path_factory):
+    """(URDF text, draft, Outcome) of Bolt planned and recorded once for the module."""
+    folder = tmp_path_factory.mktemp("bolt")
+    urdf = (example_robots / "bolt_description/robots/bolt.urdf").read_text()
+    draft = draft_scene(urdf, package_dirs=[str(example_robots.parents[1])])
+    scene_file = write_draft(draft, folder / "bolt.yaml")
     outcome = plan_and_record(Planner(), PlanRequest(scene=str(scene_file), output_name="bolt",
                                                      compiled=False),
                               folder, rrd=False, scenes=find_scene)
     return urdf, draft, outcome
-
-
-@pytest.fixture(scope="module")
-def bolt(example_robots, tmp_path_factory):
-    return _bolt(example_robots, str(tmp_path_factory.mktemp("bolt")))
 
 
 @pytest.mark.xfail(strict=True, reason="measured 2026-11-28: every check passes but one, "
