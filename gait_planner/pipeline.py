@@ -279,7 +279,9 @@ def grid_defects(result: PlanResult, cert) -> list[str]:
 def continuous_certificate(result: PlanResult):
     """`gait_planner.verify.continuous` on what the result's messages will publish: the
     efforts of `node_efforts` and the foot wrenches of `foot_wrenches` (moved to the world
-    origin), so the certificate in the metadata is the one a reader of the recording gets."""
+    origin), so the certificate in the metadata is the one a reader of the recording gets.
+    A scene drafted from a URDF is certified on that URDF (`gait_planner.verify.robot`),
+    which also sets the locked joints' `held_efforts`."""
     from gait_planner.io.messages import foot_wrenches, node_efforts
     from gait_planner.verify.continuous import certificate
     from gait_planner.verify.mechanics import parse_scene
@@ -289,6 +291,14 @@ def continuous_certificate(result: PlanResult):
     for n in range(result.n_nodes):
         for body, r, F, M, _ in foot_wrenches(result, n):
             wrenches[body][n] = np.concatenate([F, M + np.cross(r, F)])
+    if result.scene.robot is not None:  # drafted from a URDF: certified on it
+        from gait_planner.verify.robot import robot_certificate
+
+        cert, held = robot_certificate(
+            scene, result.scene.robot.urdf, result.times, result.q, result.joint_angles,
+            node_efforts(result), wrenches, result.active_contacts)
+        result.held_efforts.update(held)
+        return cert
     return certificate(scene, result.times, result.q, node_efforts(result), wrenches,
                        result.active_contacts)
 

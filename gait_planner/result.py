@@ -66,6 +66,9 @@ class PlanResult:
         kinetic_energy, potential_energy: (N+1,) J.
         phase_scaling: sigma, (n_sigma,).
         cost_value: J of `cost_name` over the half cycle (J s for kinetic_energy).
+        held_efforts: a scene drafted from a URDF: locked joint -> (N+1,) N m, what holds
+            it (inverse dynamics on the URDF, `gait_planner.verify.robot`); set with the
+            certificate, published in the JointTrajectory beside the planned joints.
     """
 
     success: bool
@@ -94,6 +97,7 @@ class PlanResult:
     stats: SolverStats
     settings: dict[str, str] = field(default_factory=dict)  # extra metadata, strings
     ground: Ground = LEVEL  # what the plan stands on (`gait_planner.model.ground`)
+    held_efforts: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def n_nodes(self) -> int:

@@ -141,7 +141,7 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
                        f"got {args.walk}")
     if getattr(args, "urdf", None):
         from gait_planner.cli.robot import draft_of, write_draft
-        draft = draft_of(args)  # written where the recording goes (its name is checked there)
+        draft = draft_of(args, target.parent)  # beside the recording (its name checked there)
         args.scene = str(write_draft(draft, target.parent / f"{draft.name}.yaml"))
     elif args.scene is None:
         raise CliError("plan needs --scene or --urdf")

@@ -46,9 +46,17 @@ def add_scene_parser(commands: argparse._SubParsersAction) -> None:
     draft.set_defaults(handler=_from_urdf)
 
 
-def draft_of(args: argparse.Namespace):
-    """The `UrdfDraft` of args.urdf with the importer's options; CliError naming the cause."""
+def draft_of(args: argparse.Namespace, folder: Path | None = None):
+    """The `UrdfDraft` of args.urdf with the importer's options, to be written in `folder`
+    (its ``robot:`` section names the URDF and --package-dir folders relative to it; None:
+    absolute); CliError naming the cause."""
+    import os
+
     from gait_planner.model.urdf_import import UrdfError, draft_scene
+
+    def written(p: str | Path) -> str:
+        p = Path(p).resolve()
+        return str(p) if folder is None else os.path.relpath(p, folder.resolve())
 
     path = Path(args.urdf)
     try:
@@ -65,7 +73,9 @@ def draft_of(args: argparse.Namespace):
     feet = [f.strip() for f in args.feet.split(",")] if args.feet else None
     dirs = list(args.package_dir) + [str(p) for p in path.resolve().parents]
     try:
-        return draft_scene(text, feet=feet, locked=locked, name=args.name, package_dirs=dirs)
+        return draft_scene(text, feet=feet, locked=locked, name=args.name, package_dirs=dirs,
+                           urdf_file=written(path),
+                           robot_dirs=[written(d) for d in args.package_dir])
     except UrdfError as error:
         raise CliError(f"{path}: {error}") from None
 
@@ -76,7 +86,7 @@ def write_draft(draft, out: Path) -> Path:
     from gait_planner.model.loader import SceneError, scene_from_text
 
     try:
-        scene_from_text(draft.yaml, out.name)
+        scene_from_text(draft.yaml, out.name, out.parent)
     except SceneError as error:  # the importer's own defect, not the user's
         raise CliError(f"the drafted scene does not load: {error}") from None
     try:
@@ -89,7 +99,7 @@ def write_draft(draft, out: Path) -> Path:
 
 
 def _from_urdf(args: argparse.Namespace) -> int:
-    draft = draft_of(args)
+    draft = draft_of(args, None if args.out is None else Path(args.out).parent)
     if args.out is None:
         sys.stdout.write(draft.yaml)
         return 0

@@ -44,7 +44,6 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from gait_planner.io import messages
 from gait_planner.io.atomic import atomic_target
 from gait_planner.io.ros_definitions import STANDARD_DEFINITIONS, custom_definitions, schema_text
-from gait_planner.io.urdf import kinematic_tree
 from gait_planner.result import PlanResult
 
 __all__ = ["METADATA_NAME", "TOPICS", "CdrEncoder", "QosProfile", "encoder_for", "plan_metadata",
@@ -223,7 +222,7 @@ def _check_path(path: Path, allowed_dirs: Sequence[str | os.PathLike] | None) ->
 
 def _records(result: PlanResult, start_ns: int) -> Iterable[tuple[int, int, str, Any]]:
     """(log time, channel order, topic, message dict) of every message."""
-    tree = kinematic_tree(result.scene)
+    tree = messages.frame_tree(result.scene)
     order = {topic: i for i, topic in enumerate(TOPICS)}
     yield start_ns, order["/robot_description"], "/robot_description", \
         messages.robot_description(result)

@@ -54,7 +54,7 @@ from gait_planner.model.rotations import rot_axis, rpy_matrix
 from gait_planner.result import PlanResult
 
 __all__ = ["check_result", "contact_forces", "contact_points", "fill_message", "foot_wrenches",
-           "joint_states",
+           "frame_tree", "joint_states", "published_joints",
            "joint_trajectory", "multibody_states", "node_efforts", "plan_response_fields",
            "quaternion_msg", "robot_description", "node_stamps_ns", "tf_messages", "tf_static",
            "time_msg", "walk_response_fields", "WORLD_FRAME"]
@@ -194,23 +194,47 @@ def check_result(result: PlanResult, *, finite: bool = True) -> None:
 # ---------------------------------------------------------------------------- messages
 
 
+def published_joints(result: PlanResult) -> tuple[list[str], np.ndarray, np.ndarray,
+                                                  np.ndarray, np.ndarray]:
+    """(names, positions, velocities, accelerations, efforts), each (N+1, n), of the joints
+    the JointTrajectory and /joint_states carry: the planned joint angles, then for a scene
+    drafted from a URDF its locked joints, held at their angle with the efforts that hold
+    them (`PlanResult.held_efforts`); ValueError if those were not computed."""
+    names = list(result.joint_angle_names)
+    rows = [np.asarray(a, dtype=float) for a in (result.joint_angles, result.joint_velocities,
+                                                  result.joint_accelerations)]
+    effort = node_efforts(result)
+    locked = dict(result.scene.robot.locked) if result.scene.robot is not None else {}
+    if locked:
+        missing = [name for name in locked if name not in result.held_efforts]
+        if missing:
+            raise ValueError(f"plan result (scene {result.scene.name!r}): no held efforts for "
+                             f"the locked joints {missing} (set by the URDF certificate)")
+        n, ones = result.n_nodes, np.ones((result.n_nodes, len(locked)))
+        rows = [np.hstack([rows[0], ones * np.array(list(locked.values()))]),
+                np.hstack([rows[1], 0 * ones]), np.hstack([rows[2], 0 * ones])]
+        effort = np.hstack([effort, np.column_stack(
+            [np.asarray(result.held_efforts[name], dtype=float).reshape(n) for name in locked])])
+        names += list(locked)
+    return names, rows[0], rows[1], rows[2], effort
+
+
 def joint_trajectory(result: PlanResult, stamp_ns: int = 0) -> dict[str, Any]:
     """trajectory_msgs/JointTrajectory: one point per node (module docstring for effort);
     header.stamp = `stamp_ns` is the reference time of every time_from_start."""
     t = np.asarray(result.times, dtype=float)
-    effort = node_efforts(result)
+    names, position, velocity, acceleration, effort = published_joints(result)
     points = [
         {
-            "positions": _floats(result.joint_angles[n]),
-            "velocities": _floats(result.joint_velocities[n]),
-            "accelerations": _floats(result.joint_accelerations[n]),
+            "positions": _floats(position[n]),
+            "velocities": _floats(velocity[n]),
+            "accelerations": _floats(acceleration[n]),
             "effort": _floats(effort[n]),
             "time_from_start": time_msg(int(round((t[n] - t[0]) * NS_PER_S))),
         }
         for n in range(result.n_nodes)
     ]
-    return {"header": header(stamp_ns, ""), "joint_names": list(result.joint_angle_names),
-            "points": points}
+    return {"header": header(stamp_ns, ""), "joint_names": names, "points": points}
 
 
 def multibody_states(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
@@ -307,13 +331,13 @@ def contact_forces(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
 def joint_states(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
     """sensor_msgs/JointState per node: angles, rates and efforts (module docstring)."""
     stamps = node_stamps_ns(result, start_ns)
-    effort = node_efforts(result)
+    names, position, velocity, _, effort = published_joints(result)
     return [
         {
             "header": header(stamps[n], ""),
-            "name": list(result.joint_angle_names),
-            "position": _floats(result.joint_angles[n]),
-            "velocity": _floats(result.joint_velocities[n]),
+            "name": names,
+            "position": _floats(position[n]),
+            "velocity": _floats(velocity[n]),
             "effort": _floats(effort[n]),
         }
         for n in range(result.n_nodes)
@@ -329,15 +353,16 @@ def tf_messages(result: PlanResult, start_ns: int,
                 tree: KinematicTree | None = None) -> list[dict[str, Any]]:
     """tf2_msgs/TFMessage per node: world -> root and every moving URDF joint."""
     scene = result.scene
-    tree = tree or kinematic_tree(scene)
+    tree = tree or frame_tree(scene)
     stamps = node_stamps_ns(result, start_ns)
     root = scene.body_index(tree.root)
     messages = []
     for n in range(result.n_nodes):
         q = np.asarray(result.q[n], dtype=float)
-        D = q[12 * root + 3:12 * root + 12].reshape(3, 3).T
-        transforms = [_transform(stamps[n], WORLD_FRAME, tree.root, q[12 * root:12 * root + 3],
-                                 quaternion_msg(D))]
+        phi, D = q[12 * root:12 * root + 3], q[12 * root + 3:12 * root + 12].reshape(3, 3).T
+        if tree.root_pose is not None:  # the robot's base link in the root body's frame
+            phi, D = phi + D @ tree.root_pose[0], D @ tree.root_pose[1]
+        transforms = [_transform(stamps[n], WORLD_FRAME, tree.root, phi, quaternion_msg(D))]
         for joint in tree.moving_joints:
             angle = float(result.joint_angles[n][joint.angle_index])
             transforms.append(_transform(stamps[n], joint.parent, joint.child, joint.origin,
@@ -349,15 +374,32 @@ def tf_messages(result: PlanResult, start_ns: int,
 def tf_static(result: PlanResult, stamp_ns: int = 0,
               tree: KinematicTree | None = None) -> dict[str, Any]:
     """tf2_msgs/TFMessage of the fixed URDF joints (contact frames), stamped `stamp_ns`."""
-    tree = tree or kinematic_tree(result.scene)
-    identity = {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
-    return {"transforms": [_transform(stamp_ns, j.parent, j.child, j.origin, dict(identity))
+    tree = tree or frame_tree(result.scene)
+    return {"transforms": [_transform(stamp_ns, j.parent, j.child, j.origin,
+                                      quaternion_msg(rpy_matrix(j.rpy)))
                            for j in tree.fixed_joints]}
 
 
 def robot_description(result: PlanResult) -> dict[str, str]:
-    """std_msgs/String holding the URDF of the plan's scene (`gait_planner.io.urdf`)."""
+    """std_msgs/String holding the URDF of the plan's scene: the robot's own for a scene
+    drafted from one (`Scene.robot`), else `gait_planner.io.urdf.scene_to_urdf`'s."""
+    robot = result.scene.robot
+    if robot is not None:
+        if not robot.urdf:
+            raise ValueError(f"scene {result.scene.name!r}: its URDF {robot.urdf_file!r} "
+                             f"was not read")
+        return {"data": robot.urdf}
     return {"data": scene_to_urdf(result.scene)}
+
+
+def frame_tree(scene) -> KinematicTree:
+    """The frames /tf and /tf_static publish: the robot's own URDF's for a scene drafted
+    from one (`gait_planner.io.robot_tree`), else those of `gait_planner.io.urdf`."""
+    if scene.robot is not None:
+        from gait_planner.io.robot_tree import robot_tree
+
+        return robot_tree(scene)
+    return kinematic_tree(scene)
 
 
 def plan_response_fields(result: PlanResult, mcap_path: str | None,

@@ -122,12 +122,16 @@ class KinematicTree:
             of its link origin: zero for the root, the parent-joint point otherwise.
         joints: moving joints in the order of the joint angles, then the fixed joints.
         massless_links: intermediate and contact links (no inertia).
+        root_pose: (position (3,), rotation (3, 3)) of the root's link frame in the root
+            body's frame (COM origin, director axes); None: the same frame (this module's
+            URDF). A robot's own URDF (`gait_planner.io.robot_tree`) has its base link here.
     """
 
     root: str
     link_offsets: dict[str, np.ndarray]
     joints: tuple[KinematicJoint, ...]
     massless_links: tuple[str, ...]
+    root_pose: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def moving_joints(self) -> tuple[KinematicJoint, ...]:

@@ -49,6 +49,8 @@ YAML layout (exactly these keys; unknown keys are errors)::
       run:                            # a request's gait "run" (`gait:` is "walk")
         phases: [...]                 # keys given replace the gait block's; options are
         options: {...}                # merged entry by entry (`with_gait`)
+    robot: {urdf: robot.urdf, links: {...}}  # optional: the URDF drafted from
+                                      # (`gait_planner.model.robot_source`)
 
 Planar scenes (root type planar) move in the x-z plane: every joint is revolute about
 (0, 1, 0), and the initial root angles have yaw = roll = 0.
@@ -56,6 +58,7 @@ Planar scenes (root type planar) move in the x-z plane: every joint is revolute 
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import os
@@ -68,6 +71,7 @@ import yaml
 
 from gait_planner.model._validate import Checker, SceneError, check_gait, join, parse_yaml
 from gait_planner.model.posture import PostureError, check_posture
+from gait_planner.model.robot_source import check_robot
 from gait_planner.model.scene import (
     Body,
     Contact,
@@ -206,25 +210,28 @@ def load_scene_file(path: str | os.PathLike) -> Scene:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as error:
         raise SceneError(f"cannot be read: {error}", file=str(path)) from None
-    return scene_from_text(text, path.name)
+    return scene_from_text(text, path.name, path.parent)
 
 
-def scene_from_text(text: str, file: str) -> Scene:
+def scene_from_text(text: str, file: str, folder: str | os.PathLike | None = None) -> Scene:
     """Validate and build the scene whose YAML is `text`; `file` names it in errors (e.g. a
-    recording's scene attachment)."""
-    return _build_scene(parse_yaml(text, file), file, text)
+    recording's scene attachment); `folder` resolves the relative paths of its ``robot:``
+    section (None: its URDF is not read, `RobotSource.urdf` is "")."""
+    return _build_scene(parse_yaml(text, file), file, text,
+                        None if folder is None else Path(folder))
 
 
 # ---------------------------------------------------------------------------- the schema
 
 
-def _build_scene(data: Any, file: str, source: str) -> Scene:
+def _build_scene(data: Any, file: str, source: str, folder: Path | None = None) -> Scene:
     c = Checker(file)
     top = c.mapping(
         data,
         "",
         required=("name", "root", "bodies", "joints", "contacts", "initial_pose"),
-        optional=("description", "gravity", "allow_nonphysical_inertia", "gait", "gaits"),
+        optional=("description", "gravity", "allow_nonphysical_inertia", "gait", "gaits",
+                  "robot"),
     )
     name = c.string(top["name"], "name")
     if not SCENE_NAME_PATTERN.fullmatch(name):  # it starts the file names of recordings
@@ -242,6 +249,7 @@ def _build_scene(data: Any, file: str, source: str) -> Scene:
     contacts = _contacts(c, top["contacts"], bodies)
     pose = _initial_pose(c, top["initial_pose"], joints, root)
     gait = check_gait(c, top["gait"], bodies, contacts) if "gait" in top else None
+    robot = check_robot(c, top["robot"], bodies, folder) if "robot" in top else None
     scene = Scene(
         name=name,
         bodies=bodies,
@@ -254,6 +262,7 @@ def _build_scene(data: Any, file: str, source: str) -> Scene:
         description=description,
         source=source,
         gaits=_other_gaits(c, data, file),
+        robot=robot,
     )
     if gait is not None:
         try:
@@ -313,7 +322,8 @@ def with_gait(scene: Scene, gait: str) -> Scene:
     source = (f"# scene {scene.name!r} with its gait {gait!r} "
               f"(gait_planner.model.loader.with_gait)\n"
               + yaml.safe_dump(_plain(data), sort_keys=False, width=100))
-    return _build_scene(data, f"{scene.name} (gait {gait})", source)
+    return dataclasses.replace(_build_scene(data, f"{scene.name} (gait {gait})", source),
+                               robot=scene.robot)
 
 
 def _plain(value: Any) -> Any:

@@ -198,6 +198,34 @@ class Gait:
 
 
 @dataclass(frozen=True)
+class RobotSource:
+    """The URDF a scene was drafted from (`gait_planner.model.urdf_import`, the scene file's
+    ``robot:`` section): what the outputs publish as the robot's own description.
+
+    Attributes:
+        urdf_file: the URDF's path as the scene file gives it (relative: to that file).
+        urdf: its text; "" where the scene was rebuilt without it (a recording's scene
+            attachment: the recording's /robot_description holds it).
+        links: body -> (position (m), rpy (rad)) of the body's URDF link frame in the body's
+            frame (origin its centre of mass, axes its directors).
+        locked: the URDF's joints held fixed (merged into their parent), name -> rad.
+        package_dirs: folders that resolve the URDF's ``package://`` paths (relative: to the
+            scene file).
+    """
+
+    urdf_file: str
+    urdf: str
+    links: Mapping[str, tuple[Vec3, Vec3]]
+    locked: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
+    package_dirs: tuple[str, ...] = ()
+
+    def link_pose(self, body: str) -> tuple[np.ndarray, np.ndarray]:
+        """(position (3,), rotation (3, 3)) of `body`'s link frame in the body's frame."""
+        position, rpy = self.links[body]
+        return np.asarray(position, dtype=float), rpy_matrix(rpy)
+
+
+@dataclass(frozen=True)
 class Scene:
     """Everything a scene file declares. Bodies are in the order of the file."""
 
@@ -212,6 +240,7 @@ class Scene:
     description: str = ""
     source: str = ""  # the scene file's text, kept for recordings
     gaits: tuple[str, ...] = ()  # its other gaits (`gaits:`), `model.loader.with_gait`
+    robot: RobotSource | None = None  # the URDF it was drafted from (`robot:`)
 
     def body(self, name: str) -> Body:
         return next(b for b in self.bodies if b.name == name)

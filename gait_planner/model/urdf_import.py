@@ -176,7 +176,7 @@ def _find_feet(model, feet: Sequence[str] | None) -> tuple[int, int]:
     return left, right
 
 
-def _revolute_axis(model, joint: int) -> np.ndarray:
+def revolute_axis(model, joint: int) -> np.ndarray:
     """The unit axis (joint frame) of a 1-dof revolute joint; UrdfError otherwise."""
     joint_model = model.joints[joint]
     name = model.names[joint]
@@ -254,13 +254,18 @@ def _link_name(model, joint: int) -> str:
 
 def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
                 locked: Mapping[str, float] | None = None, name: str | None = None,
-                package_dirs: Sequence[str | Path] = ()) -> UrdfDraft:
-    """The scene of a URDF's legs (module docstring); UrdfError naming what is refused."""
+                package_dirs: Sequence[str | Path] = (), urdf_file: str = "robot.urdf",
+                robot_dirs: Sequence[str] = ()) -> UrdfDraft:
+    """The scene of a URDF's legs (module docstring); UrdfError naming what is refused.
+
+    `package_dirs` resolve the URDF's meshes here; the draft's ``robot:`` section names the
+    URDF as `urdf_file` and its mesh folders as `robot_dirs` (both as the scene file will
+    read them: relative to its folder, or absolute)."""
     pin = _pin()
     full, geometry = _read(urdf_text, [str(p) for p in package_dirs])
     left_foot, right_foot = _find_feet(full, feet)
     legs = _path(full, left_foot) + _path(full, right_foot)
-    axes = {full.names[j]: _revolute_axis(full, j) for j in legs}  # joint frame: kept by
+    axes = {full.names[j]: revolute_axis(full, j) for j in legs}  # joint frame: kept by
     # the reduction, which changes placements only
     locked = dict(locked or {})
     q_lock = pin.neutral(full)
@@ -293,9 +298,11 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     q0 = pin.neutral(model)
     pin.forwardKinematics(model, data, q0)
     contacts, half_widths = _foot_contacts(geometry, data, foot_ids, links)
+    source = {"urdf": urdf_file, **({"package_dirs": list(robot_dirs)} if robot_dirs else {}),
+              "locked": lock_angles}
     return _write(model, data, full, bodies, ids, axes, foot_ids, contacts, half_widths,
-                  lock_angles, left_of,
-                  name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"), changes)
+                  left_of, name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
+                  changes, source)
 
 
 def _foot_contacts(geometry, data, foot_ids, links) -> tuple[dict, dict[int, float]]:
@@ -356,7 +363,7 @@ def _lowest_points(obj, oMi) -> list[np.ndarray]:
 
 
 def _write(model, data, full, bodies, ids, axes, foot_ids, contacts, half_widths,
-           lock_angles, left_of, name, changes) -> UrdfDraft:
+           left_of, name, changes, source) -> UrdfDraft:
     order = [1] + list(ids.values())
     for foot, points in contacts.items():
         bodies[foot].points.update(points)
@@ -382,6 +389,11 @@ def _write(model, data, full, bodies, ids, axes, foot_ids, contacts, half_widths
             speeds[jname] = round(math.degrees(model.velocityLimit[jm.idx_v]), 6)
     local = {j: {p: bodies[j].local(v) for p, v in bodies[j].points.items()} for j in order}
     mirror_geometry({j: bodies[j].name for j in order}, left_of, local, joints)
+    # each body's link frame in its own: origin at the joint point (the root: -R^T com), R^T
+    links = {bodies[j].name: _round(np.r_[local[j][model.names[j]] if j != 1 else
+                                          bodies[1].local(np.zeros(3)),
+                                          matrix_rpy(bodies[j].R.T)]) for j in order}
+    lock_angles = source["locked"]
     mirror = {bodies[left_of[j]].name: bodies[j].name for j in order if j in left_of}
     z_sole = min(float(data.oMi[f].act(p)[2]) for f in foot_ids for p in contacts[f].values())
     hip = [data.oMi[_path(model, f)[0]].translation[2] for f in foot_ids]
@@ -423,6 +435,7 @@ def _write(model, data, full, bodies, ids, axes, foot_ids, contacts, half_widths
                         **({"joint_speed_max": min(speeds.values())} if speeds else {}),
                         "step_length_bounds": [round(0.6 * step, 4), round(1.4 * step, 4)]},
         },
+        "robot": {**source, "links": links},
     }
     header = (f"# Drafted by `gait-planner scene from-urdf` from the URDF robot {full.name!r}\n"
               f"# (gait_planner.model.urdf_import). Bodies: the leg links, directors their "

@@ -41,31 +41,35 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from gait_planner.gaitlib.index import LibraryError
 from gait_planner.gaitlib.serve import library_start
 from gait_planner.io import messages
 from gait_planner.io.atomic import remove_stale_temporaries
 from gait_planner.io.rrd_recorder import RrdRecorder
-from gait_planner.model.loader import load_scene, scene_dirs
+from gait_planner.model.loader import SceneError, load_scene, scene_dirs
+from gait_planner.model.urdf_errors import UrdfError
 from gait_planner.ocp.library import PlanLibrary
 from gait_planner.ocp.solve import STOPPED, Planner
 from gait_planner.pipeline import plan_and_record, prepare
 from gait_planner.request import PlanRequest, RequestError, plan_request
 from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
+from gait_planner.ros.robot_description import RobotScenes
 from gait_planner.ros.worker import Closed, Lapsed, PlanWorker, Stopped
 from gait_planner.walk.simulate import walk
 from gait_planner.walk.summary import format_summary, half_cycles_done
 from gait_planner_msgs.msg import ContactForces, MultibodyState
 from gait_planner_msgs.srv import PlanGait
+from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
 
 SERVICE = "/gait_planner/plan_gait"
 TOPIC_TRAJECTORY = "/gait_planner/joint_trajectory"
 TOPIC_STATE = "/gait_planner/state"
 TOPIC_FORCES = "/gait_planner/contact_forces"
+TOPIC_DESCRIPTION = "/robot_description"  # a robot's URDF, drafted into a scene on arrival
 BUSY = "busy: another plan is running (the node plans one request at a time); try again later"
 EXECUTOR_THREADS = 4  # a waiting plan request holds one; busy answers and cancels need others
 EXIT_GRACE = 0.5  # s a stopped plan gets to end at shutdown before the process leaves anyway
@@ -88,7 +92,9 @@ class GaitPlannerNode(Node):
         self._worker.on_lapse = self._on_lapse
         parameters.declare(self)
         folders = list(self._param("scene_dirs"))  # read-only: fixed for the node's life
-        self._scenes = functools.partial(load_scene, extra=folders)
+        self._scenes = RobotScenes(functools.partial(load_scene, extra=folders),
+                                   lambda: Path(self._param("output_dir")),
+                                   [d for d in self._param("robot_package_dirs") if d])
         missing = [f for f in folders if not Path(f).expanduser().is_dir()]
         if missing:
             self.get_logger().info(f"scene_dirs: no folder {missing} (skipped); scenes from "
@@ -107,7 +113,32 @@ class GaitPlannerNode(Node):
         self._pub_state = self.create_publisher(MultibodyState, TOPIC_STATE, qos)
         self._pub_forces = self.create_publisher(ContactForces, TOPIC_FORCES, qos)
         self.create_service(PlanGait, SERVICE, self._on_plan, callback_group=group)
+        self._describe(self._param("robot_description"), "the parameter robot_description")
+        self.add_post_set_parameters_callback(self._on_parameters)
+        latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.create_subscription(String, TOPIC_DESCRIPTION,
+                                 lambda msg: self._describe(msg.data, TOPIC_DESCRIPTION),
+                                 latched, callback_group=group)
         self._action = PlanGaitActionServer(self, self._worker, self._plan_into, group)
+
+    def _describe(self, urdf: str, source: str) -> None:
+        """Draft the robot of a URDF text (`RobotScenes.describe`); errors are logged, the
+        node keeps serving (requests for the robot then answer why)."""
+        if not urdf.strip():
+            return
+        try:
+            note = self._scenes.describe(urdf)
+        except (UrdfError, SceneError, OSError) as err:
+            self.get_logger().error(f"{source}: {err}")
+            return
+        if note:
+            self.get_logger().info(f"{source}: {note}")
+
+    def _on_parameters(self, changed: list) -> None:
+        for parameter in changed:
+            if parameter.name == "robot_description":
+                self._describe(parameter.value, "the parameter robot_description")
 
     def _prepare(self) -> None:
         """Build the default request's problem (parameter prepare_on_start); a failure

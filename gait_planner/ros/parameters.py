@@ -44,6 +44,16 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         "config/scenes, first match wins; relative ones: to the node's working folder; a "
         "missing folder is skipped (logged at start); requests name scenes by bare name; "
         "fixed at start", read_only=True)),
+    "robot_package_dirs": ([""], _descriptor(
+        ParameterType.PARAMETER_STRING_ARRAY,
+        "Folders that resolve the package:// mesh paths of the robot's URDF (relative: to "
+        "the node's working folder); empty entries are ignored; fixed at start",
+        read_only=True)),
+    "robot_description": ("", _descriptor(
+        ParameterType.PARAMETER_STRING,
+        "A robot's URDF text, as robot_state_publisher takes it: drafted into the scene "
+        "'robot_description' (gait_planner.ros.robot_description), as is every URDF "
+        "published on /robot_description; empty = only the topic's")),
     "default_scene": ("walker3d", _descriptor(
         ParameterType.PARAMETER_STRING,
         "Scene planned when a request names none (a file <name>.yaml in scene_dirs, "

@@ -213,12 +213,44 @@ def cardan_efforts(R_rel: np.ndarray, m_local: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------------------------------- the certificate
 
 
-def _switch_mask(active: Sequence[Sequence[str]]) -> np.ndarray:
+def switch_mask(active: Sequence[Sequence[str]]) -> np.ndarray:
     """(N+1,) bool: nodes whose contact set differs from the previous node's, and neighbours."""
     out = np.zeros(len(active), dtype=bool)
     for n in range(1, len(active)):
         if set(active[n]) != set(active[n - 1]):
             out[n - 1:n + 2] = True  # n-1 (the last node of the old set), n, n+1
+    return out
+
+
+def local_force(R: np.ndarray, origin: np.ndarray, wrench: np.ndarray) -> "pin.Force":
+    """A world wrench (6,) (force, moment about the world origin) as Pinocchio's external
+    force on a joint at `origin` (3,) with rotation `R` (3, 3): local force and moment."""
+    f, m_origin = np.asarray(wrench[:3]), np.asarray(wrench[3:])
+    return pin.Force(R.T @ f, R.T @ (m_origin - np.cross(origin, f)))
+
+
+def inverse_dynamics(model: "pin.Model", configs: Sequence[np.ndarray], times: np.ndarray,
+                     external) -> list[np.ndarray]:
+    """RNEA's generalized forces (nv,) at the inner nodes 1..N-1 of configurations `configs`
+    (N+1 of Pinocchio's q) at `times` (N+1,) s: central differences and the averaged
+    velocity terms of the module docstring; external(n, data) gives node n's external
+    forces per joint (called after forward kinematics at node n: data.oMi is set)."""
+    data = model.createData()
+    h = np.diff(times)
+    out = []
+    for n in range(1, len(configs) - 1):
+        xi_plus = pin.difference(model, configs[n], configs[n + 1]) / h[n]
+        xi_minus = -pin.difference(model, configs[n], configs[n - 1]) / h[n - 1]
+        a = (xi_plus - xi_minus) / (0.5 * (h[n - 1] + h[n]))
+        v = (h[n - 1] * xi_plus + h[n] * xi_minus) / (h[n - 1] + h[n])
+        pin.forwardKinematics(model, data, configs[n])
+        tau = pin.rnea(model, data, configs[n], v, a, external(n, data))
+        # velocity terms C(.) averaged over the two intervals (module docstring)
+        wm, wp = h[n - 1] / (h[n - 1] + h[n]), h[n] / (h[n - 1] + h[n])
+        tau += (wm * pin.nonLinearEffects(model, data, configs[n], xi_minus)
+                + wp * pin.nonLinearEffects(model, data, configs[n], xi_plus)
+                - pin.nonLinearEffects(model, data, configs[n], v))
+        out.append(tau.copy())
     return out
 
 
@@ -238,30 +270,22 @@ def certificate(scene: SceneData, times: np.ndarray, q: np.ndarray, efforts: np.
         raise ValueError(f"efforts {efforts.shape} do not match q {q.shape} and {len(names)} "
                          "effort names (at least 3 nodes)")
     model, joint_of = build_model(scene)
-    data = model.createData()
     configs = [pin_configuration(scene, model, row) for row in q]
-    h = np.diff(times)
     slots = {j.name: model.joints[model.getJointId(j.name)].idx_v for j in scene.joints}
-    torque, force, moment = [], [], []
-    for n in range(1, n_nodes - 1):
-        xi_plus = pin.difference(model, configs[n], configs[n + 1]) / h[n]
-        xi_minus = -pin.difference(model, configs[n], configs[n - 1]) / h[n - 1]
-        a = (xi_plus - xi_minus) / (0.5 * (h[n - 1] + h[n]))
-        v = (h[n - 1] * xi_plus + h[n] * xi_minus) / (h[n - 1] + h[n])
+
+    def external(n: int, data) -> list:
         frames = _frames(scene, q[n])
         fext = [pin.Force.Zero() for _ in range(model.njoints)]
         for body, wrench in foot_wrenches.items():
             phi, R = frames[body]
             origin = phi + R @ (np.zeros(3) if body == scene.root else
                                 next(j.child_point for j in scene.joints if j.child == body))
-            f, m_origin = np.asarray(wrench[n, :3]), np.asarray(wrench[n, 3:])
-            fext[joint_of[body]] = pin.Force(R.T @ f, R.T @ (m_origin - np.cross(origin, f)))
-        tau = pin.rnea(model, data, configs[n], v, a, fext)
-        # velocity terms C(.) averaged over the two intervals (module docstring)
-        wm, wp = h[n - 1] / (h[n - 1] + h[n]), h[n] / (h[n - 1] + h[n])
-        tau += (wm * pin.nonLinearEffects(model, data, configs[n], xi_minus)
-                + wp * pin.nonLinearEffects(model, data, configs[n], xi_plus)
-                - pin.nonLinearEffects(model, data, configs[n], v))
+            fext[joint_of[body]] = local_force(R, origin, wrench[n])
+        return fext
+
+    torque, force, moment = [], [], []
+    for n, tau in enumerate(inverse_dynamics(model, configs, times, external), start=1):
+        frames = _frames(scene, q[n])
         R_root = frames[scene.root][1]
         base_f, base_m = R_root @ tau[:3], R_root @ tau[3:6]
         if scene.planar:
@@ -283,7 +307,7 @@ def certificate(scene: SceneData, times: np.ndarray, q: np.ndarray, efforts: np.
         scene=scene.name, planar=scene.planar, nodes=np.arange(1, n_nodes - 1),
         times=times[1:-1], joint_names=names, torque_error=error,
         torque_error_relative=error / peak, base_force=np.array(force),
-        base_moment=np.array(moment), near_switch=_switch_mask(active_contacts)[1:-1],
+        base_moment=np.array(moment), near_switch=switch_mask(active_contacts)[1:-1],
         peak_effort=peak, weight=sum(b.mass for b in scene.bodies) * scene.gravity,
         wrench_source=wrench_source)
 
@@ -321,6 +345,13 @@ def certificate_of_recording(rec) -> ContinuousCertificate:
     missing = [n for n in effort_names(scene) if n not in names]
     if missing:
         raise ValueError(f"the JointTrajectory has no efforts {missing}")
-    efforts = np.asarray(rec.effort, dtype=float)[:, [names.index(n) for n in effort_names(scene)]]
+    columns = [names.index(n) for n in effort_names(scene)]
+    efforts = np.asarray(rec.effort, dtype=float)[:, columns]
     wrenches, source = foot_wrenches_of_recording(rec, scene)
+    if scene.robot_root is not None:  # drafted from a URDF: certified on it
+        from gait_planner.verify.robot import robot_certificate
+
+        return robot_certificate(scene, rec.urdf, rec.times, rec.q,
+                                 np.asarray(rec.positions, dtype=float)[:, columns], efforts,
+                                 wrenches, rec.active_contacts, source)[0]
     return certificate(scene, rec.times, rec.q, efforts, wrenches, rec.active_contacts, source)

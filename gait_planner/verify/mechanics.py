@@ -50,6 +50,10 @@ class SceneData:
     scaling_bounds: tuple[float, float] | None
     base_time_step: float | None
     options: dict[str, Any]
+    # the URDF it was drafted from (`robot:`): root link pose (position, rotation) in the
+    # root body's frame and the locked joints (name -> rad); None for hand-written scenes
+    robot_root: tuple[np.ndarray, np.ndarray] | None = None
+    robot_locked: dict[str, float] | None = None
 
     def body_index(self, name: str) -> int:
         return [b.name for b in self.bodies].index(name)
@@ -101,7 +105,16 @@ def parse_scene(text: str) -> SceneData:
         mirror=mirror, phases=phases,
         scaling_bounds=tuple(float(b) for b in bounds) if bounds else None,
         base_time_step=float(gait["base_time_step"]) if "base_time_step" in gait else None,
-        options=dict(gait.get("options") or {}))
+        options=dict(gait.get("options") or {}), **_robot(data.get("robot"), root))
+
+
+def _robot(robot: Any, root: str) -> dict[str, Any]:
+    """SceneData's robot fields of a ``robot:`` section (or none)."""
+    if not robot:
+        return {}
+    pose = [float(v) for v in robot["links"][root]]
+    return {"robot_root": (np.asarray(pose[:3]), _rpy(pose[3:])),
+            "robot_locked": {str(k): float(v) for k, v in (robot.get("locked") or {}).items()}}
 
 
 def _rpy(rpy) -> np.ndarray:

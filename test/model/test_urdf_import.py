@@ -24,63 +24,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gait_planner.model.angles import configuration, joint_angles
-from gait_planner.model.loader import scene_from_text
+from gait_planner.model.loader import SceneError, load_scene_file, scene_from_text
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import InitialPose
 from gait_planner.model.urdf_import import UrdfError, draft_scene
+from urdf_bipeds import AXES, biped
 
 ROUND_OFF = 1e-9
-AXES = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1", "-y": "0 -1 0"}
-
-
-def _inertial(mass: float, rpy: str, xyz: str,
-              moments=(0.02, 0.03, 0.04)) -> str:
-    return (f'<inertial><origin xyz="{xyz}" rpy="{rpy}"/><mass value="{mass}"/>'
-            f'<inertia ixx="{moments[0]}" iyy="{moments[1]}" izz="{moments[2]}" ixy="0" '
-            f'ixz="0" iyz="0"/></inertial>')
-
-
-def biped(tilt: float = 0.2, knee_axis: str = "y", foot_geometry: str | None = None,
-          knee_type: str = "revolute", knee_mass: float = 1.0, base_y: float = 0.0,
-          right_knee_mass: float | None = None) -> str:
-    """A three-joint-per-leg biped whose hip-roll frame is pitched by `tilt` (as G1's) and
-    whose feet carry `foot_geometry` (default: four small spheres at the sole's corners)."""
-    sphere = '<collision><origin xyz="{x} {y} -0.06"/><geometry><sphere radius="0.005"/>' \
-             '</geometry></collision>'
-    feet = foot_geometry if foot_geometry is not None else "".join(
-        sphere.format(x=x, y=y) for x in (-0.05, 0.12) for y in (-0.03, 0.03))
-    legs = []
-    for side, sign in (("left", 1.0), ("right", -1.0)):
-        mass = knee_mass if side == "left" or right_knee_mass is None else right_knee_mass
-        legs.append(f"""
-  <link name="{side}_hip_link">{_inertial(1.5, xyz=f"0 {0.02 * sign} -0.02", rpy=f"{0.1 * sign} -0.2 {0.3 * sign}")}</link>
-  <link name="{side}_thigh_link">{_inertial(2.0, xyz="0 0 -0.15", rpy=f"{0.1 * sign} 0.1 0")}</link>
-  <link name="{side}_shin_link">{_inertial(mass, xyz="0 0 -0.15", rpy=f"{0.1 * sign} -0.2 {0.3 * sign}")}</link>
-  <link name="{side}_foot_link">{_inertial(0.5, xyz="0.03 0 -0.04", rpy=f"0 0.05 {0.2 * sign}")}{feet}</link>
-  <joint name="{side}_hip_roll_joint" type="revolute">
-    <parent link="base_link"/><child link="{side}_hip_link"/>
-    <origin xyz="0 {0.1 * sign} -0.1" rpy="0 {-tilt} 0"/><axis xyz="1 0 0"/>
-    <limit lower="-0.5" upper="0.5" effort="80" velocity="20"/></joint>
-  <joint name="{side}_hip_pitch_joint" type="revolute">
-    <parent link="{side}_hip_link"/><child link="{side}_thigh_link"/>
-    <origin xyz="0 {0.05 * sign} -0.05" rpy="0 {tilt} 0"/><axis xyz="0 1 0"/>
-    <limit lower="-2" upper="2" effort="100" velocity="20"/></joint>
-  <joint name="{side}_knee_joint" type="{knee_type}">
-    <parent link="{side}_thigh_link"/><child link="{side}_shin_link"/>
-    <origin xyz="0 0 -0.3"/><axis xyz="{AXES[knee_axis]}"/>
-    <limit lower="-0.1" upper="2.5" effort="120" velocity="20"/></joint>
-  <joint name="{side}_ankle_joint" type="revolute">
-    <parent link="{side}_shin_link"/><child link="{side}_foot_link"/>
-    <origin xyz="0 0 -0.3"/><axis xyz="0 1 0"/>
-    <limit lower="-0.8" upper="0.6" effort="40" velocity="20"/></joint>""")
-    return f"""<?xml version="1.0"?>
-<robot name="biped">
-  <link name="base_link">{_inertial(10.0, xyz=f"0 {base_y} 0.1", rpy="0 0 0", moments=(0.3, 0.2, 0.15))}</link>
-  <link name="arm_link">{_inertial(1.0, xyz="0 0 0.2", rpy="0 0 0")}</link>
-  <joint name="waist_joint" type="revolute"><parent link="base_link"/><child link="arm_link"/>
-    <origin xyz="0 0 0.2"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="10" velocity="5"/></joint>
-  {"".join(legs)}
-</robot>"""
 
 
 def _scene_and_model(urdf: str):
@@ -203,3 +153,21 @@ def test_talos_is_refused_as_asymmetric(example_robots):
     urdf = (example_robots / "talos_data/robots/talos_reduced.urdf").read_text()
     with pytest.raises(UrdfError, match="leg_right_2_link.*mirror image"):
         draft_scene(urdf, package_dirs=[str(example_robots.parents[1])])
+
+
+def test_the_robot_section_names_the_urdf(tmp_path):
+    urdf = biped()
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "robots" / "biped.urdf").write_text(urdf)
+    draft = draft_scene(urdf, locked={"waist_joint": 0.25}, urdf_file="robots/biped.urdf")
+    (tmp_path / "biped.yaml").write_text(draft.yaml)
+    scene = load_scene_file(tmp_path / "biped.yaml")
+    assert scene.robot.urdf == urdf and dict(scene.robot.locked) == {"waist_joint": 0.25}
+    assert set(scene.robot.links) == {b.name for b in scene.bodies}
+    assert scene_from_text(draft.yaml, "biped.yaml").robot.urdf == ""  # no folder: not read
+    (tmp_path / "robots" / "biped.urdf").unlink()
+    with pytest.raises(SceneError, match=r"robot\.urdf: the robot's URDF .*biped\.urdf"):
+        load_scene_file(tmp_path / "biped.yaml")
+    broken = draft.yaml.replace("    base_link: [", "    no_such_body: [")
+    with pytest.raises(SceneError, match="unknown body 'no_such_body'"):
+        scene_from_text(broken, "broken.yaml")

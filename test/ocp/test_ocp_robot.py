@@ -38,8 +38,10 @@ pytestmark = pytest.mark.slow
 def bolt(example_robots, tmp_path_factory):
     """(URDF text, draft, Outcome) of Bolt planned and recorded once for the module."""
     folder = tmp_path_factory.mktemp("bolt")
-    urdf = (example_robots / "bolt_description/robots/bolt.urdf").read_text()
-    draft = draft_scene(urdf, package_dirs=[str(example_robots.parents[1])])
+    path = example_robots / "bolt_description/robots/bolt.urdf"
+    urdf = path.read_text()
+    draft = draft_scene(urdf, package_dirs=[str(example_robots.parents[1])],
+                        urdf_file=str(path))
     scene_file = write_draft(draft, folder / "bolt.yaml")
     outcome = plan_and_record(Planner(), PlanRequest(scene=str(scene_file), output_name="bolt",
                                                      compiled=False),

@@ -1,0 +1,113 @@
+"""The continuous-dynamics certificate on a robot's own URDF (a scene drafted from it).
+
+A scene drafted by `gait_planner.model.urdf_import` is the URDF's legs with every other
+joint locked and merged, its right side written as the left's mirror image within the
+importer's tolerances. Its plan is certified here on the URDF itself, not on the draft:
+Pinocchio's model of the original text on a free-flyer (``buildModelFromXML``), every joint
+of it moving, the planned joints at their published angles, the locked ones at their
+locked angle with zero rate. Inverse dynamics as for any plan
+(`gait_planner.verify.continuous.inverse_dynamics`: central differences, averaged velocity
+terms, the published foot wrenches on the feet's joints), so a certificate that passes
+says the published motion, efforts and ground forces are a motion of the robot the user
+described — including what the draft changed to make it symmetric.
+
+The locked joints' generalized forces are what holds them: their efforts in the
+JointTrajectory (`held_efforts`).
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from gait_planner.verify.continuous import (ContinuousCertificate, switch_mask,
+                                            effort_names, inverse_dynamics, local_force)
+from gait_planner.verify.mechanics import SceneData
+
+__all__ = ["robot_certificate"]
+
+
+def _set(model: pin.Model, q: np.ndarray, name: str, angle: float) -> None:
+    joint = model.joints[model.getJointId(name)]
+    if joint.nq == 2:  # continuous: (cos, sin)
+        q[joint.idx_q:joint.idx_q + 2] = np.cos(angle), np.sin(angle)
+    else:
+        q[joint.idx_q] = angle
+
+
+def robot_certificate(scene: SceneData, urdf: str, times: np.ndarray, q: np.ndarray,
+                      angles: np.ndarray, efforts: np.ndarray,
+                      foot_wrenches: Mapping[str, np.ndarray],
+                      active_contacts: Sequence[Sequence[str]],
+                      wrench_source: str = "recorded"
+                      ) -> tuple[ContinuousCertificate, dict[str, np.ndarray]]:
+    """(certificate, held efforts) of a drafted scene's plan on its URDF text `urdf`.
+
+    times (N+1,) s; q (N+1, 12 nb) director coordinates (the root's COM and directors place
+    the base link: `SceneData.robot_root`); angles, efforts (N+1, na) rad, N m in the order
+    of `effort_names(scene)` (the URDF's joints); foot_wrenches: link -> (N+1, 6) ground
+    force and moment about the world origin (world); held efforts: locked joint ->
+    (N+1,) N m, nodes 0 and N taking their neighbours' values (central differences need
+    both neighbours). ValueError naming a joint the URDF lacks or neither plans nor locks."""
+    if scene.robot_root is None:
+        raise ValueError(f"scene {scene.name!r} has no robot: section (not drafted from a URDF)")
+    times, q, angles, efforts = (np.asarray(a, dtype=float) for a in (times, q, angles, efforts))
+    names, locked = effort_names(scene), dict(scene.robot_locked or {})
+    model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
+    model.gravity = pin.Motion(np.array([0.0, 0.0, -scene.gravity]), np.zeros(3))
+    moving = [model.names[j] for j in range(2, model.njoints)]
+    unknown = [n for n in list(names) + list(locked) if n not in moving]
+    loose = [n for n in moving if n not in names and n not in locked]
+    if unknown or loose:
+        raise ValueError(f"the URDF does not match scene {scene.name!r}: "
+                         + (f"no joints {unknown}" if unknown else
+                            f"joints {loose} are neither planned nor locked"))
+    position, rotation = scene.robot_root
+    root = scene.body_index(scene.root)
+    configs = []
+    for row, angle_row in zip(q, angles):
+        phi, D = row[12 * root:12 * root + 3], row[12 * root + 3:12 * root + 12].reshape(3, 3).T
+        U, _, Vt = np.linalg.svd(D @ rotation)  # nearest rotation (round-off)
+        config = pin.neutral(model)
+        config[:3], config[3:7] = phi + D @ position, pin.Quaternion(U @ Vt).coeffs()
+        for name, angle in zip(names, angle_row):
+            _set(model, config, name, float(angle))
+        for name, angle in locked.items():
+            _set(model, config, name, angle)
+        configs.append(config)
+    joint_of = {body: model.frames[model.getFrameId(body)].parentJoint for body in foot_wrenches}
+
+    def external(n: int, data) -> list:
+        fext = [pin.Force.Zero() for _ in range(model.njoints)]
+        for body, wrench in foot_wrenches.items():
+            placement = data.oMi[joint_of[body]]
+            fext[joint_of[body]] = local_force(placement.rotation, placement.translation,
+                                               wrench[n])
+        return fext
+
+    v_index = {n: model.joints[model.getJointId(n)].idx_v for n in moving}
+    data = model.createData()
+    torque, force, moment, held = [], [], [], []
+    for n, tau in enumerate(inverse_dynamics(model, configs, times, external), start=1):
+        pin.forwardKinematics(model, data, configs[n])
+        base = data.oMi[1]
+        f, m_origin = base.rotation @ tau[:3], base.rotation @ tau[3:6]
+        com = q[n, 12 * root:12 * root + 3]
+        force.append(np.linalg.norm(f))
+        moment.append(np.linalg.norm(m_origin + np.cross(base.translation - com, f)))
+        torque.append([tau[v_index[name]] for name in names])
+        held.append([tau[v_index[name]] for name in locked])
+    error = np.array(torque) - efforts[1:-1]
+    peak = float(np.abs(efforts).max()) or 1.0
+    held = np.array(held).reshape(len(torque), len(locked))
+    held = np.vstack([held[:1], held, held[-1:]])
+    weight = sum(inertia.mass for inertia in model.inertias) * scene.gravity
+    cert = ContinuousCertificate(
+        scene=f"{scene.name} on its URDF", planar=False, nodes=np.arange(1, len(q) - 1),
+        times=times[1:-1], joint_names=names, torque_error=error,
+        torque_error_relative=error / peak, base_force=np.array(force),
+        base_moment=np.array(moment), near_switch=switch_mask(active_contacts)[1:-1],
+        peak_effort=peak, weight=weight, wrench_source=wrench_source)
+    return cert, {name: held[:, i] for i, name in enumerate(locked)}
