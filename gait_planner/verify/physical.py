@@ -9,7 +9,8 @@ n . p; stairs: z less the height of the tread under the point).
   own Coulomb cone about n, |F - (n . F) n| <= mu n . F, not only each foot's net force.
 * Swing clearance: a contact point is at ground height (height < `GROUND_BAND`) only where
   it is held (listed at the node), or at the node where it is released (listed at the node
-  before). Anywhere else it is a swing point sliding along the ground at zero force, which
+  before; at node 0, the node before is the previous half cycle's node N-2, mirrored: a
+  point foot lifts off at node 0 when its partner struck at the end). Anywhere else it is a swing point sliding along the ground at zero force, which
   a real foot would catch on: a scuff. In 3D, with the metadata's ``foot_half_width`` w,
   the point's two foot edges p -+ w d2 (d2 its body's lateral director) are checked too:
   the foot is as wide as the full contact's roll moment assumes.
@@ -121,6 +122,12 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
         failures.append(f"the force on {worst[0]} at node {worst[1]} leaves its own friction "
                         f"cone: |F_t| / (mu F_n) = {worst[2]:.3g}")
 
+    # before node 0 comes the previous half cycle's node N-2 mirrored (node N-1 is node 0's
+    # image, `gait_planner.ocp.walk_on`): what it held is released at node 0, a lift-off
+    halves = int(rec.metadata.get("half_cycle_nodes", n_nodes))  # N + 1
+    by_pair = {pair: c for c, pair in scene.contacts.items()}
+    released_at_start = {by_pair.get((scene.mirror[scene.contacts[c][0]], scene.contacts[c][1]))
+                         for c in active[halves - 3]} if halves >= 3 else set()
     lowest, scuffs = np.inf, []
     crossing, crossing_at = (np.inf if ground.stairs else np.nan), None
     half_width = 0.0 if scene.planar else float(rec.metadata.get("foot_half_width", 0.0))
@@ -128,7 +135,8 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
         labels, edges = _edges(mech, q, name, half_width)  # (n_nodes, e, 3)
         heights = ground.above(edges).min(axis=1)
         for n in range(n_nodes):
-            if name in active[n] or (n > 0 and name in active[n - 1]):
+            if name in active[n] or (name in active[n - 1] if n > 0 else
+                                     name in released_at_start):
                 continue
             lowest = min(lowest, float(heights[n]))
             if heights[n] < GROUND_BAND:

@@ -297,3 +297,21 @@ def test_walker3d_on_a_ramp_keeps_its_feet_flat_on_it_and_its_foot_edges_clear(l
         level.physical.max_point_friction_ratio, rel=1e-9)
     vertical = verify_plan(on_ramp(level_walker3d, -10.0, forces=False))
     assert _failed(vertical, "leaves its own friction cone")
+
+
+def test_a_swing_point_on_the_ground_at_node_0_is_a_scuff_unless_released_there(level_walk):
+    """Node 0 follows the previous half cycle's node N-2 mirrored: a point held there lifts
+    off at node 0 (Bolt's point foot) and may touch; any other swing point may not."""
+    rec = level_walk.single
+    mech = Mechanics(parse_scene(rec.scene_text))
+    assert not _failed(verify_plan(rec), "scuffing")
+    held_before = {c.replace("_r_", "_x_").replace("_l_", "_r_").replace("_x_", "_l_")
+                   for c in rec.active_contacts[rec.n_nodes - 3]}
+    swing = [c for c in mech.scene.contacts if c not in rec.active_contacts[0]
+             and c not in held_before]
+    assert swing  # walker3d: the swing foot's points at node 0
+    name = max(swing, key=lambda c: (mech.contact_matrix(c) @ rec.q[0])[2])
+    body, _ = mech.scene.contacts[name]
+    height = float((mech.contact_matrix(name) @ rec.q[0])[2])
+    report = verify_plan(_turned_at(rec, 0, body, name, height, 0.0))
+    assert _failed(report, "scuffing", f"('{name}', 0)")
