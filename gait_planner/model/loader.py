@@ -27,6 +27,8 @@ YAML layout (exactly these keys; unknown keys are errors)::
                                       # parent's directors; optional reference_rpy:
                                       # [r, p, y] rad, the child's directors in the parent's
                                       # at zero angle (URDF rpy; default aligned)
+                                      # a spherical joint's angles are <name>_pitch,
+                                      # _roll, _yaw, or its optional angle_names: [p, r, y]
     contacts:
       - {name: foot_r_heel, body: foot_r, point: heel}
     initial_pose:
@@ -392,7 +394,7 @@ def _joints(c: Checker, value: Any, bodies: tuple[Body, ...], root: Root) -> tup
             item,
             key,
             required=("name", "type", "parent", "parent_point", "child", "child_point"),
-            optional=("axis", "reference_rpy"),
+            optional=("axis", "reference_rpy", "angle_names"),
         )
         kind = c.choice(j["type"], join(key, "type"), JointType)
         ends = {}
@@ -413,6 +415,16 @@ def _joints(c: Checker, value: Any, bodies: tuple[Body, ...], root: Root) -> tup
         angles = (name,) if kind is JointType.REVOLUTE else tuple(
             f"{name}_{a}" for a in _SPHERICAL_ANGLES
         )
+        if "angle_names" in j:
+            nkey = join(key, "angle_names")
+            if kind is not JointType.SPHERICAL:
+                c.fail(nkey, "only a spherical joint names its angles (a revolute joint's "
+                       "angle is named as the joint)")
+            angles = tuple(c.name(a, join(nkey, k))
+                           for k, a in enumerate(c.sequence(j["angle_names"], nkey, 3)))
+            if len(set(angles)) < 3:
+                c.fail(nkey, f"its three angles (pitch, roll, yaw) need three names, got "
+                       f"{list(angles)}")
         for angle in angles:
             if angle in angle_owner:
                 c.fail(join(key, "name"), f"its angle name {angle!r} clashes with an angle of "

@@ -17,13 +17,18 @@ approximation of it:
 * **Joints.** Every leg joint is revolute: its axis in the parent's directors and its
   zero-angle reference R0 (the child's directors in the parent's at the URDF's zero pose,
   as `reference_rpy`), so the scene's joint angle is the URDF's (zero at the URDF's zero,
-  positive about its axis) and its name is the URDF joint's.
+  positive about its axis) and its name is the URDF joint's. Three revolute joints chained
+  by two massless links (a URDF's ball joint, as `gait-planner urdf` writes spherical
+  joints) whose axes meet in one point as pitch, roll, yaw: one spherical joint whose
+  angles are the three URDF joints' (`gait_planner.model.urdf_fuse`; exact; links with
+  mass are never fused).
 * **Contacts.** Each foot's collision geometry at the URDF zero pose: a sphere's lowest
   point, a box's lowest corners, a mesh's lowest vertices. With points ahead and behind
   the foot's centre, the rear ones make the ``heel`` and the front ones the ``forefoot``
   (each the centre of its group: two points per foot, as walker3d's foot, whose full
   contact also holds the roll about the heel-forefoot line); a single point makes a
-  point foot (the compass's phases).
+  point foot (the compass's phases). A foot without collision geometry: the links fixed
+  to it without mass (`gait-planner urdf`'s contact frames) are its points.
 * **Mirror.** Left and right bodies paired by their names (``left_``/``right_``,
   ``l_``/``r_``, ``_l``/``_r``, ``FL_``/``FR_``, ...). The half-cycle's mirror periodicity
   needs a symmetric robot: right and left data that differ by more than
@@ -42,8 +47,9 @@ approximation of it:
 
 Refused before anything is built, with the joint or link named (`UrdfError`): an
 unreadable or closed-chain description, a leg joint that is not revolute (prismatic,
-planar, floating, spherical), a moving leg body without mass or with a non-physical inertia,
-fewer than two feet, a foot without collision geometry, a mesh that cannot be read.
+planar, floating, spherical), a moving leg body without mass (other than a ball joint's)
+or with a non-physical inertia, fewer than two feet, a foot without collision geometry or
+contact frames, a mesh that cannot be read.
 """
 
 from __future__ import annotations
@@ -61,6 +67,7 @@ import yaml
 
 from gait_planner.model.rotations import matrix_rpy
 from gait_planner.model.urdf_errors import UrdfError
+from gait_planner.model.urdf_fuse import ball_points, find_balls
 from gait_planner.model.urdf_mirror import S, mirror_geometry, mirrored_inertias
 
 __all__ = ["UrdfDraft", "UrdfError", "draft_scene"]
@@ -282,11 +289,13 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     ids = {full.names[j]: model.getJointId(full.names[j]) for j in legs}
     foot_ids = (ids[full.names[left_foot]], ids[full.names[right_foot]])
 
-    order = [1] + list(ids.values())
-    links = {j: _link_name(model, j) for j in order}
+    links = {j: _link_name(model, j) for j in [1] + list(ids.values())}
+    balls = find_balls(model, list(ids.values()), links)
+    inner = {j for ball in balls for j in ball.joints[:2]}  # carry the massless links
     bodies: dict[int, _Body] = {}
     changes: list[str] = []
-    inertias, left_of = mirrored_inertias(model, links, changes)
+    inertias, left_of = mirrored_inertias(
+        model, {j: link for j, link in links.items() if j not in inner}, changes)
     for joint, (mass, com, inertia) in inertias.items():
         if joint in left_of:  # a right link: the left one's principal axes mirrored
             left = bodies[left_of[joint]]
@@ -297,17 +306,19 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     data = model.createData()
     q0 = pin.neutral(model)
     pin.forwardKinematics(model, data, q0)
-    contacts, half_widths = _foot_contacts(geometry, data, foot_ids, links)
+    contacts, half_widths = _foot_contacts(model, geometry, data, foot_ids, links)
     source = {"urdf": urdf_file, **({"package_dirs": list(robot_dirs)} if robot_dirs else {}),
               "locked": lock_angles}
-    return _write(model, data, full, bodies, ids, axes, foot_ids, contacts, half_widths,
+    return _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
                   left_of, name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
                   changes, source)
 
 
-def _foot_contacts(geometry, data, foot_ids, links) -> tuple[dict, dict[int, float]]:
+def _foot_contacts(model, geometry, data, foot_ids, links) -> tuple[dict, dict[int, float]]:
     """(foot joint -> {"heel": p, "forefoot": p} or {"foot": p}, joint-frame points; foot
-    joint -> the sole's half width (its points' lateral spread), flat feet only)."""
+    joint -> the sole's half width (its points' lateral spread), flat feet with a width
+    only). A foot without collision geometry: the links fixed to it without mass (contact
+    frames, as `gait-planner urdf` writes them) are its points."""
     out, half_widths = {}, {}
     for foot in foot_ids:
         lowest: list[np.ndarray] = []  # joint-frame points
@@ -316,9 +327,13 @@ def _foot_contacts(geometry, data, foot_ids, links) -> tuple[dict, dict[int, flo
                 continue
             lowest += _lowest_points(obj, data.oMi[foot])
         link = links[foot]
+        lowest = lowest or [np.array(f.placement.translation) for f in model.frames
+                            if f.parentJoint == foot and f.type == _pin().FrameType.BODY
+                            and f.name != link and f.inertia.mass == 0]
         if not lowest:
-            raise UrdfError(f"foot link {link!r} has no collision geometry: its contact "
-                            f"points come from its <collision> spheres, boxes or meshes")
+            raise UrdfError(f"foot link {link!r} has no collision geometry and no massless "
+                            f"links fixed to it: its contact points come from its "
+                            f"<collision> spheres, boxes or meshes, or else from such links")
         world = np.array([data.oMi[foot].act(p) for p in lowest])
         z0 = world[:, 2].min()
         on_sole = world[:, 2] <= z0 + 1e-3
@@ -330,7 +345,8 @@ def _foot_contacts(geometry, data, foot_ids, links) -> tuple[dict, dict[int, flo
         middle = 0.5 * (wpts[:, 0].min() + wpts[:, 0].max())
         out[foot] = {"heel": pts[wpts[:, 0] < middle].mean(axis=0),
                      "forefoot": pts[wpts[:, 0] >= middle].mean(axis=0)}
-        half_widths[foot] = 0.5 * float(np.ptp(wpts[:, 1]))
+        if np.ptp(wpts[:, 1]) > 0:
+            half_widths[foot] = 0.5 * float(np.ptp(wpts[:, 1]))
     return out, half_widths
 
 
@@ -362,22 +378,30 @@ def _lowest_points(obj, oMi) -> list[np.ndarray]:
     return list(local[height <= height.min() + 1e-3])
 
 
-def _write(model, data, full, bodies, ids, axes, foot_ids, contacts, half_widths,
+def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
            left_of, name, changes, source) -> UrdfDraft:
-    order = [1] + list(ids.values())
+    order = [1] + [j for j in ids.values() if j in bodies]
     for foot, points in contacts.items():
         bodies[foot].points.update(points)
+    ball_of = {ball.joints[2]: ball for ball in balls}
     joints, limits, efforts, speeds = {}, {}, {}, {}
     for jname, jid in ids.items():
-        parent = int(model.parents[jid])
-        placement = model.jointPlacements[jid]
-        bp, bc = bodies[parent], bodies[jid]
-        axis = axes[jname]
-        bp.points[jname] = placement.translation
-        bc.points[jname] = np.zeros(3)
-        joints[jname] = {"parent": bp.name, "child": bc.name,
-                         "axis": bp.R.T @ placement.rotation @ axis,
-                         "reference": bp.R.T @ placement.rotation @ bc.R}
+        if jid in ball_of:  # the ball's last joint: the ball is one spherical joint
+            ball = ball_of[jid]
+            bp, bc = bodies[int(model.parents[ball.joints[0]])], bodies[jid]
+            bp.points[ball.name], bc.points[ball.name] = ball_points(
+                model, ball, axes, bp.R, bc.R, bp.name, bc.name)
+            joints[ball.name] = {"parent": bp.name, "child": bc.name,
+                                 "entry": ball.entry(bp.name, bc.name)}
+        elif jid in bodies:
+            parent = int(model.parents[jid])
+            placement = model.jointPlacements[jid]
+            bp, bc = bodies[parent], bodies[jid]
+            bp.points[jname] = placement.translation
+            bc.points[jname] = np.zeros(3)
+            joints[jname] = {"parent": bp.name, "child": bc.name,
+                             "axis": bp.R.T @ placement.rotation @ axes[jname],
+                             "reference": bp.R.T @ placement.rotation @ bc.R}
         jm = model.joints[jid]
         lo, hi = float(model.lowerPositionLimit[jm.idx_q]), float(model.upperPositionLimit[jm.idx_q])
         if jm.nq == 1 and abs(lo) < 1e10 and abs(hi) < 1e10:
@@ -390,7 +414,8 @@ def _write(model, data, full, bodies, ids, axes, foot_ids, contacts, half_widths
     local = {j: {p: bodies[j].local(v) for p, v in bodies[j].points.items()} for j in order}
     mirror_geometry({j: bodies[j].name for j in order}, left_of, local, joints)
     # each body's link frame in its own: origin at the joint point (the root: -R^T com), R^T
-    links = {bodies[j].name: _round(np.r_[local[j][model.names[j]] if j != 1 else
+    links = {bodies[j].name: _round(np.r_[local[j][ball_of[j].name if j in ball_of else
+                                                   model.names[j]] if j != 1 else
                                           bodies[1].local(np.zeros(3)),
                                           matrix_rpy(bodies[j].R.T)]) for j in order}
     lock_angles = source["locked"]
@@ -409,19 +434,22 @@ def _write(model, data, full, bodies, ids, axes, foot_ids, contacts, half_widths
             contact_names[(side[foot], point)] = cname
             contact_yaml.append({"name": cname, "body": bodies[foot].name, "point": point})
     step = round(WALKER3D_STEP_RATIO * leg, 4)
+    fused = f" ({3 * len(balls)} as {len(balls)} spherical)" if balls else ""
     scene = {
         "name": name,
         "description": f"Legs of the URDF robot {full.name!r}: {len(ids)} revolute joints "
-                       f"planned, {len(lock_angles)} locked (gait-planner scene from-urdf).",
+                       f"planned{fused}, {len(lock_angles)} locked (gait-planner scene "
+                       f"from-urdf).",
         "gravity": 9.81,
         "root": {"body": root.name, "type": "free"},
         "bodies": [{"name": bodies[j].name, "mass": round(bodies[j].mass, 12),
                     "inertia": _round(bodies[j].moments),
                     "points": {p: _round(v) for p, v in local[j].items()}} for j in order],
-        "joints": [{"name": jname, "type": "revolute", "axis": _round(j["axis"]),
-                    "reference_rpy": _round(matrix_rpy(j["reference"])),
-                    "parent": j["parent"], "parent_point": jname, "child": j["child"],
-                    "child_point": jname} for jname, j in joints.items()],
+        "joints": [j.get("entry") or {
+            "name": jname, "type": "revolute", "axis": _round(j["axis"]),
+            "reference_rpy": _round(matrix_rpy(j["reference"])), "parent": j["parent"],
+            "parent_point": jname, "child": j["child"], "child_point": jname}
+            for jname, j in joints.items()],
         "contacts": contact_yaml,
         "initial_pose": {"root_position": _round(com_world),
                          "root_angles": _round(matrix_rpy(root.R)[::-1])},

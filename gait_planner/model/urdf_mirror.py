@@ -90,7 +90,9 @@ def mirror_geometry(names: dict[int, str], left_of: dict[int, int], local, joint
     the right joints' axes and references (`joints`: name -> {"parent", "child", "axis",
     "reference"}) as the left ones' mirror images, and the base's points as their own
     (a point named for a side as its partner's image, any other one on the mirror plane);
-    `names`: joint -> link name, `left_of` from `mirrored_inertias` (module docstring)."""
+    `names`: joint -> link name, `left_of` from `mirrored_inertias` (module docstring).
+    Spherical joints (no "axis") are exact in their parents' directors
+    (`gait_planner.model.urdf_fuse`), so mirror images once their bodies are."""
     pairs = [(left, right) for right, left in left_of.items()]
     pairs += [(j, j) for j in names if j not in left_of and j not in left_of.values()]
     for left, right in pairs:
@@ -108,7 +110,7 @@ def mirror_geometry(names: dict[int, str], left_of: dict[int, int], local, joint
     rights = {names[j] for j in left_of}
     for name, joint in joints.items():
         other = mirror_name(name)[0]
-        if other not in joints or joint["parent"] not in rights and joint["child"] not in rights:
+        if "axis" not in joint or other not in joints or joint["parent"] not in rights and joint["child"] not in rights:
             continue
         left, right = joints[other], joint
         image = -S @ left["axis"]

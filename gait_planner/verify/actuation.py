@@ -61,8 +61,7 @@ def effort_slots(scene: SceneData, names: Sequence[str]) -> dict[str, list[int]]
     """joint -> indices of its effort components in the JointTrajectory, or a failure."""
     slots = {}
     for j in scene.joints:
-        wanted = [j.name] if j.axis is not None else [f"{j.name}_{a}"
-                                                      for a in ("pitch", "roll", "yaw")]
+        wanted = list(j.angles)
         missing = [w for w in wanted if w not in names]
         if missing:
             return f"the JointTrajectory names no effort slots {missing} of joint {j.name}"

@@ -130,9 +130,9 @@ class ContinuousCertificate:
 
 
 def effort_names(scene: SceneData) -> tuple[str, ...]:
-    """Effort (joint angle) names in scene joint order: j_pitch, j_roll, j_yaw or j."""
-    return tuple(n for j in scene.joints for n in (
-        [j.name] if j.axis is not None else [f"{j.name}_{a}" for a in ("pitch", "roll", "yaw")]))
+    """Effort (joint angle) names in scene joint order: j_pitch, j_roll, j_yaw (or the
+    spherical joint's angle_names) or j."""
+    return tuple(n for j in scene.joints for n in j.angles)
 
 
 def _revolute(axis: np.ndarray):

@@ -60,9 +60,8 @@ def angle_mirror(scene: SceneData, names) -> np.ndarray:
             P[names.index(partner.name), names.index(j.name)] = \
                 swapped * float((-MIRROR * j.axis) @ partner.axis)
             continue
-        for axis, sign in (("pitch", 1.0), ("roll", -1.0), ("yaw", -1.0)):
-            P[names.index(f"{partner.name}_{axis}"), names.index(f"{j.name}_{axis}")] = \
-                swapped * sign
+        for mine, theirs, sign in zip(j.angles, partner.angles, (1.0, -1.0, -1.0)):
+            P[names.index(theirs), names.index(mine)] = swapped * sign  # pitch, roll, yaw
     return P
 
 

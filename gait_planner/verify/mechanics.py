@@ -31,6 +31,8 @@ class JointData:
     child_point: np.ndarray
     axis: np.ndarray | None  # unit, parent's director components (revolute)
     reference: np.ndarray  # (3, 3) child's directors in the parent's at zero angle
+    angles: tuple[str, ...]  # its angle (effort) names: j, or j_pitch, j_roll, j_yaw or
+    # the spherical joint's angle_names
 
 
 @dataclass(frozen=True)
@@ -78,10 +80,13 @@ def parse_scene(text: str) -> SceneData:
             axis = axis / np.linalg.norm(axis)
         elif j["type"] != "spherical":
             raise ValueError(f"joint {j['name']!r}: unknown type {j['type']!r}")
+        angles = (str(j["name"]),) if axis is not None else tuple(
+            str(a) for a in j.get("angle_names") or
+            [f"{j['name']}_{a}" for a in ("pitch", "roll", "yaw")])
         joints.append(JointData(
             str(j["name"]), str(j["type"]), str(j["parent"]),
             by_name[j["parent"]].points[j["parent_point"]], str(j["child"]),
-            by_name[j["child"]].points[j["child_point"]], axis, reference))
+            by_name[j["child"]].points[j["child_point"]], axis, reference, angles))
     root = str(data["root"]["body"])
     ordered, stack = [], [j for j in joints if j.parent == root][::-1]
     while stack:  # depth first from the root: parents before children

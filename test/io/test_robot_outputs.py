@@ -3,8 +3,9 @@
 * /tf and /tf_static (`gait_planner.io.robot_tree`): composed from ``world`` as a tf
   listener does, every link of the original URDF lands where Pinocchio's forward kinematics
   of that URDF puts it (1e-9 m), for any joint angles, root pose, tilted joint frames and a
-  locked joint away from zero (hypothesis); each contact frame lands on the plan's contact
-  point.
+  locked joint away from zero (hypothesis), and for walker3d's own URDF imported back (its
+  hips and ankles fused into spherical joints); each contact frame lands on the plan's
+  contact point.
 * The JointTrajectory carries the locked joints after the planned ones, held at their
   angle with the efforts the URDF certificate computed, and refuses to publish without them.
 * The certificate on the original URDF (`gait_planner.verify.robot`) and the one on the
@@ -28,7 +29,8 @@ from hypothesis import strategies as st
 from gait_planner.io.messages import published_joints
 from gait_planner.io.robot_tree import robot_tree
 from gait_planner.model.angles import angle_names, configuration
-from gait_planner.model.loader import scene_from_text
+from gait_planner.io.urdf import scene_to_urdf
+from gait_planner.model.loader import load_scene, scene_from_text
 from gait_planner.model.rotations import rot_axis, rpy_matrix
 from gait_planner.model.scene import InitialPose
 from gait_planner.model.urdf_import import draft_scene
@@ -50,10 +52,12 @@ def _robot_scene(tilt: float = 0.2, lock: float = LOCK):
 
 
 def _pose(scene, angles, root) -> np.ndarray:
-    names = angle_names(scene)
+    values, k = {}, 0
+    for joint in scene.joints:  # angles in the order of angle_names(scene)
+        values[joint.name], k = tuple(angles[k:k + joint.dof]), k + joint.dof
     return configuration(scene, InitialPose(
         root_position=tuple(np.asarray(scene.initial_pose.root_position) + root[:3]),
-        root_angles=tuple(root[3:]), joint_angles={n: (a,) for n, a in zip(names, angles)}))
+        root_angles=tuple(root[3:]), joint_angles=values))
 
 
 def _tf_world(scene, q: np.ndarray, angles) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -74,19 +78,32 @@ def _tf_world(scene, q: np.ndarray, angles) -> dict[str, tuple[np.ndarray, np.nd
     return world
 
 
+def _walker3d_round_trip():
+    urdf = scene_to_urdf(load_scene("walker3d"))
+    scene = scene_from_text(draft_scene(urdf).yaml, "walker3d_urdf.yaml")
+    return urdf, None, dataclasses.replace(scene, robot=dataclasses.replace(scene.robot,
+                                                                            urdf=urdf))
+
+
 @settings(max_examples=15, deadline=None)
-@given(tilt=st.floats(-0.6, 0.6), angles=st.lists(st.floats(-1, 1), min_size=8, max_size=8),
-       root=st.lists(st.floats(-0.5, 0.5), min_size=6, max_size=6))
-def test_tf_puts_every_link_where_pinocchio_does(tilt, angles, root):
-    urdf, draft, scene = _robot_scene(tilt)
+@given(tilt=st.floats(-0.6, 0.6), angles=st.lists(st.floats(-1, 1), min_size=14, max_size=14),
+       root=st.lists(st.floats(-0.5, 0.5), min_size=6, max_size=6),
+       walker3d=st.booleans())
+def test_tf_puts_every_link_where_pinocchio_does(tilt, angles, root, walker3d):
+    """The synthetic biped (8 revolute joints, a waist locked at LOCK) or walker3d's own
+    export imported back (hips and ankles fused into spherical joints, 14 angles)."""
+    urdf, _, scene = _walker3d_round_trip() if walker3d else _robot_scene(tilt)
+    angles = angles[:len(angle_names(scene))]
     q = _pose(scene, angles, np.asarray(root))
     world = _tf_world(scene, q, angles)
     model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
     base_p, base_R = world[scene.root.body]
     q_pin = pin.neutral(model)
     q_pin[:3], q_pin[3:7] = base_p, pin.Quaternion(base_R).coeffs()
-    for name, a in list(zip(angle_names(scene), angles)) + [("waist_joint", LOCK)]:
-        q_pin[model.joints[model.getJointId(name)].idx_q] = a
+    for name, a in list(zip(angle_names(scene), angles)) + list(scene.robot.locked.items()):
+        joint = model.joints[model.getJointId(name)]  # continuous joints: (cos, sin)
+        q_pin[joint.idx_q:joint.idx_q + joint.nq] = (np.cos(a), np.sin(a)) if joint.nq == 2 \
+            else a
     data = model.createData()
     pin.framesForwardKinematics(model, data, q_pin)
     links = [f for f in model.frames if f.type == pin.FrameType.BODY]
