@@ -121,7 +121,7 @@ class ReferenceController:
         self.feet = [model.body(scene.contact(sorted(c)[0]).body).id for _, c in self.legs]
         self.root = model.body(wm.root).id
         self.joint_ids = np.array([model.joint(n).id for n in angle_names(scene)])
-        self.contact_body = {c.name: model.body(c.name).id for c in scene.contacts}
+        self.contact_site = dict(zip((c.name for c in scene.contacts), wm.contact_sites))
         self.points = {c.name: (scene.body_index(c.body),
                                 np.asarray(scene.body(c.body).points[c.point]))
                        for c in scene.contacts}
@@ -152,7 +152,7 @@ class ReferenceController:
             _, D_ref = ref.root_at(t)
             mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_BODY, self.root,
                                      self._vel, 0)
-            D, w_ref = data.xmat[self.root].reshape(3, 3), ref.root_rate_at(t, h)
+            D, w_ref = data.site_xmat[wm.root_site].reshape(3, 3), ref.root_rate_at(t, h)
             for idx in stance:
                 fb[idx] += torso_torque(g, D, D_ref, self._vel[:3], w_ref,
                                         data.xaxis[self.joint_ids[idx]]) / len(stance)
@@ -171,7 +171,7 @@ class ReferenceController:
         mujoco.mj_subtreeVel(self.model, data)
         q_ref = ref.q_at(t)
         planned = np.mean([self.planned_point(q_ref, c) for c in active], axis=0)
-        support = np.mean([data.xpos[self.contact_body[c]] for c in active], axis=0)
+        support = np.mean([data.site_xpos[self.contact_site[c]] for c in active], axis=0)
         com_rate = (ref.com_at(t + h) - ref.com_at(t - h)) / (2 * h)
         return placement_shift(self.gains,
                                data.subtree_com[self.root] - support - (ref.com_at(t) - planned),

@@ -18,6 +18,7 @@ import numpy as np
 import yaml
 
 from gait_planner.walk.controller import Gains, ReferenceController
+from gait_planner.walk.robot_urdf import RobotUrdf
 
 __all__ = ["CONFIG", "ground_forces", "load_config", "walk"]
 
@@ -76,13 +77,15 @@ def _rms(x) -> float:
 
 def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
          config: dict[str, Any] | None = None, series: bool = False,
-         progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
+         progress: Callable[[int, int], None] | None = None,
+         robot: RobotUrdf | None = None) -> dict[str, Any]:
     """The walk of the module docstring; scale multiplies the plan's efforts (the
     self-test); series adds the per-step trace (key "series"); progress(walked, steps) is
-    called at every half cycle's end."""
+    called at every half cycle's end; robot: walk a drafted plan on the robot's own URDF
+    (`walk.mujoco_model`) instead of the recording's /robot_description."""
     import mujoco
 
-    from gait_planner.walk.mujoco_model import build_model, plan_qpos
+    from gait_planner.walk.mujoco_model import build_model, plan_qpos, plan_root_qvel
     from gait_planner.walk.reference import Reference
 
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
@@ -97,21 +100,18 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     half_width = float(rec.metadata.get("foot_half_width", 0.04575))
     sim = cfg["simulation"]
     wm = build_model(rec, scene, half_width, sim["foot_sphere_radius"], sim["time_step"],
-                     sim["contact_time_constant"], cfg["joints"]["kd"])
+                     sim["contact_time_constant"], cfg["joints"]["kd"], robot)
     model, data = wm.model, mujoco.MjData(wm.model)
     place = cfg["placement"]
     gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], cfg["torso"]["kp"], cfg["torso"]["kd"],
                   place["kp"], place["kd"])
     control = ReferenceController(model, wm, ref, gains, place["max_shift"], scale)
-    root_id = model.body(wm.root).id
+    root_site = wm.root_site
 
     i_root = scene.body_index(scene.root.body)
     data.qpos[:] = plan_qpos(wm, i_root, ref.q[0], ref.angles[0])
-    v0, w0 = ref.root_rate0
-    if wm.planar:
-        data.qvel[:3] = v0[0], v0[2], w0[1]
-    else:
-        data.qvel[:6] = np.r_[v0, ref.root_at(0.0)[1].T @ w0]
+    root_qvel = plan_root_qvel(wm, ref.root_at(0.0)[1], *ref.root_rate0)
+    data.qvel[:len(root_qvel)] = root_qvel
     data.qvel[wm.dof] = ref.rates[0]
 
     stop = cfg["stop"]
@@ -121,7 +121,6 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     trace: dict[str, list] = {k: [] for k in ("time", "position", "velocity", "torso",
                                               "torso_ref", "ground_force",
                                               "contact_position")}
-    contact_ids = [model.body(c.name).id for c in scene.contacts]
     drift, placement, per_half, boundaries, start = [], [], [], 1, 0
     reason = "completed"
     while data.time < t_end - 0.5 * h:
@@ -137,20 +136,20 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         ffs.append(ff)
         fbs.append(fb)
         plans.append(plan_effort)
-        com = data.xpos[root_id].copy()
+        com = data.site_xpos[root_site].copy()
         phi_ref, D_ref = ref.root_at(t)
-        tilt = math.degrees(math.acos(np.clip(data.xmat[root_id].reshape(3, 3)[:, 2] @ D_ref[:, 2],
-                                              -1, 1)))
+        tilt = math.degrees(math.acos(np.clip(
+            data.site_xmat[root_site].reshape(3, 3)[:, 2] @ D_ref[:, 2], -1, 1)))
         if series:
             trace["time"].append(t)
             trace["position"].append(data.qpos[wm.qpos].copy())
             trace["velocity"].append(data.qvel[wm.dof].copy())
-            trace["torso"].append(np.r_[com, data.xmat[root_id]])
+            trace["torso"].append(np.r_[com, data.site_xmat[root_site]])
             trace["torso_ref"].append(np.r_[phi_ref, D_ref.reshape(-1)])
-            trace["contact_position"].append(data.xpos[contact_ids].copy())
+            trace["contact_position"].append(data.site_xpos[wm.contact_sites].copy())
         mujoco.mj_step2(model, data)
         if series:  # the contact forces of that state, solved in mj_step2
-            trace["ground_force"].append(ground_forces(model, data, contact_ids))
+            trace["ground_force"].append(ground_forces(model, data, wm))
         worst = int(np.argmax(np.abs(errs[-1])))
         if com[2] < phi_ref[2] - stop["height_drop"]:
             reason = (f"fall: torso centre of mass {com[2]:.3f} m high, "
@@ -165,7 +164,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
             break
         if data.time >= boundaries * ref.period - 0.5 * h:
             mujoco.mj_kinematics(model, data)
-            drift.append((data.xpos[root_id] - ref.root_at(data.time)[0]).tolist())
+            drift.append((data.site_xpos[root_site] - ref.root_at(data.time)[0]).tolist())
             placement.append(_placement_error(ref, data, control))
             per_half.append(_rms(np.degrees(errs[start:])))
             start = len(errs)
@@ -193,21 +192,22 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     }
 
 
-def ground_forces(model, data, contact_ids: list[int]) -> np.ndarray:
-    """(n_contacts, 3) N, world: the ground's force on each planned contact point's spheres,
-    summed, from the contacts MuJoCo solved in the last step."""
+def ground_forces(model, data, wm) -> np.ndarray:
+    """(n_contacts, 3) N, world: the ground's force on each planned contact point's foot
+    geometry (`WalkModel.geom_contact`), summed, from the contacts MuJoCo solved in the last
+    step."""
     import mujoco
 
     ground = model.geom("ground").id
     force = np.zeros(6)
-    per_point = np.zeros((len(contact_ids), 3))
+    per_point = np.zeros((len(wm.contact_sites), 3))
     for c in range(data.ncon):
         geoms = (data.contact[c].geom1, data.contact[c].geom2)
-        body = model.geom_bodyid[geoms[1] if geoms[0] == ground else geoms[0]]
+        foot = geoms[1] if geoms[0] == ground else geoms[0]
         mujoco.mj_contactForce(model, data, c, force)
         # the contact frame's rows are its axes, the first the normal, from geom1 to geom2
         f = data.contact[c].frame.reshape(3, 3).T @ force[:3]
-        per_point[contact_ids.index(body)] += f if geoms[0] == ground else -f
+        per_point[wm.geom_contact[foot]] += f if geoms[0] == ground else -f
     return per_point
 
 
@@ -218,6 +218,6 @@ def _placement_error(ref, data, control) -> float:
     q_n = ref.q[n]
     worst = 0.0
     for c in ref.active[n]:
-        worst = max(worst, float(np.linalg.norm(data.xpos[control.contact_body[c]]
+        worst = max(worst, float(np.linalg.norm(data.site_xpos[control.contact_site[c]]
                                                 - control.planned_point(q_n, c))))
     return worst

@@ -1,0 +1,115 @@
+"""A drafted robot walks on its own URDF (`gait_planner.walk.robot_urdf`,
+`walk.director_frames`, `walk.mujoco_model.build_model(..., robot=...)`), checked without a
+plan on G1 and Bolt from the example-robot-data wheel:
+
+* the plan's frames sit where the scene puts them: at any root pose and leg angles, the
+  ``plan_root`` site is the scene's root centre of mass and directors, each ``plan_<contact>``
+  site the scene's contact point (1e-9 m), and the whole robot's centre of mass is the
+  scene's (0.1 mm, and the mass to 1e-5: the draft makes left and right data symmetric);
+* locked joints are welded at the draft's angles (G1's arms bent: the centre of mass
+  still agrees), only the feet's own collision geometry is left, each of it mapped to the
+  contact point it carries (G1: four 5 mm spheres per foot, heel pair and toe pair; Bolt:
+  the meshes of its lower leg and of the foot fixed to it);
+* a URDF that is not the scene's robot and a foot mesh that is not found are refused.
+"""
+
+from __future__ import annotations
+
+import types
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gait_planner.model.angles import angle_names, configuration
+from gait_planner.model.loader import scene_from_text
+from gait_planner.model.urdf_import import draft_scene
+
+mujoco = pytest.importorskip("mujoco")
+
+from gait_planner.walk.mujoco_model import build_model, plan_qpos  # noqa: E402
+from gait_planner.walk.robot_urdf import RobotUrdf  # noqa: E402
+
+G1 = "g1_description/urdf/g1_29dof_rev_1_0.urdf"
+BOLT = "bolt_description/robots/bolt.urdf"
+ARMS = {"left_shoulder_pitch_joint": -0.3, "right_shoulder_pitch_joint": -0.3,
+        "left_elbow_joint": 0.8, "right_elbow_joint": 0.8}
+
+
+def _walker(example_robots, path, locked=None):
+    text = (example_robots / path).read_text()
+    dirs = (str(example_robots.parents[1]),)
+    draft = draft_scene(text, locked=locked, package_dirs=dirs)
+    scene = scene_from_text(draft.yaml, f"{draft.name}.yaml")
+    rec = types.SimpleNamespace(metadata={}, path=path, joint_names=angle_names(scene))
+    wm = build_model(rec, scene, 0.03, 0.005, 5e-4, 0.005, 0.0,
+                     RobotUrdf(text, dirs, draft.locked))
+    return scene, wm, RobotUrdf(text, dirs, draft.locked)
+
+
+@pytest.mark.parametrize("path, locked", [(G1, None), (G1, ARMS), (BOLT, None)])
+def test_the_plans_frames_sit_where_the_scene_puts_them(example_robots, path, locked):
+    scene, wm, _ = _walker(example_robots, path, locked)
+    model, data = wm.model, mujoco.MjData(wm.model)
+    rng = np.random.default_rng(7)
+    names = angle_names(scene)
+    for _ in range(3):
+        angles = rng.uniform(-0.4, 0.4, len(names))
+        pose = replace(scene.initial_pose, root_position=tuple(rng.uniform(-1, 1, 3)),
+                       root_angles=tuple(rng.uniform(-0.6, 0.6, 3)),
+                       joint_angles={n: (a,) for n, a in zip(names, angles)})
+        q = configuration(scene, pose).reshape(-1, 12)
+        i = scene.body_index(scene.root.body)
+        data.qpos[:] = plan_qpos(wm, i, q.reshape(-1), angles)
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        assert np.allclose(data.site_xpos[wm.root_site], q[i, :3], atol=1e-9)
+        assert np.allclose(data.site_xmat[wm.root_site].reshape(3, 3), q[i, 3:].reshape(3, 3).T,
+                           atol=1e-9)
+        for c, site in zip(scene.contacts, wm.contact_sites):
+            b = scene.body_index(c.body)
+            point = q[b, :3] + q[b, 3:].reshape(3, 3).T @ scene.body(c.body).points[c.point]
+            assert np.allclose(data.site_xpos[site], point, atol=1e-9), c.name
+        masses = np.array([b.mass for b in scene.bodies])
+        com = masses @ q[:, :3] / masses.sum()
+        assert np.allclose(data.subtree_com[model.body(wm.root).id], com, atol=1e-4)
+        # the draft writes left and right data symmetric (Bolt: 1.5e-6 kg moved)
+        assert float(model.body_subtreemass[model.body(wm.root).id]) == pytest.approx(
+            masses.sum(), rel=1e-5)
+
+
+def test_only_the_feet_collide_each_geometry_with_its_contact(example_robots):
+    scene, wm, _ = _walker(example_robots, G1)
+    model = wm.model
+    feet = [g for g in range(model.ngeom) if model.geom_contype[g]]
+    assert len(feet) == 8
+    assert all(model.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE
+               and model.geom_size[g, 0] == pytest.approx(0.005) for g in feet)
+    contacts = [scene.contacts[wm.geom_contact[g]] for g in feet]
+    for g, c in zip(feet, contacts):
+        assert model.body(model.geom_bodyid[g]).name == c.body
+        heel = model.geom_pos[g, 0] < 0  # G1's heel spheres at x = -0.05 m, toes at 0.12 m
+        assert c.point == ("heel" if heel else "forefoot")
+    bolt_scene, bolt, _ = _walker(example_robots, BOLT)
+    meshes = [g for g in range(bolt.model.ngeom) if bolt.model.geom_contype[g]]
+    # per leg the lower leg's mesh and that of the foot fixed below it: one rigid body
+    assert [bolt.model.geom_type[g] for g in meshes] == [mujoco.mjtGeom.mjGEOM_MESH] * 4
+    for g in meshes:
+        contact = bolt_scene.contacts[bolt.geom_contact[g]]
+        assert bolt.model.body_weldid[bolt.model.geom_bodyid[g]] == \
+            bolt.model.body(contact.body).id
+
+
+def test_another_robot_and_a_missing_mesh_are_refused(example_robots):
+    scene, _, g1 = _walker(example_robots, G1)
+    rec = types.SimpleNamespace(metadata={}, path="g1", joint_names=angle_names(scene))
+    shifted = g1.text.replace('<origin xyz="0 0 -0.017558" rpy="0 0 0"/>',
+                              '<origin xyz="0 0 -0.027558" rpy="0 0 0"/>', 1)
+    with pytest.raises(ValueError, match="not scene .*'s: at the zero pose a joint anchor"):
+        build_model(rec, scene, 0.03, 0.005, 5e-4, 0.005, 0.0, replace(g1, text=shifted))
+    bolt_scene, _, bolt = _walker(example_robots, BOLT)
+    rec = types.SimpleNamespace(metadata={}, path="bolt", joint_names=angle_names(bolt_scene))
+    with pytest.raises(ValueError, match="collision mesh .*lower_leg.*stl.* of foot link "
+                       ".FL_LOWER_LEG. is not found"):
+        build_model(rec, bolt_scene, 0.03, 0.005, 5e-4, 0.005, 0.0,
+                    replace(bolt, package_dirs=()))
