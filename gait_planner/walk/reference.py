@@ -16,12 +16,13 @@ equals the recorded nodes.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from gait_planner.io.mcap_reader import RecordedPlan
-from gait_planner.model.angles import joint_angles
+from gait_planner.model.angles import angle_names, joint_angles
 from gait_planner.model.loader import scene_from_text
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
@@ -36,6 +37,23 @@ def scene_of(rec: RecordedPlan) -> Scene:
     """The planner's scene from the recording's attached scene file."""
     name = f"{rec.metadata.get('scene', '')}.yaml"
     return scene_from_text(rec.scene_text, name)
+
+
+def planned_joints(rec: RecordedPlan) -> RecordedPlan:
+    """The recording with only the planned joints in its trajectory: a scene drafted from a
+    URDF publishes the locked joints after them (held; the walk welds them)."""
+    names = list(angle_names(scene_of(rec)))
+    if list(rec.joint_names) == names:
+        return rec
+    missing = [n for n in names if n not in rec.joint_names]
+    if missing:
+        raise ValueError(f"{rec.path}: the JointTrajectory lacks the planned joints {missing}")
+    keep = [list(rec.joint_names).index(n) for n in names]
+    return dataclasses.replace(rec, joint_names=tuple(names), **{
+        key: np.asarray(getattr(rec, key))[:, keep]
+        for key in ("positions", "velocities", "accelerations", "effort", "joint_state_position",
+                    "joint_state_velocity", "joint_state_effort")
+        if np.asarray(getattr(rec, key)).shape[1:] == (len(rec.joint_names),)})
 
 
 def _first_half_cycle(rec: RecordedPlan) -> RecordedPlan:

@@ -88,12 +88,12 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     import mujoco
 
     from gait_planner.walk.mujoco_model import build_model, plan_qpos, plan_root_qvel
-    from gait_planner.walk.reference import Reference
+    from gait_planner.walk.reference import Reference, planned_joints
 
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
         raise ValueError(f"steps must be an integer >= 1, got {steps!r}")
     cfg = config or load_config()
-    rec = _read(path)
+    rec = planned_joints(_read(path))
     ref = Reference.from_recording(rec, steps)
     scene = ref.scene
     if len(scene.contacts) < 2 or len({c.body for c in scene.contacts}) == len(scene.contacts):
