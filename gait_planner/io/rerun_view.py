@@ -6,6 +6,8 @@ Entities (timeline ``time``: s from the start of the half cycle, duration type; 
 * ``world``: z up; ``world/ground``: a grid on the ground the plan was made for
   (`PlanResult.ground`: z = 0, a ramp's tilted plane, or stairs, whose treads are boxes at
   ``world/ground/treads``), over the plan's x range (level ground: -1.5 to 1.5 m).
+* ``world/robot``: for a scene drafted from a URDF, the robot's own meshes moved by /tf
+  (`gait_planner.io.rerun_robot`) instead of ``world/walker``.
 * ``world/walker/<body>``: the body's drawing primitive (`gait_planner.io.urdf.body_shapes`,
   box or cylinder, in body coordinates, partly transparent), placed per node by a
   Transform3D (the COM phi and the directors [d1 d2 d3] from q); ``world/skeleton``: line
@@ -41,6 +43,7 @@ import rerun as rr
 from gait_planner.io.atomic import atomic_target
 from gait_planner.io.messages import contact_points, foot_wrenches
 from gait_planner.io.rerun_blueprint import blueprint
+from gait_planner.io.rerun_robot import log_robot_model, log_robot_motion
 from gait_planner.io.rerun_draw import (Columns, log_bodies, log_boundaries, log_ground,
                                         log_poses, send_scalars, skeleton)
 from gait_planner.io.rerun_series import (COLOUR_KEY, phase_boundaries, plot_groups, poses,
@@ -65,7 +68,10 @@ def _log_static(result: PlanResult, rec: rr.RecordingStream) -> None:
     else:  # over the plan's x range (a joined plan climbs a tread per half cycle)
         phi, _ = poses(result.q)
         log_ground(rec, float(phi[..., 0].max()) + 1.0, result.ground)
-    log_bodies(rec, result.scene, "world/walker")
+    if result.scene.robot is not None:  # the robot itself, not the draft's primitives
+        log_robot_model(rec, result)
+    else:
+        log_bodies(rec, result.scene, "world/walker")
     stats = result.stats
     sigma = ", ".join(f"{s:.4f}" for s in result.phase_scaling)
     summary = (
@@ -121,7 +127,10 @@ def _log_motion(result: PlanResult, rec: rr.RecordingStream) -> None:
     t = np.asarray(result.times, dtype=float) - float(result.times[0])
     nodes = np.arange(result.n_nodes)
     indexes = [rr.TimeColumn("time", duration=t), rr.TimeColumn("node", sequence=nodes)]
-    log_poses(rec, "world/walker", result.body_names, indexes, phi, D)
+    if result.scene.robot is not None:
+        log_robot_motion(rec, result)
+    else:
+        log_poses(rec, "world/walker", result.body_names, indexes, phi, D)
     names = ("skeleton", "com", "com_total", "trail_com", *trails, "points", "forces", "cops",
              "wrenches")
     columns = {name: Columns(indexes) for name in names}

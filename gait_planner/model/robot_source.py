@@ -49,12 +49,13 @@ def check_robot(c: Checker, value: Any, bodies: tuple[Body, ...],
     locked = {k: c.number(v, join("robot.locked", k)) for k, v in locked_map.items()}
     dirs = tuple(c.string(d, join("robot.package_dirs", i))
                  for i, d in enumerate(c.sequence(r.get("package_dirs", []), "robot.package_dirs")))
-    text = ""
+    text, resolved = "", ""
     if folder is not None:
         path = folder / urdf_file
         try:
             text = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as error:
             c.fail("robot.urdf", f"the robot's URDF {str(path)!r} cannot be read: {error}")
-        dirs = tuple(str(folder / d) for d in dirs)
-    return RobotSource(urdf_file, text, MappingProxyType(links), MappingProxyType(locked), dirs)
+        dirs, resolved = tuple(str((folder / d).resolve()) for d in dirs), str(path.resolve())
+    return RobotSource(urdf_file, text, MappingProxyType(links), MappingProxyType(locked), dirs,
+                       resolved)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
+from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping
 
@@ -211,6 +212,8 @@ class RobotSource:
         locked: the URDF's joints held fixed (merged into their parent), name -> rad.
         package_dirs: folders that resolve the URDF's ``package://`` paths (relative: to the
             scene file).
+        urdf_path: the URDF's absolute path where it was read ("" where it was not), for
+            mesh paths relative to it.
     """
 
     urdf_file: str
@@ -218,6 +221,13 @@ class RobotSource:
     links: Mapping[str, tuple[Vec3, Vec3]]
     locked: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
     package_dirs: tuple[str, ...] = ()
+    urdf_path: str = ""
+
+    def search_dirs(self) -> tuple[str, ...]:
+        """Where ``package://PKG/...`` paths are looked for: `package_dirs`, then the URDF's
+        own folder and its parents (as ``gait-planner scene from-urdf`` looks)."""
+        parents = [str(p) for p in Path(self.urdf_path).parents] if self.urdf_path else []
+        return tuple(self.package_dirs) + tuple(parents)
 
     def link_pose(self, body: str) -> tuple[np.ndarray, np.ndarray]:
         """(position (3,), rotation (3, 3)) of `body`'s link frame in the body's frame."""

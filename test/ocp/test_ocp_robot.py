@@ -8,7 +8,7 @@ would.
   angle), its torques stay within the URDF's effort limits, its angles within the draft's
   ranges and its rates within the joint speed bound;
 * the recording's /robot_description is the URDF itself and /tf and /tf_static carry every
-  one of its links;
+  one of its links; the rerun view draws the URDF's meshes, moved per node by /tf;
 * Pinocchio's forward kinematics of the published joint angles on the original URDF (its
   base placed as the recorded root body) puts every held contact point where the plan
   publishes it (1e-6 m).
@@ -55,7 +55,7 @@ def robot(request, example_robots, tmp_path_factory):
     scene_file = write_draft(draft, folder / f"{name}.yaml")
     outcome = plan_and_record(Planner(), PlanRequest(scene=str(scene_file), output_name=name,
                                                      compiled=False),
-                              folder, rrd=False, scenes=find_scene)
+                              folder, rrd=True, scenes=find_scene)
     return urdf, draft, outcome
 
 
@@ -145,3 +145,23 @@ def test_published_angles_put_the_held_contacts_where_the_plan_has_them(robot):
 
 def _directors(q_row, index: int) -> np.ndarray:
     return np.asarray(q_row)[12 * index + 3:12 * index + 12].reshape(3, 3).T
+
+
+def test_the_rerun_view_draws_the_robots_meshes_moved_by_tf(robot):
+    """The .rrd holds the URDF's visual meshes (rerun's URDF loader, package:// resolved)
+    and, per node, the /tf transform of the base link between named frames."""
+    from rerun.chunk import RrdReader
+
+    urdf, _, outcome = robot
+    links = {f.name for f in pin.buildModelFromXML(urdf).frames if f.type == pin.FrameType.BODY}
+    meshes, base_rows = set(), 0
+    base = outcome.result.scene.root.body
+    for chunk in RrdReader(outcome.rrd_path).stream():
+        path = chunk.entity_path
+        if "/visual_geometries/" in path:
+            assert "blob" in " ".join(chunk.to_record_batch().schema.names), path  # a mesh
+            meshes.add(path.split("/visual_geometries/")[1].split("/")[0])
+        if path == f"/world/robot/frames/{base}":
+            base_rows += chunk.num_rows
+    assert meshes and meshes <= links
+    assert base_rows == outcome.result.n_nodes
