@@ -30,6 +30,7 @@ FULL = [
     ["walk.py"],
     ["gait_trends.py"],
     ["gait_library.py"],
+    ["robots.py"],
 ]
 QUICK = [
     ["model_size.py", "--quick", "--compiled"],
@@ -40,6 +41,7 @@ QUICK = [
     ["walk.py", "--quick"],
     ["gait_trends.py", "--quick"],
     ["gait_library.py", "--quick"],
+    ["robots.py", "--quick"],
 ]
 
 
