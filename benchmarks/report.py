@@ -588,7 +588,10 @@ def robots(doc) -> list[str]:
                 f"and {b['cost']:.5g} J s): round-off in the derivatives leads IPOPT to "
                 "another local optimum or the certificate to another grid, so their times "
                 "compare different work."), ""]
-    twins = [r for r in doc["rows"] if r["kind"] == "counterpart"]
+    twins = [dict(r, walked=(f"{r['half_cycles_walked']} of {h.get('steps', 10)}"
+                             if r.get("half_cycles_walked") is not None else "–"),
+                  why=r.get("walk") or r.get("error") or "")
+             for r in doc["rows"] if r["kind"] == "counterpart"]
     if twins:
         out += ["The robot beside its human counterpart: walker3d with its lengths scaled to "
                 "the robot's leg length (hip to sole) and its masses to the robot's total mass "
@@ -601,7 +604,8 @@ def robots(doc) -> list[str]:
             ("speed m/s", "speed_m_s", ".2f"), ("J (J s)", "cost", ".5g"),
             ("W+ J", "positive_work_J", ".3g"), ("W+/(m g s)", "cost_of_transport", ".3f"),
             ("peak N m", "peak_torque_Nm", ".3g"), ("iterations", "iterations", ".0f"),
-            ("nodes", "nodes", ".0f"), ("plan s", "plan_s", ".1f")]) + [""]
+            ("nodes", "nodes", ".0f"), ("plan s", "plan_s", ".1f"),
+            ("half cycles walked", "walked", ""), ("walk", "why", "")]) + [""]
     if h.get("figure"):
         out += [f"Each robot at the mid-step node of its plan (matplotlib, from the "
                 f"recording's /tf): [{h['figure']}]({h['figure']})", "",
