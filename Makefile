@@ -39,7 +39,8 @@ docs: setup
 # Benchmarks (benchmarks/README.md): `bench` rewrites benchmarks/REPORT.md and
 # benchmarks/results/*.json (over an hour on 2 cores: work_precision.py ~55 min of it under
 # load on 2026-11-27, the plans walked in MuJoCo ~6 min:
-# benchmarks/walk.py); `bench-quick` is a smoke run (~3 min)
+# benchmarks/walk.py; robots drafted from their URDF, Bolt and G1, an estimated 15-25 min:
+# benchmarks/robots.py); `bench-quick` is a smoke run (~5 min)
 # writing to build/bench-quick/ instead.
 bench: setup
 	$(PYTHON) benchmarks/bench.py

@@ -1,7 +1,7 @@
 """Run the benchmarks and rewrite benchmarks/REPORT.md (`make bench`, `make bench-quick`).
 
     .venv/bin/python benchmarks/bench.py            # everything (over an hour on 2 cores)
-    .venv/bin/python benchmarks/bench.py --quick    # smoke run (~3 min): small cases only,
+    .venv/bin/python benchmarks/bench.py --quick    # smoke run (~5 min): small cases only,
                                                     # results and report in build/bench-quick/
 
 Each script runs in a fresh process (as a user meets it) and writes its rows to
@@ -30,6 +30,7 @@ FULL = [
     ["walk.py"],
     ["gait_trends.py"],
     ["gait_library.py"],
+    ["robots.py"],
 ]
 QUICK = [
     ["model_size.py", "--quick", "--compiled"],
@@ -40,6 +41,7 @@ QUICK = [
     ["walk.py", "--quick"],
     ["gait_trends.py", "--quick"],
     ["gait_library.py", "--quick"],
+    ["robots.py", "--quick"],
 ]
 
 

@@ -8,6 +8,7 @@ whose file is missing says so. Conclusions are computed from the rows, not typed
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 
@@ -526,11 +527,97 @@ def peers(doc) -> list[str]:
     return out + [""]
 
 
+def _certificate(text: str) -> str:
+    """A certificate's sentence in short: OK or fails, with the torque error."""
+    if not text:
+        return "–"
+    match = re.search(r"torque error ([0-9.eE+-]+) %", text)
+    return ("OK" if text.endswith(": OK") else "fails") + (f" ({match.group(1)} %)" if match
+                                                          else "")
+
+
+def robots(doc) -> list[str]:
+    out = ["## 11. Robots planned from their URDF", ""]
+    if doc is None:
+        return out + ["Not measured (run `make bench`).", ""]
+    h = doc["header"]
+    out += [provenance(doc), "",
+            "`robots.py` (issue #37): each robot of the example-robot-data wheel drafted from "
+            "its URDF (`gait_planner.model.urdf_import`) and planned as a user plans it, in "
+            "fresh processes: *first build* the problem's build in a process whose compile "
+            "cache (`$GAIT_PLANNER_CACHE`) is empty (the per-node derivative elements "
+            "compiled with the C compiler; a refined grid compiles its new elements during "
+            "the plan, in *first process*), *build* and the rest of the row from a second "
+            "process with that cache filled (compiled) or from one process with CasADi's "
+            "derivatives (casadi); *ready* the process's start to the built problem, imports "
+            "and the draft included; *plan* the cold request (kinematic guess, refined while "
+            "the continuous-dynamics certificate asks), *IPOPT* its solves over every grid; "
+            "variables of the first grid, nodes of the plan. Cost of transport: "
+            f"{h.get('cost_of_transport', 'W+ / (m g s)')}. Peak: the largest |effort| and "
+            "the largest share of a joint's URDF effort limit (the joint named). Walked: "
+            f"`gait-planner walk RUN.mcap --steps {h.get('steps', 10)} --json`, its half "
+            "cycles or its error.", ""]
+    rows = [dict(r, joints=f"{r.get('joints_planned', '–')} / {r.get('joints_locked', '–')}",
+                 share=("–" if r.get("peak_torque_share") is None else
+                        f"{r['peak_torque_share']:.1%} ({r['peak_share_joint']})"),
+                 cert=_certificate(r.get("certificate", "")),
+                 walked=(f"{r['half_cycles_walked']} of {h.get('steps', 10)}"
+                         if r.get("half_cycles_walked") is not None else "–"),
+                 why=r.get("walk") or r.get("error") or "")
+            for r in doc["rows"] if r["kind"] == "robot"]
+    out += table(rows, [
+        ("robot", "robot", ""), ("derivatives", "mode", ""), ("joints planned / locked",
+                                                                 "joints", ""),
+        ("variables", "variables", ".0f"), ("nodes", "nodes", ".0f"),
+        ("first build s", "first_build_s", ".1f"), ("first process s", "first_process_s", ".0f"),
+        ("build s", "build_s", ".1f"), ("ready s", "ready_s", ".1f"), ("plan s", "plan_s", ".1f"),
+        ("IPOPT s", "solve_s", ".1f"), ("iterations", "iterations", ".0f"),
+        ("J (J s)", "cost", ".5g"), ("W+ J", "positive_work_J", ".3g"),
+        ("W+/(m g s)", "cost_of_transport", ".3f"), ("peak N m", "peak_torque_Nm", ".3g"),
+        ("peak / limit", "share", ""), ("certificate", "cert", ""),
+        ("half cycles walked", "walked", ""), ("walk", "why", "")])
+    out += [""]
+    for robot in dict.fromkeys(r["robot"] for r in rows):  # computed: one plan or two?
+        mine = [r for r in rows if r["robot"] == robot and r.get("success")]
+        if len(mine) == 2:
+            a, b = mine
+            same = a["nodes"] == b["nodes"] and abs(a["cost"] - b["cost"]) <= 1e-6 * abs(a["cost"])
+            out += [f"{robot}: the {a['mode']} and {b['mode']} rows " + (
+                "reach the same plan." if same else
+                f"are different plans ({a['nodes']} and {b['nodes']} nodes, J {a['cost']:.5g} "
+                f"and {b['cost']:.5g} J s): round-off in the derivatives leads IPOPT to "
+                "another local optimum or the certificate to another grid, so their times "
+                "compare different work."), ""]
+    twins = [dict(r, walked=(f"{r['half_cycles_walked']} of {h.get('steps', 10)}"
+                             if r.get("half_cycles_walked") is not None else "–"),
+                  why=r.get("walk") or r.get("error") or "")
+             for r in doc["rows"] if r["kind"] == "counterpart"]
+    if twins:
+        out += ["The robot beside its human counterpart: walker3d with its lengths scaled to "
+                "the robot's leg length (hip to sole) and its masses to the robot's total mass "
+                "(inertias by mass x length^2), step and time step scaled as the importer "
+                "scales them (`scaled_walker.py`), and walker3d itself; each compiled, "
+                "planned cold in a fresh process.", ""]
+        out += table(twins, [
+            ("plan", "label", ""), ("leg m", "leg_length_m", ".4f"), ("mass kg", "mass_kg", ".2f"),
+            ("step m", "step_length_m", ".4f"), ("half cycle s", "duration_s", ".3f"),
+            ("speed m/s", "speed_m_s", ".2f"), ("J (J s)", "cost", ".5g"),
+            ("W+ J", "positive_work_J", ".3g"), ("W+/(m g s)", "cost_of_transport", ".3f"),
+            ("peak N m", "peak_torque_Nm", ".3g"), ("iterations", "iterations", ".0f"),
+            ("nodes", "nodes", ".0f"), ("plan s", "plan_s", ".1f"),
+            ("half cycles walked", "walked", ""), ("walk", "why", "")]) + [""]
+    if h.get("figure"):
+        out += [f"Each robot at the mid-step node of its plan (matplotlib, from the "
+                f"recording's /tf): [{h['figure']}]({h['figure']})", "",
+                f"![robots mid-step]({h['figure']})", ""]
+    return out
+
+
 def main() -> None:
     docs = {name: load(name) for name in ("work_precision", "integrators", "model_size",
                                          "model_size_compiled", "hard_cases", "cold_solve",
                                          "node_latency_walker3d", "request_sweep", "walk",
-                                         "gait_trends", "gait_library", "peers")}
+                                         "gait_trends", "gait_library", "peers", "robots")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
              "`benchmarks/results/*.json`; every number below is in those files with the "
@@ -548,6 +635,7 @@ def main() -> None:
     lines += gait_trends(docs["gait_trends"])
     lines += gait_library(docs["gait_library"])
     lines += peers(docs["peers"])
+    lines += robots(docs["robots"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
