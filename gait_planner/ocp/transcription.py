@@ -604,7 +604,7 @@ class Transcription:
         start = self.mb.ndof * (self.N - 1)  # T (nt, N - 1) follows U, column by column
         for name, limit in self.settings.effort_limits:  # |tau| <= the joint's effort limit
             rows = start + self.mb.joint_slices[name].start + self.mb.nt * np.arange(self.N - 1)
-            lbx[rows], ubx[rows] = -limit, limit
+            lbx[rows], ubx[rows] = -limit / TORQUE_SCALE, limit / TORQUE_SCALE  # T: tau / scale
         lbg = np.concatenate([np.zeros(n_eq), np.zeros(n_in)])
         ubg = np.concatenate([np.zeros(n_eq)] + [
             np.full(int(e.shape[0]), self._upper.get(name, np.inf)) for name, e in self._ineq])
