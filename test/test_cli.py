@@ -219,3 +219,15 @@ def test_without_a_compiler_or_a_cache_the_plan_uses_casadi_and_says_why(tmp_pat
     assert len(notes) == 1 and notes[0].startswith(
         "-- building with CasADi's derivatives (not compiled: no C compiler found")
     assert json.loads(captured.out)["success"]
+
+
+def test_scene_from_urdf_takes_the_mirror_tolerance_its_refusal_names(example_robots, tmp_path,
+                                                                      capsys):
+    urdf = str(example_robots / "talos_data/robots/talos_reduced.urdf")
+    command = ["scene", "from-urdf", urdf, "--package-dir", str(example_robots.parents[1]),
+               "--out", str(tmp_path / "talos.yaml")]
+    assert main(command) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--mirror-tolerance 0.06 accepts it" in err
+    assert main(command + ["--mirror-tolerance", "0.06"]) == 0
+    assert "--mirror-tolerance 0.06" in (tmp_path / "talos.yaml").read_text()

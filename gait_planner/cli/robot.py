@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from gait_planner.cli.errors import CliError
+from gait_planner.model.urdf_mirror import MIRROR_COM_TOLERANCE, MIRROR_TOLERANCE
 
 URDF_HELP = ("a robot's URDF: its legs are planned in its own joint names and limits, every "
              "other joint locked (gait-planner scene from-urdf --help)")
@@ -24,6 +25,12 @@ def add_urdf_options(parser: argparse.ArgumentParser) -> None:
                         help="a folder holding the packages of package:// mesh paths "
                         "(repeatable; the URDF's own folder and its parents are tried too)")
     parser.add_argument("--name", help="the scene's name (default: the URDF robot's name)")
+    parser.add_argument("--mirror-tolerance", type=float, default=MIRROR_TOLERANCE,
+                        metavar="FRACTION", help="a right leg link whose mass or inertia "
+                        "differs from its left partner's mirror image by less than this "
+                        "fraction is written as that mirror image, and the draft's header "
+                        f"says so (default {MIRROR_TOLERANCE:g}); centres of mass: "
+                        f"{MIRROR_COM_TOLERANCE * 100:g} cm")
 
 
 def add_scene_parser(commands: argparse._SubParsersAction) -> None:
@@ -75,7 +82,8 @@ def draft_of(args: argparse.Namespace, folder: Path | None = None):
     try:
         return draft_scene(text, feet=feet, locked=locked, name=args.name, package_dirs=dirs,
                            urdf_file=written(path),
-                           robot_dirs=[written(d) for d in args.package_dir])
+                           robot_dirs=[written(d) for d in args.package_dir],
+                           mirror_tolerance=args.mirror_tolerance)
     except UrdfError as error:
         raise CliError(f"{path}: {error}") from None
 

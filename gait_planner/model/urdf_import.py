@@ -34,7 +34,9 @@ approximation of it:
   needs a symmetric robot: right and left data that differ by more than
   `gait_planner.model.urdf_mirror`'s tolerances are refused, naming the link; below them
   the draft writes the left link's data mirrored for the right one and lists what moved
-  (G1's right knee inertia, Bolt's 1.5e-6 kg).
+  (G1's right knee inertia, Bolt's 1.5e-6 kg). `mirror_tolerance` (a fraction, default
+  5 %: `--mirror-tolerance`) is the mass and inertia difference the user accepts; the
+  refusal names the value that would accept the robot.
 * **Limits.** The URDF's ranges (`joint_limits`, within +-89.5 deg of its zero: the range
   rows take ranges narrower than 180 deg) and efforts (`effort_limits`, hard bounds on the
   torques) per joint; its slowest velocity limit for every joint (`joint_speed_max`: the
@@ -68,7 +70,8 @@ import yaml
 from gait_planner.model.rotations import matrix_rpy
 from gait_planner.model.urdf_errors import UrdfError
 from gait_planner.model.urdf_fuse import ball_points, find_balls
-from gait_planner.model.urdf_mirror import S, mirror_geometry, mirrored_inertias
+from gait_planner.model.urdf_mirror import (MIRROR_TOLERANCE, S, mirror_geometry,
+                                            mirrored_inertias)
 
 __all__ = ["UrdfDraft", "UrdfError", "draft_scene"]
 
@@ -262,12 +265,18 @@ def _link_name(model, joint: int) -> str:
 def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
                 locked: Mapping[str, float] | None = None, name: str | None = None,
                 package_dirs: Sequence[str | Path] = (), urdf_file: str = "robot.urdf",
-                robot_dirs: Sequence[str] = ()) -> UrdfDraft:
+                robot_dirs: Sequence[str] = (),
+                mirror_tolerance: float = MIRROR_TOLERANCE) -> UrdfDraft:
     """The scene of a URDF's legs (module docstring); UrdfError naming what is refused.
 
     `package_dirs` resolve the URDF's meshes here; the draft's ``robot:`` section names the
     URDF as `urdf_file` and its mesh folders as `robot_dirs` (both as the scene file will
-    read them: relative to its folder, or absolute)."""
+    read them: relative to its folder, or absolute). `mirror_tolerance`: the relative
+    difference of a right link's mass and inertia from its left partner's mirror image
+    written symmetric (a fraction in [0, 1); `gait_planner.model.urdf_mirror`)."""
+    if not 0.0 <= mirror_tolerance < 1.0:
+        raise UrdfError(f"--mirror-tolerance takes a fraction in [0, 1) (0.06 for 6 %), got "
+                        f"{mirror_tolerance:g}")
     pin = _pin()
     full, geometry = _read(urdf_text, [str(p) for p in package_dirs])
     left_foot, right_foot = _find_feet(full, feet)
@@ -295,7 +304,8 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     bodies: dict[int, _Body] = {}
     changes: list[str] = []
     inertias, left_of = mirrored_inertias(
-        model, {j: link for j, link in links.items() if j not in inner}, changes)
+        model, {j: link for j, link in links.items() if j not in inner}, changes,
+        tolerance=mirror_tolerance)
     for joint, (mass, com, inertia) in inertias.items():
         if joint in left_of:  # a right link: the left one's principal axes mirrored
             left = bodies[left_of[joint]]
@@ -311,7 +321,7 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
               "locked": lock_angles}
     return _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
                   left_of, name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
-                  changes, source)
+                  changes, source, mirror_tolerance)
 
 
 def _foot_contacts(model, geometry, data, foot_ids, links) -> tuple[dict, dict[int, float]]:
@@ -379,7 +389,7 @@ def _lowest_points(obj, oMi) -> list[np.ndarray]:
 
 
 def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-           left_of, name, changes, source) -> UrdfDraft:
+           left_of, name, changes, source, mirror_tolerance) -> UrdfDraft:
     order = [1] + [j for j in ids.values() if j in bodies]
     for foot, points in contacts.items():
         bodies[foot].points.update(points)
@@ -476,7 +486,9 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
         header += "# Locked joints (merged into their parent): " + ", ".join(
             f"{k} = {v:g} rad" for k, v in lock_angles.items()) + "\n"
     if changes:
-        header += "# Made mirror-symmetric (the URDF's own data differ):\n" + "".join(
+        asked = (f"; --mirror-tolerance {mirror_tolerance:g}"
+                 if mirror_tolerance != MIRROR_TOLERANCE else "")
+        header += f"# Made mirror-symmetric (the URDF's own data differ{asked}):\n" + "".join(
             f"#   {change}\n" for change in changes)
     text = header + yaml.safe_dump(scene, sort_keys=False, width=100, default_flow_style=None)
     return UrdfDraft(text, name, tuple(ids), lock_angles)

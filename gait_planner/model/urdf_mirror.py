@@ -8,10 +8,11 @@ Two steps, both refusing (`UrdfError`, naming the link or joint) what is not sym
 * `mirrored_inertias`, on the URDF's data in the joint frames: a right link's mass, centre
   of mass and inertia become its left partner's mirror image (m, S c, S I S), a link
   without a partner (the base) is made symmetric about its own xz-plane ((I + S I S)/2,
-  c_y = 0), when the URDF's differ by less than MIRROR_TOLERANCE (mass, inertia; relative)
-  and MIRROR_COM_TOLERANCE (centre of mass). G1's right knee, whose Ixz has the wrong sign
-  (9e-5 kg m^2), Talos's leg links (COM 0.4 mm, inertia 2.3e-4 kg m^2 apart) and its base
-  with the locked torso and arms (COM 2.05 mm off the mid-plane) are written symmetric.
+  c_y = 0), when the URDF's differ by less than MIRROR_TOLERANCE (mass, inertia; relative,
+  5 %, or the user's `--mirror-tolerance`) and MIRROR_COM_TOLERANCE (centre of mass, 1 cm).
+  G1's right knee, whose Ixz has the wrong sign (9e-5 kg m^2), is written symmetric;
+  Talos's leg_2 inertias (5.35 % apart) only with `--mirror-tolerance 0.06`, its COMs being
+  0.4 mm apart and its base with the locked torso and arms 2.05 mm off the mid-plane.
 * `mirror_geometry`, on the drafted points, axes and references (director components,
   the right links' principal axes being the left ones' mirrored): points (X1, X2, X3) ->
   (X1, -X2, X3), axes n -> +-(-S n), references R0 -> S R0 S, after checking that the
@@ -20,6 +21,7 @@ Two steps, both refusing (`UrdfError`, naming the link or joint) what is not sym
 
 from __future__ import annotations
 
+import math
 import re
 
 import numpy as np
@@ -45,15 +47,19 @@ def mirror_name(name: str) -> tuple[str, str] | tuple[None, None]:
     return None, None
 
 
-def mirrored_inertias(model, links: dict[int, str], changes: list[str]
+def mirrored_inertias(model, links: dict[int, str], changes: list[str], *,
+                      tolerance: float = MIRROR_TOLERANCE
                       ) -> tuple[dict[int, tuple], dict[int, int]]:
     """(joint -> (mass, COM (3,), inertia at the COM (3, 3)) in the joint frames, left
     links before their right partners; right joint -> its left partner) of a Pinocchio
-    model's links (module docstring); `changes` collects what moved."""
+    model's links (module docstring); `changes` collects what moved. `tolerance`: the
+    relative difference of mass and inertia written symmetric (MIRROR_TOLERANCE unless the
+    user asks, `--mirror-tolerance`); a larger one is refused naming the worst link and the
+    tolerance that would accept every link."""
     raw = {j: (float(model.inertias[j].mass), np.array(model.inertias[j].lever),
                np.array(model.inertias[j].inertia)) for j in links}
     by_name = {name: j for j, name in links.items()}
-    out, left_of = {}, {}
+    out, left_of, beyond = {}, {}, []
     for joint, name in links.items():
         image_name, side = mirror_name(name)
         other = by_name.get(image_name or "", joint)
@@ -64,25 +70,50 @@ def mirrored_inertias(model, links: dict[int, str], changes: list[str]
         if other == joint:  # the base, made symmetric about its own xz-plane
             image = (mass, np.array([com[0], 0.0, com[2]]), 0.5 * (inertia + S @ inertia @ S))
             partner, moved = "its own mirror image", "symmetric"
+            written = "writing it symmetric about its own xz-plane"
         else:
             m2, c2, i2 = raw[other]
             image = (m2, S @ c2, S @ i2 @ S)
-            partner = f"the mirror image of {links[other]!r}"
-            moved = f"{links[other]}'s mirror image"
+            partner = moved = f"{links[other]}'s mirror image"
+            written = "writing the left's data for both"
             left_of[joint] = other
-        scale = max(np.abs(np.linalg.eigvalsh(inertia)).max(), 1e-300)
-        for what, a, b, tol in (("mass", mass, image[0], MIRROR_TOLERANCE * mass),
-                                ("centre of mass", com, image[1], MIRROR_COM_TOLERANCE),
-                                ("inertia", inertia, image[2], MIRROR_TOLERANCE * scale)):
+        scale = max(np.abs(np.linalg.eigvalsh(m)).max() for m in (inertia, image[2]))
+        for what, a, b, unit in (("mass", mass, image[0], max(mass, image[0])),
+                                 ("centre of mass", com, image[1], None),
+                                 ("inertia", inertia, image[2], scale)):
             gap = float(np.max(np.abs(np.asarray(a) - np.asarray(b))))
-            if gap > 1e-6 * tol:
-                changes.append(f"{name}: {what} moved by {gap:.3g} to be {moved}")
-            if gap > tol:
-                raise UrdfError(f"link {name!r}: its {what} is not {partner} ({gap:.3g} "
-                                f"apart, more than {tol:.3g}): the half cycle's mirror "
-                                f"periodicity needs a left-right symmetric robot")
+            if unit is None:  # the centre of mass: an absolute tolerance
+                if gap > 1e-6 * MIRROR_COM_TOLERANCE:
+                    changes.append(f"{name}: {what} moved by {gap * 1e3:.3g} mm to be {moved}")
+                if gap > MIRROR_COM_TOLERANCE:
+                    raise UrdfError(f"{name}'s {what} is {gap * 1e3:.3g} mm from {partner} "
+                                    f"(more than {MIRROR_COM_TOLERANCE * 1e3:g} mm): the half "
+                                    f"cycle's mirror periodicity needs a left-right "
+                                    f"symmetric robot")
+                continue
+            relative = gap / unit if gap > 0 else 0.0  # relative to the larger of the two
+            if relative > 1e-6 * MIRROR_TOLERANCE:
+                changes.append(f"{name}: {what} moved by {gap:.3g} ({100 * relative:.3g} %) "
+                               f"to be {moved}")
+            if relative > tolerance:
+                beyond.append((relative, f"{name}'s {what} is {100 * relative:.3g} % from "
+                                         f"{partner}", written))
         out[joint] = image
+    if beyond:
+        relative, what, written = max(beyond)
+        others = " and every other link" if len(beyond) > 1 else ""
+        asked = (f"; --mirror-tolerance {_above(relative):g} accepts it{others}, {written}"
+                 if _above(relative) < 1 else "")
+        raise UrdfError(f"{what} (more than {100 * tolerance:g} %){asked}: the half cycle's "
+                        f"mirror periodicity needs a left-right symmetric robot")
     return {j: out[j] for j in sorted(out, key=lambda j: j in left_of)}, left_of
+
+
+def _above(fraction: float) -> float:
+    """The one-significant-digit fraction just above `fraction` (0.0536 -> 0.06)."""
+    exponent = math.floor(math.log10(fraction))
+    digit = math.floor(fraction / 10.0 ** exponent) + 1
+    return round(digit * 10.0 ** exponent, -exponent)
 
 
 def mirror_geometry(names: dict[int, str], left_of: dict[int, int], local, joints) -> None:

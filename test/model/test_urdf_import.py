@@ -10,7 +10,9 @@
 * Each refusal names the joint or link and the rule, in well under a second.
 * The example robots of example-robot-data (a test dependency): G1 and Bolt are drafted
   (G1's right knee, whose inertia is not its left partner's mirror image in the URDF, is
-  written symmetric and the draft says so), Talos is refused as asymmetric.
+  written symmetric and the draft says so); Talos is refused as asymmetric at the default
+  tolerance, the refusal naming --mirror-tolerance and the value that accepts it, and is
+  drafted with that value (the header lists the right links written as mirror images).
 """
 
 from __future__ import annotations
@@ -149,10 +151,23 @@ def test_example_robots_are_drafted(example_robots, path, joints):
     assert np.abs(np.asarray(Multibody(scene).constraints(q))).max() < ROUND_OFF
 
 
-def test_talos_is_refused_as_asymmetric(example_robots):
+def test_talos_is_refused_at_the_default_tolerance_and_drafted_when_asked(example_robots):
     urdf = (example_robots / "talos_data/robots/talos_reduced.urdf").read_text()
-    with pytest.raises(UrdfError, match="leg_right_2_link.*mirror image"):
-        draft_scene(urdf, package_dirs=[str(example_robots.parents[1])])
+    dirs = [str(example_robots.parents[1])]
+    with pytest.raises(UrdfError, match=r"leg_right_2_link's inertia is 5\.35 % from "
+                       r"leg_left_2_link's mirror image .*--mirror-tolerance 0\.06 accepts it"):
+        draft_scene(urdf, package_dirs=dirs)
+    draft = draft_scene(urdf, package_dirs=dirs, mirror_tolerance=0.06)
+    header = [line for line in draft.yaml.splitlines() if line.startswith("#")]
+    assert "# Made mirror-symmetric (the URDF's own data differ; --mirror-tolerance 0.06):" \
+        in header
+    assert "#   leg_right_2_link: inertia moved by 0.000226 (5.35 %) to be leg_left_2_link's " \
+        "mirror image" in header
+    scene = scene_from_text(draft.yaml, "talos.yaml")
+    right, left = scene.body("leg_right_2_link"), scene.body("leg_left_2_link")
+    assert right.mass == left.mass and right.inertia == left.inertia
+    with pytest.raises(UrdfError, match=r"--mirror-tolerance takes a fraction in \[0, 1\)"):
+        draft_scene(urdf, package_dirs=dirs, mirror_tolerance=6)
 
 
 def test_the_robot_section_names_the_urdf(tmp_path):
