@@ -1,5 +1,5 @@
 """Robots planned from their URDF (issue #37, item 6): per robot of the example-robot-data
-wheel (`robot_plan.ROBOTS`: Bolt, Unitree G1), the scene drafted and planned as a user
+wheel (`robot_plan.ROBOTS`: Bolt, Unitree G1, Talos), the scene drafted and planned as a user
 plans it, in fresh processes; G1's plan beside walker3d scaled to G1 and walker3d itself.
 
     .venv/bin/python benchmarks/robots.py                  # every robot, compiled and not
@@ -27,9 +27,8 @@ robot's compiled plan, walker3d scaled to its leg length and mass (`scaled_walke
 and walker3d, each compiled (cache: ~/.cache/gait_planner), with J, W+/(m g s), peak
 torque, iterations, duration and speed.
 
-The picture `robots.png`: each robot at the mid-step node of its plan (the node nearest
-half the half cycle), drawn with matplotlib from the recording's /tf and /tf_static (link
-frame origins joined parent to child, held contact points marked), side and front view.
+The picture `robots.png`: each robot at the mid-step node of its plan, its own meshes
+placed by the recording's /tf, as rerun draws it (`robot_picture.py`; needs Chromium).
 Rows to benchmarks/results/robots.json.
 """
 
@@ -44,9 +43,8 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
-from robot_plan import ROBOTS
+from robot_picture import mid_step_picture
+from robot_plan import ROBOTS, robots_folder
 
 HERE = Path(__file__).resolve().parent
 STEPS = 10  # half cycles walked
@@ -143,63 +141,13 @@ def progress_line(r: dict) -> str:
             + f"; walked {r.get('half_cycles_walked')}: {r.get('walk')}")
 
 
-def mid_step_figure(rows: list[dict], path: Path) -> Path | None:
-    """Each robot at its mid-step node, from the recording's /tf (module docstring)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from gait_planner.io.mcap_reader import read_plan_mcap
-
-    shown = {}
-    for r in rows:  # one recording per robot, the first that planned
+def recordings(rows: list[dict]) -> dict[str, str]:
+    """robot -> the first recording of it that planned (for the picture)."""
+    shown: dict[str, str] = {}
+    for r in rows:
         if r["kind"] == "robot" and r.get("mcap") and r["robot"] not in shown:
             shown[r["robot"]] = r["mcap"]
-    if not shown:
-        return None
-    fig, axes = plt.subplots(len(shown), 2, figsize=(8, 4 * len(shown)), squeeze=False)
-    for (robot, mcap), (side, front) in zip(shown.items(), axes):
-        rec = read_plan_mcap(mcap)
-        n = int(np.argmin(np.abs(rec.times - rec.times[-2] / 2)))  # t_(N-1): the half cycle
-        poses = _frames(list(rec.tf[n]) + list(rec.tf_static))
-        links = [(t.parent, t.child) for t in list(rec.tf[n]) + list(rec.tf_static)
-                 if t.parent in poses and t.parent != "world"]
-        points = np.asarray(rec.contact_points[n]).reshape(-1, 3)
-        for ax, (i, j), label in ((side, (0, 2), "x m (forward)"), (front, (1, 2), "y m (left)")):
-            for parent, child_frame in links:
-                a, b = poses[parent][:3, 3], poses[child_frame][:3, 3]
-                ax.plot([a[i], b[i]], [a[j], b[j]], "-o", color="tab:blue", ms=3, lw=2)
-            if len(points):
-                ax.plot(points[:, i], points[:, j], "v", color="tab:red", ms=8,
-                        label="held contact")
-            ax.axhline(0.0, color="0.5", lw=1)
-            ax.set_aspect("equal")
-            ax.locator_params(nbins=4)
-            ax.set_xlabel(label)
-            ax.set_ylabel("z m")
-        side.set_title(f"{robot}: node {n} of {len(rec.times) - 1}, t = {rec.times[n]:.3f} s "
-                       f"({rec.phases[n]})", fontsize=9)
-        front.set_title("front view", fontsize=9)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-    return path
-
-
-def _frames(transforms) -> dict[str, np.ndarray]:
-    """World poses (4x4) of every frame reachable from "world"."""
-    poses, pending = {"world": np.eye(4)}, list(transforms)
-    while pending:
-        left = [t for t in pending if t.parent not in poses]
-        for t in pending:
-            if t.parent in poses:
-                poses[t.child] = poses[t.parent] @ t.matrix()
-        if len(left) == len(pending):
-            break
-        pending = left
-    return poses
+    return shown
 
 
 def main() -> int:
@@ -227,7 +175,8 @@ def main() -> int:
         if match:
             rows += counterpart_rows(match[0], args.counterpart, folder, args.time_limit)
         try:  # a picture that fails must not lose the measurements
-            figure = mid_step_figure(rows, figure_path("robots.png"))
+            figure = mid_step_picture(recordings(rows), figure_path("robots.png"),
+                                      robots_folder().parents[1])
         except Exception as error:  # noqa: BLE001 - reported in the results' header
             figure = None
             print(f"robots.png not drawn: {error!r}", flush=True)
