@@ -94,7 +94,8 @@ class GaitPlannerNode(Node):
         folders = list(self._param("scene_dirs"))  # read-only: fixed for the node's life
         self._scenes = RobotScenes(functools.partial(load_scene, extra=folders),
                                    lambda: Path(self._param("output_dir")),
-                                   [d for d in self._param("robot_package_dirs") if d])
+                                   [d for d in self._param("robot_package_dirs") if d],
+                                   self._param("robot_mirror_tolerance"))
         missing = [f for f in folders if not Path(f).expanduser().is_dir()]
         if missing:
             self.get_logger().info(f"scene_dirs: no folder {missing} (skipped); scenes from "

@@ -49,6 +49,12 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         "Folders that resolve the package:// mesh paths of the robot's URDF (relative: to "
         "the node's working folder); empty entries are ignored; fixed at start",
         read_only=True)),
+    "robot_mirror_tolerance": (0.05, _descriptor(
+        ParameterType.PARAMETER_DOUBLE,
+        "How far (a fraction) the robot's right-leg inertial data may differ from the left's "
+        "mirror image and be written as it (the half cycle's mirror needs a symmetric robot; "
+        "Talos needs 0.06); fixed at start", read_only=True,
+        floating_point_range=[FloatingPointRange(from_value=0.0, to_value=0.5)])),
     "robot_description": ("", _descriptor(
         ParameterType.PARAMETER_STRING,
         "A robot's URDF text, as robot_state_publisher takes it: drafted into the scene "

@@ -36,8 +36,9 @@ class RobotScenes:
     """Scene lookup with the described robot (module docstring); thread-safe."""
 
     def __init__(self, files: Callable[[str], Scene], folder: Callable[[], Path],
-                 package_dirs: Sequence[str] = ()):
+                 package_dirs: Sequence[str] = (), mirror_tolerance: float | None = None):
         self._files, self._folder, self._package_dirs = files, folder, list(package_dirs)
+        self._options = {} if mirror_tolerance is None else {"mirror_tolerance": mirror_tolerance}
         self._lock = threading.Lock()
         self._scene: Scene | None = None
         self._digest = ""
@@ -55,7 +56,8 @@ class RobotScenes:
             return None
         try:
             draft = draft_scene(urdf, package_dirs=self._package_dirs, urdf_file=URDF_FILE,
-                                robot_dirs=[str(Path(d).resolve()) for d in self._package_dirs])
+                                robot_dirs=[str(Path(d).resolve()) for d in self._package_dirs],
+                                **self._options)
         except UrdfError as error:
             with self._lock:
                 self._error = f"the robot on /robot_description cannot be planned: {error}"

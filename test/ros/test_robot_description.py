@@ -43,3 +43,12 @@ def test_an_unplannable_description_keeps_the_previous_robot(tmp_path):
     with pytest.raises(UrdfError):
         scenes.describe("<robot name='broken'>")
     assert scenes(ROBOT_SCENE).name == "biped"
+
+
+def test_the_mirror_tolerance_is_the_nodes(tmp_path):
+    """A right knee 8 % heavier than the left is refused at the default and drafted at 0.1."""
+    urdf = biped(right_knee_mass=1.08)
+    with pytest.raises(UrdfError, match="mirror"):
+        RobotScenes(_files, lambda: tmp_path).describe(urdf)
+    scenes = RobotScenes(_files, lambda: tmp_path, mirror_tolerance=0.1)
+    assert "drafted scene 'biped'" in scenes.describe(urdf)
