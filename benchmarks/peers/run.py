@@ -257,10 +257,11 @@ def scene_rows(scene: str, n: int, peers: list[str], time_limit: float,
                         continue
                     plan, why_not = exchange.read_plan(out), ""
                 else:
-                    out.unlink(missing_ok=True)
-                    (plan, why_not), load = measured(
-                        lambda: run_peer(python, peer, args, path, out, time_limit, pinned),
-                        threshold, wait)
+                    def solve(out=out, args=args, pinned=pinned):
+                        out.unlink(missing_ok=True)  # a re-run reads only its own plan
+                        return run_peer(python, peer, args, path, out, time_limit, pinned)
+
+                    (plan, why_not), load = measured(solve, threshold, wait)
                     row.update(load)
                 if plan is None:
                     rows.append({**row, "status": why_not})
