@@ -48,16 +48,20 @@ bench: setup
 bench-quick: setup
 	$(PYTHON) benchmarks/bench.py --quick
 
-# `bench-peers` (issue #27): DMOCC against Crocoddyl, Drake and OpenSim Moco, each peer in
-# its own env .venv-peers/<peer> (benchmarks/peers/setup_env.sh; a peer whose env cannot be
-# made is skipped with the reason), walker2d and walker3d at 4, 8 and 16 intervals per
+# `bench-peers` (issues #27, #38): DMOCC against Crocoddyl, Drake and OpenSim Moco, each peer
+# in its own env .venv-peers/<peer> (benchmarks/peers/setup_env.sh; a peer whose env cannot
+# be made is skipped with the reason), walker2d and walker3d at 4, 8 and 16 intervals per
 # phase, 300 s per solve; benchmarks/results/peers.json and benchmarks/peers.png
-# (benchmarks/README.md).
+# (benchmarks/README.md). Every row in one run, one solve at a time, each after the 1-minute
+# load average fell to 0.5 (re-run once, then marked, when above); single-threaded
+# (PEERS_THREADS=both adds the peers at their libraries' default threads). Run it on an
+# idle machine: ~4 h on 2 cores (single; both: ~6.5 h).
 PEERS ?= crocoddyl drake opensim
+PEERS_THREADS ?= single
 PEERS_ARGS ?=
 bench-peers: setup
 	@for peer in $(PEERS); do benchmarks/peers/setup_env.sh $$peer || true; done
-	$(PYTHON) -m benchmarks.peers.run --peers $(PEERS) $(PEERS_ARGS)
+	$(PYTHON) -m benchmarks.peers.run --peers $(PEERS) --threads $(PEERS_THREADS) $(PEERS_ARGS)
 
 # Build outputs and caches; keeps .venv/ (and forgets its msg_defs build, so the next
 # `make setup` rebuilds and reinstalls gait_planner_msgs) and keeps runs/.

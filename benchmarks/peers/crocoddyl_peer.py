@@ -1,7 +1,8 @@
 """Crocoddyl peer: problem.json -> plan.npz, run in the peer env from the repository root:
 
     .venv-peers/crocoddyl/bin/python -m benchmarks.peers.crocoddyl_peer PROBLEM OUT.npz \
-        [--solver fddp|csqp] [--integrator euler|rk4] [--max-iterations 500] [--time-limit 300]
+        [--solver fddp|csqp] [--integrator euler|rk4] [--setup project|example] \
+        [--threads 1] [--max-iterations 2000] [--time-limit 300]
 
 The gait written as Crocoddyl's biped examples write one (crocoddyl/utils/biped.py,
 SimpleBipedGaitProblem; mim_solvers/examples/solo12.py for constraints):
@@ -16,31 +17,48 @@ SimpleBipedGaitProblem; mim_solvers/examples/solo12.py for constraints):
   with the examples' gains [0, 30] (velocity damping; no position feedback); at a phase
   whose contacts include a touchdown, an ActionModelImpulseFwdDynamics with impulse models
   of every contact held after it (perfectly plastic), the striking points' placement
-  (DMOCC's) tracked there by a cost of weight PLACEMENT_WEIGHT (FDDP) or held by an
-  equality constraint (CSQP);
-* cost: sum over running models of dt |tau|^2 (the squared-torque cost, weight 1) plus the
-  regularisation the examples carry, kept small: ResidualModelState to the kinematic guess
-  with weights STATE_WEIGHTS (base orientation, joints, velocities; the examples use 500,
-  0.01, 10 on the same residual at weight 10 against a control weight of 0.1 to 1e-3);
+  (DMOCC's) tracked there by a cost of weight SETUPS[setup]["placement"] (FDDP) or held by
+  an equality constraint (CSQP);
+* cost: sum over running models of dt |tau|^2 (the squared-torque cost) plus the
+  regularisation the examples carry: ResidualModelState to the kinematic guess. The
+  weights are a setup (SETUPS, --setup): "project" (the default) keeps the regularisation
+  small against the squared torque (weight 1) and reads DMOCC's hard constraints as stiff
+  penalties (1e7 periodicity and ground, 1e6 placement, 1e5 limits); "example" gives every
+  term the magnitude the biped example gives its counterpart (control 0.1, state 10 with
+  500/0.01/10 per coordinate, wrench cone 10, strike placement 1e8, task 1e6) — the row
+  "FDDP euler example weights" of run.py, with the example's Euler integrator;
 * DMOCC's inequalities: friction cones (linearised, 4 facets, inner approximation; a full
   foot's WrenchCone over its heel-forefoot length and the scene's foot breadth: CoP inside
   the sole), joint ranges and joint speed limits (state bounds), free contact points at or
-  above the ground: quadratic-barrier costs of weights BARRIER_WEIGHTS (as the examples'
-  wrench cones) for FDDP; hard constraints for mim_solvers' CSQP (--solver csqp, an option
-  only: on walker2d at 4 per phase from DMOCC's start it reached NaN after 20 iterations,
-  48 s, so run.py does not use it);
+  above the ground: quadratic-barrier costs (as the examples' wrench cones) for FDDP; hard
+  constraints for mim_solvers' CSQP (--solver csqp, with its README's settings,
+  CSQP_SETTINGS). On walker2d at 4 per phase from DMOCC's start (2026-11-28) CSQP fails:
+  its ADMM QP does not converge within max_qp_iters (primal residual ~1e3, dual ~1e10 at
+  1000 QP iterations, then 1e158), the trial step's cost is NaN, and mim_solvers 0.3.0
+  raises "step_error" inside an OpenMP region of tryStep, which aborts the process (exit
+  -6, SIGABRT) instead of letting the line search try a shorter step; with the example
+  weights it stops after 25 iterations without an acceptable step (J 2e9). Crocoddyl
+  3.2.1 fills a ConstraintModelManager's bounds only in calc (uninitialised before): the
+  shooting problem is evaluated once before the solver is made;
 * the start: Crocoddyl's shooting problem starts from a fixed state x0: the kinematic
   guess's first node (moved along x so its stance heel stands on DMOCC's placement) made
   feasible (`feasible_start`), or (--start dmocc, a warm row) DMOCC's optimal start state;
-  periodicity as a terminal cost of weight PERIODIC_WEIGHT on the state against
+  periodicity as a terminal cost of weight SETUPS[setup]["periodic"] on the state against
   mirror(x0) + step (hard periodicity needs x0 free, which a shooting problem lacks).
 Not expressed: free phase durations, DMOCC's torso lean bound (only the orientation
 regularisation), its swing clearance (1 cm) and strike speed bound, kinetic-energy cost.
+
+Threads: the shooting problem's calc/calcDiff run on `ShootingProblem.nthreads` OpenMP
+threads, by default the build's CROCODDYL_WITH_NTHREADS (2 in the 3.2.1 wheel; not read from
+OMP_NUM_THREADS); --threads sets it (default 1, 0 the library's default) and the plan's
+meta says it ("threads"). The solve is one call, stopped at the time limit by a callback
+(`_solve_until`).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import time
 from pathlib import Path
 
@@ -58,15 +76,42 @@ INV_DAMPING = 1e-8
 # examples' [0, 30] (velocity damping alone) let held points sink 16 to 34 mm on walker2d
 # at 4 intervals per phase (Euler); critically damped at 20 rad/s instead
 BAUMGARTE_GAINS = np.array([400.0, 40.0])
-STATE_WEIGHTS = {"base_orientation": 10.0, "joints": 0.1, "velocities": 0.1}
-# quadratic-barrier weights (FDDP): per N^2 (cones, as the examples' 10), rad^2 and
-# (rad/s)^2 (joint ranges and speeds), m^2 (contact points above the ground)
-BARRIER_WEIGHTS = {"cone": 10.0, "limits": 1e5, "ground": 1e7}
-PLACEMENT_WEIGHT = 1e6
-# terminal periodicity weight per start: from DMOCC's start 1e7 holds the end within 0.7 mm
-# of mirror(x0) (1e5: 45 mm; walker2d, 4 per phase); from the guess's start no periodic gait
-# is near, and 1e7 keeps FDDP from converging (2000 iterations, stop 5.4), so 1e5 there
-PERIODIC_WEIGHT = {"dmocc": 1e7, "guess": 1e5}
+# the penalty weights of a setup: the project's (a stiff reading of DMOCC's hard
+# constraints) or the magnitudes Crocoddyl's own biped examples give their terms
+# (crocoddyl/utils/biped.py, SimpleBipedGaitProblem, which bipedal_gaits_fwddyn.py solves):
+# --setup project|example
+SETUPS = {
+    "project": {
+        "torque": 1.0,  # the squared-torque objective itself
+        "state_reg": 1.0,
+        # per-coordinate weights of the state regularisation (base orientation, joints,
+        # velocities), the same at impulses
+        "state_weights": {"base_orientation": 10.0, "joints": 0.1, "velocities": 0.1},
+        "impulse_state_weights": None,  # the running ones
+        # quadratic-barrier weights: per N^2 (cones, as the examples' 10), rad^2 and
+        # (rad/s)^2 (joint ranges and speeds), m^2 (contact points above the ground)
+        "cone": 10.0, "limits": 1e5, "ground": 1e7,
+        "placement": 1e6,
+        # terminal periodicity weight per start: from DMOCC's start 1e7 holds the end within
+        # 0.7 mm of mirror(x0) (1e5: 45 mm; walker2d, 4 per phase); from the guess's start no
+        # periodic gait is near, and 1e7 keeps FDDP from converging (2000 iterations, stop
+        # 5.4), so 1e5 there
+        "periodic": {"dmocc": 1e7, "guess": 1e5},
+    },
+    "example": {
+        "torque": 1e-1,  # ctrlReg
+        "state_reg": 1e1,  # stateReg, running: [0]*3 + [500]*3 + [0.01]*nj + [10]*nv
+        "state_weights": {"base_orientation": 500.0, "joints": 0.01, "velocities": 10.0},
+        # impulse stateReg: [1]*6 + [0.1]*nj + [10]*nv
+        "impulse_state_weights": {"base": 1.0, "joints": 0.1, "velocities": 10.0},
+        "cone": 1e1,  # wrenchCone barrier
+        "limits": 1e3,  # humanoid_taichi.py's limitCost (biped.py has no joint limits)
+        # no counterpart in biped.py: its task weight (comTrack, footTrack 1e6)
+        "ground": 1e6,
+        "placement": 1e8,  # the impulse model's footTrack
+        "periodic": {"dmocc": 1e6, "guess": 1e6},  # task weight (a terminal task here)
+    },
+}
 FOOT_BREADTH = 0.0915  # m, the scene's foot (DMOCC's foot_half_width x 2)
 _LWA = pin.LOCAL_WORLD_ALIGNED
 
@@ -188,8 +233,10 @@ def mirror_state(walker: Walker, problem: dict, x: np.ndarray, back: bool = Fals
 class GaitBuilder:
     """Action models of the gait (module docstring) for one solver kind."""
 
-    def __init__(self, walker: Walker, problem: dict, hard: bool, integrator: str):
+    def __init__(self, walker: Walker, problem: dict, hard: bool, integrator: str,
+                 setup: dict):
         self.w, self.p, self.hard, self.integrator = walker, problem, hard, integrator
+        self.setup = setup
         self.mu = problem["friction_coefficient"]
         nv = walker.model.nv
         names = problem["joint_names"]
@@ -202,10 +249,14 @@ class GaitBuilder:
             lo[nv + 6:], hi[nv + 6:] = -problem["joint_speed_limit"], problem["joint_speed_limit"]
         self.state_bounds = (lo, hi)
         self.x_neutral = walker.state.zero()
-        weights = np.concatenate([[0.0] * 3, [STATE_WEIGHTS["base_orientation"]] * 3,
-                                  [STATE_WEIGHTS["joints"]] * (nv - 6),
-                                  [STATE_WEIGHTS["velocities"]] * nv])
+        running = setup["state_weights"]
+        weights = np.concatenate([[0.0] * 3, [running["base_orientation"]] * 3,
+                                  [running["joints"]] * (nv - 6), [running["velocities"]] * nv])
         self.reg_activation = weights ** 2
+        impulse = setup["impulse_state_weights"]
+        self.impulse_reg_activation = self.reg_activation if impulse is None else \
+            np.concatenate([[impulse["base"]] * 6, [impulse["joints"]] * (nv - 6),
+                            [impulse["velocities"]] * nv]) ** 2
 
     def _bounded(self, costs, constraints, name: str, kind: str, residual, lo, hi) -> None:
         """residual within [lo, hi]: a constraint (CSQP) or a quadratic barrier (FDDP)."""
@@ -217,13 +268,14 @@ class GaitBuilder:
             bounds = crocoddyl.ActivationBounds(np.maximum(lo, -finite), np.minimum(hi, finite))
             costs.addCost(name, crocoddyl.CostModelResidual(
                 self.w.state, crocoddyl.ActivationModelQuadraticBarrier(bounds), residual),
-                BARRIER_WEIGHTS[kind])
+                self.setup[kind])
 
     def _common(self, costs, constraints, x_ref: np.ndarray, free: list[str], nu: int) -> None:
         w = self.w
+        activation = self.reg_activation if nu else self.impulse_reg_activation
         costs.addCost("state_reg", crocoddyl.CostModelResidual(
-            w.state, crocoddyl.ActivationModelWeightedQuad(self.reg_activation),
-            crocoddyl.ResidualModelState(w.state, x_ref, nu)), 1.0)
+            w.state, crocoddyl.ActivationModelWeightedQuad(activation),
+            crocoddyl.ResidualModelState(w.state, x_ref, nu)), self.setup["state_reg"])
         self._bounded(costs, constraints, "limits", "limits",
                       crocoddyl.ResidualModelState(w.state, self.x_neutral, nu),
                       *self.state_bounds)
@@ -257,7 +309,7 @@ class GaitBuilder:
                 residual = crocoddyl.ResidualModelContactFrictionCone(w.state, frame, cone, nu)
             self._bounded(costs, constraints, f"{name}_cone", "cone", residual, cone.lb, cone.ub)
         costs.addCost("torque", crocoddyl.CostModelResidual(
-            w.state, crocoddyl.ResidualModelControl(w.state, nu)), 1.0)
+            w.state, crocoddyl.ResidualModelControl(w.state, nu)), self.setup["torque"])
         free = [c for c in self.p["contact_frames"] if c not in active]
         self._common(costs, constraints, x_ref, free, nu)
         dmodel = crocoddyl.DifferentialActionModelContactFwdDynamics(
@@ -281,7 +333,7 @@ class GaitBuilder:
                     w.state, residual, target, target))  # mim_solvers: equality as lb = ub
             else:
                 costs.addCost(f"{c}_strike", crocoddyl.CostModelResidual(w.state, residual),
-                              PLACEMENT_WEIGHT)
+                              self.setup["placement"])
         free = [c for c in self.p["contact_frames"] if c not in active]
         self._common(costs, constraints, x_ref, free, 0)
         return crocoddyl.ActionModelImpulseFwdDynamics(w.state, impulses, costs, constraints,
@@ -298,11 +350,12 @@ class GaitBuilder:
         return crocoddyl.IntegratedActionModelEuler(dmodel, 0.0)
 
 
-def build(problem: dict, solver: str, integrator: str, start: str):
+def build(problem: dict, solver: str, integrator: str, start: str, setup: str = "project"):
     """(shooting problem, walker, knots (kind, plan node) per action model, initial xs,
-    us); x0 from `start` ("guess" or "dmocc"), the initial trajectory the guess's."""
+    us); x0 from `start` ("guess" or "dmocc"), the initial trajectory the guess's, the
+    weights SETUPS[setup]."""
     walker = Walker(problem)
-    builder = GaitBuilder(walker, problem, solver == "csqp", integrator)
+    builder = GaitBuilder(walker, problem, solver == "csqp", integrator, SETUPS[setup])
     times, xs_guess = node_states(walker, problem, "guess")
     models, knots, n = [], [], 0  # knots: (kind, plan node) per action model
     for p, phase in enumerate(problem["phases"]):
@@ -319,7 +372,7 @@ def build(problem: dict, solver: str, integrator: str, start: str):
           node_states(walker, problem, "dmocc")[1][0])
     shooting = crocoddyl.ShootingProblem(x0, models,
                                          builder.terminal(mirror_state(walker, problem, x0),
-                                                          PERIODIC_WEIGHT[start]))
+                                                          SETUPS[setup]["periodic"][start]))
     xs = [x0] + [xs_guess[k] for _, k in knots[1:]] + [xs_guess[n]]
     us = shooting.quasiStatic(xs[:-1])
     return shooting, walker, knots, xs, us
@@ -346,35 +399,69 @@ def contact_forces(walker: Walker, shooting, knots, K: int) -> dict[str, np.ndar
     return out
 
 
-CHUNK = 50  # iterations between checks of the time limit
+# mim_solvers' README settings for SolverCSQP (termination on the KKT residual, the ADMM
+# QP's iteration cap and tolerances, the filter line search)
+CSQP_SETTINGS = {"termination_tolerance": 1e-3, "max_qp_iters": 1000, "eps_abs": 1e-5,
+                 "eps_rel": 0.0, "use_filter_line_search": True}
 
 
-def _solve_until(solver, xs, us, max_iterations: int, deadline: float) -> tuple[bool, int]:
-    """(converged, iterations): solve in chunks of CHUNK iterations, each warm from the
-    last, until converged, max_iterations or the deadline (time.perf_counter())."""
-    done, converged = 0, False
-    while done < max_iterations and not converged and time.perf_counter() < deadline:
-        converged = solver.solve(xs, us, min(CHUNK, max_iterations - done), False)
-        done += solver.iter
-        xs, us = list(solver.xs), list(solver.us)
-        if solver.iter == 0:
-            break
-    return bool(converged), done
+class TimeLimit(Exception):
+    """The solve's wall-clock deadline passed (raised from the solver's callback)."""
+
+
+class Deadline(crocoddyl.CallbackAbstract):
+    """FDDP's per-iteration callback that stops the solve at a wall-clock deadline by
+    raising TimeLimit; the solver keeps its last accepted iterate."""
+
+    def __init__(self, deadline: float):
+        crocoddyl.CallbackAbstract.__init__(self)
+        self.deadline = deadline
+
+    def __call__(self, solver) -> None:
+        if time.perf_counter() > self.deadline:
+            raise TimeLimit
+
+
+def _solve_until(solver, xs, us, max_iterations: int, deadline: float,
+                 init_reg: float = math.nan) -> tuple[bool, int]:
+    """(converged, iterations) of one `solve` call from (xs, us) and regularisation
+    `init_reg` (NaN: the solver's own start, `reg_min`), stopped at max_iterations or the
+    deadline (time.perf_counter()): FDDP by the Deadline callback, CSQP by its own
+    `max_solve_time`. One call, not chunks of calls: a new call restarts FDDP's
+    regularisation (`init_reg`) and forgets that its iterate was feasible, which a
+    convergence test needs (on walker2d at 4 per phase, RK4, from DMOCC's start: 142
+    iterations in chunks of 50 against 129 in one call; Euler: 1389 against 613)."""
+    if isinstance(solver, crocoddyl.SolverFDDP):
+        solver.setCallbacks([Deadline(deadline)])
+    else:
+        solver.max_solve_time = max(deadline - time.perf_counter(), 0.0)
+    try:
+        converged = solver.solve(xs, us, max_iterations, False, init_reg)
+    except TimeLimit:
+        converged = False
+    return bool(converged), int(solver.iter)
 
 
 def solve(problem: dict, solver_name: str, integrator: str, start_state: str,
-          max_iterations: int, time_limit: float, rounds: int) -> exchange.Plan:
+          max_iterations: int, time_limit: float, rounds: int, threads: int = 1,
+          setup: str = "project") -> exchange.Plan:
     """The plan (exchange.Plan) of the problem by Crocoddyl; after the first solve, each
     of `rounds` more starts from the previous half cycle's end mapped back by the mirror
-    (x0 <- mirror^-1(x_K)), warm, towards a periodic gait (a fixed point)."""
+    (x0 <- mirror^-1(x_K)), warm, towards a periodic gait (a fixed point). `threads`: the
+    shooting problem's `nthreads` (its OpenMP threads for calc/calcDiff; 0 leaves the
+    library's default, CROCODDYL_WITH_NTHREADS, which OMP_NUM_THREADS does not change)."""
     start = time.perf_counter()
-    shooting, walker, knots, xs, us = build(problem, solver_name, integrator, start_state)
+    shooting, walker, knots, xs, us = build(problem, solver_name, integrator, start_state,
+                                            setup)
+    if threads > 0:
+        shooting.nthreads = threads
     if solver_name == "csqp":
+        # crocoddyl 3.2.1 fills a ConstraintModelManager's bounds (g_lb, g_ub) only in
+        # calc: before it they are uninitialised memory
+        shooting.calc(xs, us)
         solver = mim_solvers.SolverCSQP(shooting)
-        solver.max_qp_iters = 1000
-        solver.termination_tolerance = 1e-4
-        solver.eps_abs, solver.eps_rel = 1e-6, 1e-6
-        solver.max_solve_time = time_limit
+        for key, value in CSQP_SETTINGS.items():
+            setattr(solver, key, value)
     else:
         solver = crocoddyl.SolverFDDP(shooting)
         solver.th_stop = 1e-7  # the biped example's
@@ -388,7 +475,7 @@ def solve(problem: dict, solver_name: str, integrator: str, start_state: str,
         shooting.x0 = x0
         periodic.reference = mirror_state(walker, problem, x0)
         converged, more = _solve_until(solver, [x0] + list(solver.xs[1:]), list(solver.us),
-                                       max_iterations, deadline)
+                                       max_iterations, deadline, float(solver.preg))
         iterations += more
     solve_time = time.perf_counter() - start
     K = sum(1 for kind, _ in knots if kind == "running")
@@ -418,7 +505,8 @@ def solve(problem: dict, solver_name: str, integrator: str, start_state: str,
                   f"gap {solver.ffeas:.3g}",
         "objective": float(dts @ (tau ** 2).sum(axis=1)),
         "total_cost": float(solver.cost), "dynamic_gap": float(solver.ffeas),
-        "start": start_state,
+        "start": start_state, "threads": int(shooting.nthreads), "setup": setup,
+        "integrator": integrator,
         "notes": "durations fixed (DMOCC's); start state fixed ("
                  + ("the kinematic guess's" if start_state == "guess" else
                     "DMOCC's optimum: a warm row") + "); "
@@ -443,12 +531,18 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=0,
                         help="re-solves from the mirrored end state (towards periodicity)")
     parser.add_argument("--time-limit", type=float, default=300.0)
+    parser.add_argument("--threads", type=int, default=1,
+                        help="ShootingProblem.nthreads (0: the library's default)")
+    parser.add_argument("--setup", choices=tuple(SETUPS), default="project",
+                        help="penalty weights: the project's, or the biped example's")
     args = parser.parse_args()
     plan = solve(exchange.read_problem(args.problem), args.solver, args.integrator,
-                 args.start, args.max_iterations, args.time_limit, args.rounds)
+                 args.start, args.max_iterations, args.time_limit, args.rounds,
+                 args.threads, args.setup)
     exchange.write_plan(args.out, plan)
     print(f"{args.out}: {plan.meta['status']}, {plan.meta['iterations']} iterations, "
-          f"{plan.meta['solve_time']:.2f} s, objective {plan.meta['objective']:.4g}")
+          f"{plan.meta['solve_time']:.2f} s, objective {plan.meta['objective']:.4g}, "
+          f"{plan.meta['threads']} thread(s)")
 
 
 if __name__ == "__main__":

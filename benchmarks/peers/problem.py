@@ -154,11 +154,13 @@ def dmocc_settings(scene: Scene, intervals_per_phase: int, time_limit: float) ->
 def export(scene_name: str, intervals_per_phase: int, out_dir: Path, *,
            time_limit: float = 300.0, planner: Planner | None = None
            ) -> tuple[PlanResult, GaitSettings, Path]:
-    """Plan the scene by DMOCC and write <out_dir>/problem.json and its URDF; returns the
-    plan, its settings and problem.json's path. Raises RuntimeError if DMOCC fails."""
+    """Plan the scene by DMOCC, cold (never from a plan `planner` stored before: a second
+    export of the same problem solves it as the first did), and write
+    <out_dir>/problem.json and its URDF; returns the plan, its settings and problem.json's
+    path. Raises RuntimeError if DMOCC fails."""
     scene = load_scene(scene_name)
     settings = dmocc_settings(scene, intervals_per_phase, time_limit)
-    result = (planner or Planner()).plan(scene, settings)
+    result = (planner or Planner()).plan(scene, settings, warm_start=False)
     if not result.success:
         raise RuntimeError(f"DMOCC did not plan {scene_name} at {intervals_per_phase}: "
                            f"{result.message}")
