@@ -45,9 +45,10 @@ WALKING = {"hip_pitch": [-45, 25], "hip_roll": [-15, 15], "hip_yaw": [-15, 15],
 def g1_walk(example_robots, tmp_path_factory):
     """The summary of G1's plan (walking ranges) walked 10 half cycles on its own URDF."""
     folder = tmp_path_factory.mktemp("g1")
-    text = (example_robots / "g1_description/urdf/g1_29dof_rev_1_0.urdf").read_text()
+    urdf = example_robots / "g1_description/urdf/g1_29dof_rev_1_0.urdf"
+    text = urdf.read_text()
     dirs = (str(example_robots.parents[1]),)
-    draft = draft_scene(text, package_dirs=dirs)
+    draft = draft_scene(text, package_dirs=dirs, urdf_file=str(urdf))
     scene = yaml.safe_load(draft.yaml)
     options = scene["gait"]["options"]
     options["torso_lean_max"] = 5
@@ -67,7 +68,7 @@ def test_g1_walks_its_first_half_cycle_on_its_own_urdf(g1_walk):
     assert g1_walk["joint_rms_per_half_cycle_deg"][0] < JOINT_RMS
 
 
-@pytest.mark.xfail(strict=True, reason="measured 2026-11-29: 2 of 10 half cycles, feedback "
+@pytest.mark.xfail(strict=True, reason="measured 2026-11-28: 2 of 10 half cycles, feedback "
                    "59 %: the torso rolls and yaws off the plan (issue #37 item 5 open)")
 def test_g1_walks_ten_half_cycles_with_feedback_at_most_40_percent(g1_walk):
     assert g1_walk["half_cycles_walked"] == 10, g1_walk["stopped"]
