@@ -607,8 +607,9 @@ def robots(doc) -> list[str]:
             ("nodes", "nodes", ".0f"), ("plan s", "plan_s", ".1f"),
             ("half cycles walked", "walked", ""), ("walk", "why", "")]) + [""]
     if h.get("figure"):
-        out += [f"Each robot at the mid-step node of its plan (matplotlib, from the "
-                f"recording's /tf): [{h['figure']}]({h['figure']})", "",
+        out += [f"Each robot at the mid-step node of its plan, its own meshes placed by the "
+                f"recording's /tf as rerun draws them (`robot_picture.py`): "
+                f"[{h['figure']}]({h['figure']})", "",
                 f"![robots mid-step]({h['figure']})", ""]
     return out
 

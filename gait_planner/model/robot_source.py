@@ -49,7 +49,8 @@ def check_robot(c: Checker, value: Any, bodies: tuple[Body, ...],
     locked = {k: c.number(v, join("robot.locked", k)) for k, v in locked_map.items()}
     dirs = tuple(c.string(d, join("robot.package_dirs", i))
                  for i, d in enumerate(c.sequence(r.get("package_dirs", []), "robot.package_dirs")))
-    text, resolved = "", ""
+    text = ""
+    resolved = urdf_file if Path(urdf_file).is_absolute() else ""  # (read or not)
     if folder is not None:
         path = folder / urdf_file
         try:

@@ -212,8 +212,8 @@ class RobotSource:
         locked: the URDF's joints held fixed (merged into their parent), name -> rad.
         package_dirs: folders that resolve the URDF's ``package://`` paths (relative: to the
             scene file).
-        urdf_path: the URDF's absolute path where it was read ("" where it was not), for
-            mesh paths relative to it.
+        urdf_path: the URDF's absolute path: where it was read, or as the scene names it
+            ("" for a relative name not read), for mesh paths relative to it.
     """
 
     urdf_file: str

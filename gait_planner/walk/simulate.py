@@ -84,7 +84,8 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     called at every half cycle's end; robot: the robot's own URDF a drafted plan walks on
     (`walk.mujoco_model`); default: for a scene drafted from a URDF (its ``robot:``
     section), the recording's /robot_description, which is that URDF, with the section's
-    locked joints and package folders (the foot meshes' only)."""
+    locked joints, its package folders and the URDF's own folder and parents (for the foot
+    meshes only)."""
     import mujoco
 
     from gait_planner.walk.mujoco_model import build_model, plan_qpos, plan_root_qvel
@@ -100,7 +101,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         raise ValueError(f"{rec.path}: scene {scene.name!r} has no foot with two contact "
                          f"points (heel and forefoot); walk needs feet")
     if robot is None and scene.robot is not None:  # drafted: the recording's own URDF
-        robot = RobotUrdf(rec.urdf, scene.robot.package_dirs, dict(scene.robot.locked))
+        robot = RobotUrdf(rec.urdf, scene.robot.search_dirs(), dict(scene.robot.locked))
     half_width = float(rec.metadata.get("foot_half_width", 0.04575))
     sim = cfg["simulation"]
     wm = build_model(rec, scene, half_width, sim["foot_sphere_radius"], sim["time_step"],
