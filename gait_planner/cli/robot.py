@@ -55,15 +55,16 @@ def add_scene_parser(commands: argparse._SubParsersAction) -> None:
 
 def draft_of(args: argparse.Namespace, folder: Path | None = None):
     """The `UrdfDraft` of args.urdf with the importer's options, to be written in `folder`
-    (its ``robot:`` section names the URDF and --package-dir folders relative to it; None:
-    absolute); CliError naming the cause."""
+    (its ``robot:`` section names the URDF and --package-dir folders relative to it when
+    they are below it, else absolute; None: absolute); CliError naming the cause."""
     import os
 
     from gait_planner.model.urdf_import import UrdfError, draft_scene
 
-    def written(p: str | Path) -> str:
+    def written(p: str | Path) -> str:  # relative only below the draft's folder
         p = Path(p).resolve()
-        return str(p) if folder is None else os.path.relpath(p, folder.resolve())
+        relative = None if folder is None else os.path.relpath(p, folder.resolve())
+        return str(p) if relative is None or relative.startswith("..") else relative
 
     path = Path(args.urdf)
     try:

@@ -43,7 +43,7 @@ class RobotScenes:
         self._scene: Scene | None = None
         self._digest = ""
         self._error = "no URDF received yet on /robot_description (nor in the node's " \
-                      "robot_description parameter)"
+                      "robot_description parameter): is robot_state_publisher running?"
 
     def describe(self, urdf: str) -> str | None:
         """Draft `urdf` (a URDF text) as the described robot; the log line saying what was
