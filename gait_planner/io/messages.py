@@ -35,7 +35,10 @@ Conventions:
   moment about the mean of the foot's active points, and the centre of pressure.
 * /tf: per node one TFMessage: ``world -> <root>`` (the root's COM and directors) and one
   transform per moving URDF joint (origin translation, rotation about the axis by the joint
-  angle); /tf_static: the contact frames. Frames are those of `gait_planner.io.urdf`.
+  angle); /tf_static: the contact frames. Frames are those of `gait_planner.io.urdf`; for a
+  scene drafted from a URDF (`Scene.robot`) those of that URDF (`frame_tree`,
+  `gait_planner.io.robot_tree`), whose text is then /robot_description, and the
+  JointTrajectory and /joint_states add its locked joints (`published_joints`).
 """
 
 from __future__ import annotations
