@@ -9,7 +9,6 @@ The mid-step node is the node nearest half the half cycle (t_(N-1) / 2). The URD
 
 from __future__ import annotations
 
-import os
 import tempfile
 from pathlib import Path
 
@@ -27,6 +26,7 @@ def _pose_rrd(mcap: str, rrd: Path, package_root: Path) -> str:
 
     from gait_planner.io.mcap_reader import read_plan_mcap
     from gait_planner.io.rerun_draw import log_ground
+    from gait_planner.io.rerun_robot import log_transform, log_urdf
 
     rec = read_plan_mcap(mcap)
     n = int(np.argmin(np.abs(rec.times - rec.times[-2] / 2)))
@@ -40,21 +40,9 @@ def _pose_rrd(mcap: str, rrd: Path, package_root: Path) -> str:
                                         collapse_panels=True))
     stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     log_ground(stream)
-    saved = os.environ.get("ROS_PACKAGE_PATH")
-    os.environ["ROS_PACKAGE_PATH"] = str(package_root)
-    try:
-        stream.log_file_from_contents("robot.urdf", rec.urdf.encode(),
-                                      entity_path_prefix="world/robot", static=True)
-    finally:
-        os.environ.pop("ROS_PACKAGE_PATH") if saved is None else \
-            os.environ.__setitem__("ROS_PACKAGE_PATH", saved)
-    stream.log("world/robot/frames/world", rr.Transform3D(parent_frame="tf#/world",
-                                                          child_frame="world"), static=True)
+    log_urdf(stream, rec.urdf, "", [str(package_root)], "robot")
     for t in rec.tf[n]:
-        x, y, z, w = t.rotation
-        stream.log(f"world/robot/frames/{t.child}", rr.Transform3D(
-            translation=t.translation, quaternion=rr.Quaternion(xyzw=[x, y, z, w]),
-            parent_frame=t.parent, child_frame=t.child), static=True)
+        log_transform(stream, t.parent, t.child, t.translation, t.rotation, static=True)
     stream.flush()
     stream.disconnect()
     return f"node {n} of {len(rec.times) - 1} ({rec.phases[n]})"

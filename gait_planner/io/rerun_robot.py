@@ -25,7 +25,7 @@ import rerun as rr
 from gait_planner.io.messages import WORLD_FRAME, tf_messages
 from gait_planner.result import PlanResult
 
-__all__ = ["ROBOT_ENTITY", "log_robot_model", "log_robot_motion"]
+__all__ = ["ROBOT_ENTITY", "log_robot_model", "log_robot_motion", "log_transform", "log_urdf"]
 
 ROBOT_ENTITY = "world/robot"
 
@@ -43,18 +43,32 @@ def _package_path(dirs):
             os.environ["ROS_PACKAGE_PATH"] = saved
 
 
-def log_robot_model(rec: rr.RecordingStream, result: PlanResult) -> None:
-    """The robot's URDF, static (module docstring)."""
-    robot = result.scene.robot
-    with _package_path(robot.search_dirs()):
-        if robot.urdf_path:
-            rec.log_file_from_path(Path(robot.urdf_path), entity_path_prefix=ROBOT_ENTITY,
-                                   static=True)
+def log_urdf(rec: rr.RecordingStream, urdf: str, urdf_path: str, dirs, name: str) -> None:
+    """A URDF (its text, or its file where `urdf_path` is set) through rerun's URDF loader,
+    static under `ROBOT_ENTITY`, ``package://`` paths looked for in `dirs`; and the frame
+    ``world`` of /tf tied to the view's ``world`` entity."""
+    with _package_path(dirs):
+        if urdf_path:
+            rec.log_file_from_path(Path(urdf_path), entity_path_prefix=ROBOT_ENTITY, static=True)
         else:
-            rec.log_file_from_contents(f"{result.scene.name}.urdf", robot.urdf.encode(),
+            rec.log_file_from_contents(f"{name}.urdf", urdf.encode(),
                                        entity_path_prefix=ROBOT_ENTITY, static=True)
     rec.log(f"{ROBOT_ENTITY}/frames/{WORLD_FRAME}",
             rr.Transform3D(parent_frame="tf#/world", child_frame=WORLD_FRAME), static=True)
+
+
+def log_transform(rec: rr.RecordingStream, parent: str, child: str, translation, xyzw,
+                  static: bool = False) -> None:
+    """One /tf transform parent -> child as a Transform3D between named frames."""
+    rec.log(f"{ROBOT_ENTITY}/frames/{child}", rr.Transform3D(
+        translation=list(translation), quaternion=rr.Quaternion(xyzw=list(xyzw)),
+        parent_frame=parent, child_frame=child), static=static)
+
+
+def log_robot_model(rec: rr.RecordingStream, result: PlanResult) -> None:
+    """The robot's URDF, static (module docstring)."""
+    robot = result.scene.robot
+    log_urdf(rec, robot.urdf, robot.urdf_path, robot.search_dirs(), result.scene.name)
 
 
 def log_robot_motion(rec: rr.RecordingStream, result: PlanResult) -> None:
@@ -65,9 +79,7 @@ def log_robot_motion(rec: rr.RecordingStream, result: PlanResult) -> None:
         rec.set_time("node", sequence=n)
         for transform in message["transforms"]:
             move, turn = transform["transform"]["translation"], transform["transform"]["rotation"]
-            rec.log(f"{ROBOT_ENTITY}/frames/{transform['child_frame_id']}", rr.Transform3D(
-                translation=[move["x"], move["y"], move["z"]],
-                quaternion=rr.Quaternion(xyzw=[turn["x"], turn["y"], turn["z"], turn["w"]]),
-                parent_frame=transform["header"]["frame_id"],
-                child_frame=transform["child_frame_id"]))
+            log_transform(rec, transform["header"]["frame_id"], transform["child_frame_id"],
+                          (move["x"], move["y"], move["z"]),
+                          (turn["x"], turn["y"], turn["z"], turn["w"]))
     rec.reset_time()
