@@ -308,9 +308,10 @@ def _add_prepare(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "prepare", help="compile the scenes' derivatives and plan their defaults now "
         "(make setup runs it)",
-        description="Build each SCENE's default problem with compiled derivatives, so that "
-        "the C libraries are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) and "
-        "no first request compiles, and plan its default request into the plan library "
+        description="Build each SCENE's problems with compiled derivatives (one per shape: "
+        "level or ramp, a requested speed, stairs up, stairs down), so that the C libraries "
+        "are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) and no request "
+        "within the scene's ranges compiles, and plan its default request into the plan library "
         "(gait_planner/ocp/library.py), from which the node's first request re-plans warm. "
         "Takes about a minute for walker3d the first time, a few seconds when cached.")
     parser.add_argument("scenes", nargs="+", metavar="NAME|FILE.yaml",
@@ -327,7 +328,7 @@ def _compile_note(stage: str) -> None:
 def _prepare(args: argparse.Namespace) -> int:
     from gait_planner.model.loader import SceneError, find_scene
     from gait_planner.ocp.library import PlanLibrary
-    from gait_planner.ocp.settings import SettingsError, settings_for
+    from gait_planner.ocp.settings import SettingsError, form_requests, settings_for
     from gait_planner.ocp.solve import Planner
 
     for name in args.scenes:
@@ -338,6 +339,8 @@ def _prepare(args: argparse.Namespace) -> int:
             planner = Planner(library=PlanLibrary(), stage=_compile_note)
             used = planner.prepare(scene, settings)
             result = planner.plan(scene, settings, warm_start=False)
+            for shape in form_requests(scene, settings)[1:]:  # the default's is built
+                planner.prepare(scene, shape)
         except (SceneError, SettingsError) as error:
             raise CliError(str(error)) from None
         kept = ("its default plan kept in the plan library" if result.success

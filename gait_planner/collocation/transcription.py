@@ -274,7 +274,7 @@ class CollocationTranscription:
         self._eq.append(("pin_x", ca.mtimes(ca.DM(mb.contact_rows(first)[0:1]), self.q[0])))
         if s.speed > 0:  # the product's row (`speed_row`): knots 0..K span the half cycle
             self._eq.append(("speed", speed_row(self.step, ca.sum1(ca.vertcat(*self.h)),
-                                                s.speed)))
+                                                1.0 / s.speed)))
 
     def _impact_elements(self, j: int, after, impulse_at: np.ndarray):
         """The impact rows at knot j as elements: `impact_element` and the impulse's

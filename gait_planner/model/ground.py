@@ -17,6 +17,11 @@ ground there.
   shifted by s along x and by h up. The normal is e_z.
 
 Slope and stairs together are not a ground this planner builds (`Ground.__post_init__`).
+
+A compiled problem reads its ground from the NLP's parameter vector (`Ground.parameters`,
+`PARAMETERS`), not from constants folded into its code: `ParametricGround` is the same
+ground as CasADi expressions of those entries, so one compiled problem serves every slope
+and every stair height of one `Ground.form` (docs/design.md section 13).
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 # A swing point must clear a stair edge's height this far (m) before the edge on stairs up.
@@ -132,6 +138,33 @@ class Ground:
                     for j in (-1, 0, 1))
         return h * (steps - 1.0)
 
+    @property
+    def descending(self) -> bool:
+        return self.step_height < 0
+
+    @property
+    def form(self) -> str:
+        """What of the ground shapes the NLP (its rows and their Functions), as opposed to
+        its values (`parameters`): "plane" (level ground and ramps), "stairs up", "stairs
+        down" (with the segment rows) or "stairs down, edge margin" (without them)."""
+        if not self.stairs:
+            return "plane"
+        if self.step_height > 0:
+            return "stairs up"
+        return "stairs down" if self.segment_rows else "stairs down, edge margin"
+
+    @property
+    def parameters(self) -> np.ndarray:
+        """(len(PARAMETERS),) the values a compiled problem reads (`ParametricGround`): the
+        normal's x and z, rise per metre of step, step height m, riser m, tread m, and the
+        edge's shift towards the lower tread m (`clearance_height`: (edge margin + 5 edge
+        widths) signed with the step height; 0 without stairs)."""
+        n = self.normal
+        ahead = ((self.edge_margin + 5 * EDGE_WIDTH) * (1.0 if self.step_height > 0 else -1.0)
+                 if self.stairs else 0.0)
+        return np.array([n[0], n[2], self.rise_per_step, self.step_height, self.riser,
+                         self.tread, ahead])
+
     def metadata(self) -> dict[str, str]:
         """The recording's metadata entries that name this ground (`verify` reads them on
         its own; `from_metadata` is the inverse)."""
@@ -155,3 +188,77 @@ _METADATA = {"slope": "slope", "step_height": "step_height", "riser": "stair_ris
 
 
 LEVEL = Ground()
+
+# the entries of `Ground.parameters`, in order
+PARAMETERS = ("normal_x", "normal_z", "rise_per_step", "step_height", "riser", "tread",
+              "edge_ahead")
+
+
+def parametric_rise(parameters, step):
+    """`Ground.rise` of the ground of `parameters` (`Ground.parameters`, any algebra)."""
+    return step * parameters[2] + parameters[3]
+
+
+class ParametricGround:
+    """A ground of one `Ground.form` as CasADi expressions of its `Ground.parameters`
+    (values: a (len(PARAMETERS),) DM, SX or MX column), with `Ground`'s algebra: one
+    compiled Function serves every slope and stair height of the form. `inputs` are the
+    symbols a Function built from it takes after its own inputs (none for constants)."""
+
+    def __init__(self, values, form: str, inputs: tuple = ()):
+        self.values, self.form, self.inputs = values, form, inputs
+
+    @classmethod
+    def symbols(cls, ground: Ground) -> "ParametricGround":
+        """Symbols (SX) for the parameters of grounds of `ground`'s form."""
+        values = ca.SX.sym("ground", len(PARAMETERS))
+        return cls(values, ground.form, (values,))
+
+    @classmethod
+    def constant(cls, ground: Ground) -> "ParametricGround":
+        """`ground` itself: its parameters as constants."""
+        return cls(ca.DM(ground.parameters), ground.form)
+
+    def like(self, values) -> "ParametricGround":
+        """The same form with other values (e.g. the parameter vector's MX entries)."""
+        return ParametricGround(values, self.form)
+
+    @property
+    def stairs(self) -> bool:
+        return self.form != "plane"
+
+    @property
+    def descending(self) -> bool:
+        return self.form.startswith("stairs down")
+
+    @property
+    def segment_rows(self) -> bool:
+        return self.form == "stairs down"
+
+    @property
+    def normal(self) -> list:
+        """[n_x, 0, n_z]: the ramp's unit normal (`Ground.normal`)."""
+        return [self.values[0], 0.0, self.values[1]]
+
+    @property
+    def step_height(self):
+        return self.values[3]
+
+    def rise(self, step):
+        """`Ground.rise`: step tan(slope) + step_height."""
+        return parametric_rise(self.values, step)
+
+    def tread_height(self, tread: int):
+        return tread * self.values[3]
+
+    def along_normal(self, E: np.ndarray):
+        """n . E (1, k) of rows E (3, k) (positions linear in q): their height above the
+        ground's plane."""
+        return sum(n * ca.DM(E[i : i + 1]) for i, n in enumerate(self.normal)
+                   if not (isinstance(n, float) and n == 0.0))
+
+    def clearance_height(self, x, sigmoid):
+        """`Ground.clearance_height`, with the edge shift `Ground.parameters` gives."""
+        h, riser, tread, ahead = (self.values[i] for i in (3, 4, 5, 6))
+        steps = sum(sigmoid((x - riser - j * tread + ahead) / EDGE_WIDTH) for j in (-1, 0, 1))
+        return h * (steps - 1.0)

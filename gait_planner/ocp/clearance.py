@@ -65,7 +65,7 @@ from typing import Callable, Sequence
 import casadi as ca
 import numpy as np
 
-from gait_planner.model.ground import LEVEL, Ground
+from gait_planner.model.ground import LEVEL, Ground, ParametricGround
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.mirror import contact_partners
@@ -130,23 +130,32 @@ def strike_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]]
     return out
 
 
-def strike_rows(mb: Multibody, points: Sequence[str], ground: Ground = LEVEL) -> ca.Function:
-    """CasADi Function (q_n, q_{n+1}, h_n, c) -> one margin (>= 0) per striking point:
+def _parametric(ground: Ground | ParametricGround) -> ParametricGround:
+    """The ground as CasADi expressions: a `Ground`'s parameters as constants."""
+    return ground if isinstance(ground, ParametricGround) else ParametricGround.constant(ground)
+
+
+def strike_rows(mb: Multibody, points: Sequence[str], ground: Ground | ParametricGround = LEVEL
+                ) -> ca.Function:
+    """CasADi Function (q_n, q_{n+1}, h_n, c[, ground]) -> one margin (>= 0) per striking
+    point (ground: the parameters of a symbolic `ParametricGround`):
     ((v h_n)^2 - |d|^2) / (v c0)^2, c = (base time step s, v = strike speed bound m/s),
     d = x_{n+1} - x_n less its component along the ground's normal n: the point's mean
     speed along the ground over the interval below v (horizontal on level ground and
     stairs; the row is smooth, and O(1) at sigma = 1). In planar scenes in the x-z plane."""
     q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
         ca.SX.sym("c", 2)
-    tangential = np.eye(3) - np.outer(ground.normal, ground.normal)
+    ground = _parametric(ground)
     rows = []
     for point in points:
         contact = mb.scene.contact(point)
-        G = ca.DM(tangential @ mb.point_matrix(contact.body, contact.point))
-        step = ca.mtimes(G, q1 - q0)
+        P = mb.point_matrix(contact.body, contact.point)
+        d = ca.mtimes(ca.DM(P), q1 - q0)
+        step = d - ca.vertcat(*ground.normal) * ca.mtimes(ground.along_normal(P), q1 - q0)
         rows.append(((c[1] * h) ** 2 - ca.sumsqr(step)) / (c[1] * c[0]) ** 2)
-    return ca.Function("strike_speed_" + "_".join(points), [q0, q1, h, c],
-                       [ca.vertcat(*rows)], ["q", "q_next", "h", "c"], ["margin"])
+    return ca.Function("strike_speed_" + "_".join(points), [q0, q1, h, c, *ground.inputs],
+                       [ca.vertcat(*rows)], ["q", "q_next", "h", "c", *_names(ground)],
+                       ["margin"])
 
 
 def clearance_schedule(scene: Scene, held: Sequence[set[str]], settings: GaitSettings,
@@ -159,12 +168,18 @@ def clearance_schedule(scene: Scene, held: Sequence[set[str]], settings: GaitSet
                                settings.swing_clearance_ramp / node_spacing)
 
 
+def _names(ground: ParametricGround) -> list[str]:
+    return ["ground"] * len(ground.inputs)
+
+
 def edge_heights(mb: Multibody, point: str, half_width: float,
-                 ground: Ground = LEVEL) -> tuple[np.ndarray, np.ndarray]:
-    """Constant rows (Z, X), each (r, k), of what must clear the ground for a swing contact
+                 ground: Ground | ParametricGround = LEVEL):
+    """Rows (Z, X), each (r, k), of what must clear the ground for a swing contact
     point: its two foot edges p_C -+ half_width d2 (r = 2) in a 3D scene with half_width
     > 0, else the point itself (r = 1). Z q is their height along the ground's normal n
-    (n . p: above a ramp's plane; z on level ground and stairs), X q their x (m)."""
+    (n . p: above a ramp's plane; z on level ground and stairs), X q their x (m). numpy
+    arrays for a `Ground`, Z a CasADi expression of the parameters for a
+    `ParametricGround`."""
     c = mb.scene.contact(point)
     P = mb.point_matrix(c.body, c.point)
     if mb.scene.planar or half_width <= 0:
@@ -174,33 +189,40 @@ def edge_heights(mb: Multibody, point: str, half_width: float,
         start = mb.block(c.body).start + 6
         d2[:, start : start + 3] = half_width * np.eye(3)
         edges = [P - d2, P + d2]
-    return (np.array([ground.normal @ E for E in edges]), np.array([E[0] for E in edges]))
+    X = np.array([E[0] for E in edges])
+    if isinstance(ground, ParametricGround):
+        return ca.vertcat(*[ground.along_normal(E) for E in edges]), X
+    return np.array([ground.normal @ E for E in edges]), X
 
 
 def _stacked_edges(mb: Multibody, points: Sequence[str], half_width: float,
-                   ground: Ground) -> tuple[ca.DM, ca.DM]:
+                   ground: ParametricGround):
     """(Z, X), each (r, k): the `edge_heights` rows of `points`, stacked in order."""
     blocks = [edge_heights(mb, name, half_width, ground) for name in points]
-    return ca.DM(np.vstack([z for z, _ in blocks])), ca.DM(np.vstack([x for _, x in blocks]))
+    return ca.vertcat(*[z for z, _ in blocks]), ca.DM(np.vstack([x for _, x in blocks]))
 
 
 def ground_heights(mb: Multibody, points: Sequence[str], half_width: float,
-                   ground: Ground = LEVEL) -> ca.Function:
-    """CasADi Function "ground_heights" q (k,) -> (r,) m: the heights above the ground of
-    the `edge_heights` of `points`, in order: Z q on level ground and ramps; on stairs
-    Z q - `Ground.clearance_height`(X q), the height above the treads with each edge a
-    smooth step moved towards the lower tread (`gait_planner.model.ground`)."""
+                   ground: Ground | ParametricGround = LEVEL) -> ca.Function:
+    """CasADi Function "ground_heights" (q (k,)[, ground]) -> (r,) m: the heights above the
+    ground of the `edge_heights` of `points`, in order: Z q on level ground and ramps; on
+    stairs Z q - `Ground.clearance_height`(X q), the height above the treads with each
+    edge a smooth step moved towards the lower tread (`gait_planner.model.ground`);
+    ground: the parameters of a symbolic `ParametricGround`."""
     q = ca.SX.sym("q", mb.k)
+    ground = _parametric(ground)
     Z, X = _stacked_edges(mb, points, half_width, ground)
     height = ca.mtimes(Z, q)
     if ground.stairs:
         height = height - ground.clearance_height(ca.mtimes(X, q), _logistic)
-    return ca.Function("ground_heights_" + "_".join(points), [q], [height], ["q"], ["z"])
+    return ca.Function("ground_heights_" + "_".join(points), [q, *ground.inputs], [height],
+                       ["q", *_names(ground)], ["z"])
 
 
 def segment_heights(mb: Multibody, points: Sequence[str], half_width: float,
-                    ground: Ground) -> ca.Function:
-    """CasADi Function "segment_heights" (q_n, q_{n+1}, h_n, c) -> (2 r,) m, the rows that
+                    ground: Ground | ParametricGround) -> ca.Function:
+    """CasADi Function "segment_heights" (q_n, q_{n+1}, h_n, c[, ground]) -> (2 r,) m, the
+    rows that
     keep the straight segment between two nodes' `edge_heights` points above stairs down:
     first Z q_n - g(X q_{n+1}), then Z q_{n+1} - g(X q_n), each less the required height
     c[1] (g: `Ground.clearance_height`; c[0], the base time step, and h_n are unused, the
@@ -210,6 +232,7 @@ def segment_heights(mb: Multibody, points: Sequence[str], half_width: float,
     the edge's corner (module docstring)."""
     q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
         ca.SX.sym("c", 2)
+    ground = _parametric(ground)
     Z, X = _stacked_edges(mb, points, half_width, ground)
 
     def g(x):
@@ -217,24 +240,27 @@ def segment_heights(mb: Multibody, points: Sequence[str], half_width: float,
 
     rows = ca.vertcat(ca.mtimes(Z, q0) - g(ca.mtimes(X, q1)),
                       ca.mtimes(Z, q1) - g(ca.mtimes(X, q0))) - c[1]
-    return ca.Function("segment_heights_" + "_".join(points), [q0, q1, h, c], [rows],
-                       ["q", "q_next", "h", "c"], ["z"])
+    return ca.Function("segment_heights_" + "_".join(points), [q0, q1, h, c, *ground.inputs],
+                       [rows], ["q", "q_next", "h", "c", *_names(ground)], ["z"])
 
 
 def midpoint_heights(mb: Multibody, points: Sequence[str], half_width: float,
-                     ground: Ground) -> ca.Function:
-    """CasADi Function (q_n, q_{n+1}, h_n, c) -> (r,) m: the `ground_heights` of `points` at
+                     ground: Ground | ParametricGround) -> ca.Function:
+    """CasADi Function (q_n, q_{n+1}, h_n, c[, ground]) -> (r,) m: the `ground_heights` of
+    `points` at
     the mean configuration (q_n + q_{n+1}) / 2, whose contact points are the midpoints of
     the nodes' (positions are linear in q); h_n and c are unused (the interval element
     signature)."""
     q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
         ca.SX.sym("c", 2)
-    heights = ground_heights(mb, points, half_width, ground)(0.5 * (q0 + q1))
-    return ca.Function("midpoint_heights_" + "_".join(points), [q0, q1, h, c], [heights],
-                       ["q", "q_next", "h", "c"], ["z"])
+    ground = _parametric(ground)
+    heights = ground_heights(mb, points, half_width, ground)(0.5 * (q0 + q1), *ground.inputs)
+    return ca.Function("midpoint_heights_" + "_".join(points), [q0, q1, h, c, *ground.inputs],
+                       [heights], ["q", "q_next", "h", "c", *_names(ground)], ["z"])
 
 
-def segment_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]], ground: Ground,
+def segment_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]],
+                     ground: Ground | ParametricGround,
                      clearances: dict[int, dict[str, float]]
                      ) -> dict[int, tuple[tuple[str, ...], float]]:
     """{interval n: (contact points not held over it, required height m)} of intervals
@@ -245,7 +271,7 @@ def segment_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]], gr
     heights at nodes n and n + 1 (`clearance_schedule`; 0 at a node where a point is
     held), so that a segment ending in a contact asks only to stay above the treads.
     Points in the scene's order."""
-    if ground.step_height >= 0:
+    if not ground.descending:
         return {}
     out = {}
     for n, points in enumerate(held):
@@ -271,17 +297,18 @@ def schedule_heights(mb: Multibody, points: dict[str, float], half_width: float
 
 def clearance_rows(mb: Multibody, q_at: Callable[[int], ca.MX],
                    schedule: dict[int, dict[str, float]], half_width: float,
-                   ground: Ground = LEVEL) -> tuple[list, list[float]]:
+                   ground: Ground | ParametricGround = LEVEL, ground_values=()
+                   ) -> tuple[list, list[float]]:
     """The "ground_clearance" rows height - required >= 0 of every swing point of
     `schedule` (`clearance_schedule`; q_at(n) the configuration (k,) of node n), at its two
     foot edges (`ground_heights`, half_width m), and their required heights (m), in row
-    order."""
+    order; ground_values: what a symbolic ground's parameters are (the NLP's entries)."""
     rows: list = []
     heights: list[float] = []
     for n, points in schedule.items():
         if points:
             h = schedule_heights(mb, points, half_width)
-            rows.append(ground_heights(mb, tuple(points), half_width, ground)(q_at(n))
-                        - ca.DM(h))
+            rows.append(ground_heights(mb, tuple(points), half_width, ground)(
+                q_at(n), *ground_values) - ca.DM(h))
             heights += h
     return rows, heights

@@ -27,6 +27,8 @@ is published (`point_forces`).
 
 Friction cones and the roll moment's bound are about the ground's normal n (e_z on level
 ground and on stairs): the normal force is n . F, the tangential force F - (n . F) n.
+The transcription reads n from its parameters (`gait_planner.model.ground.ParametricGround`):
+`phase_rows` and `establishing_rows` then are CasADi expressions of them.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from gait_planner.model.ground import LEVEL, Ground
+from gait_planner.model.ground import LEVEL, Ground, ParametricGround
 from gait_planner.model.multibody import Multibody
 
 
@@ -81,16 +83,16 @@ class BodyContact:
         s = lam[self.n_rows] / self.span_length  # d / length = e
         return [[a - s * e for a, e in zip(first, d)], [b + s * e for b, e in zip(second, d)]]
 
-    def cone_rows(self, lam, q, mu, smoothing, half_width) -> list:
+    def cone_rows(self, lam, q, mu, smoothing, half_width, normal=None) -> list:
         """Friction cone (>= 0) of every point's ground force F about the ground's normal n,
         mu F_n - sqrt(|F_t|^2 + smoothing^2) with F_n = n . F and F_t = F - F_n n, which
         makes it push; for a 3D full contact also the roll moment's bound (centre of
         pressure within the foot's half width (m)). lam, q as for `force_components`, as
-        CasADi expressions."""
-        n = self.normal
+        CasADi expressions; normal: n (3 numbers or expressions), else this contact's."""
+        n = self.normal if normal is None else normal
         out = []
         for f in self.force_components(lam, q):
-            normal = sum(a * b for a, b in zip(n, f) if a != 0.0)
+            normal = sum(a * b for a, b in zip(n, f) if not _zero(a))
             tangential = [fi - normal * ni for fi, ni in zip(f, n)]
             out.append(mu * normal - ca.sqrt(sum(t**2 for t in tangential) + smoothing**2))
         if self.full and not self.planar:  # net force F_a + F_b = (lam0, lam1+lam3, lam2+lam4)
@@ -145,29 +147,56 @@ def body_contacts(mb: Multibody, contact_names, ground: Ground = LEVEL
     return tuple(out)
 
 
+def _zero(a) -> bool:
+    """a is the number 0 (not an expression)."""
+    return isinstance(a, (int, float)) and a == 0.0
+
+
 def stacked_rows(contacts: tuple[BodyContact, ...], k: int) -> np.ndarray:
     """All rows of a phase's contacts, (sum r, k)."""
     return np.vstack([c.rows for c in contacts]) if contacts else np.zeros((0, k))
 
 
+def phase_rows(contacts: tuple[BodyContact, ...], k: int, ground: ParametricGround):
+    """`stacked_rows` of contacts built on level ground (`body_contacts` without a
+    ground), with each full 3D contact's roll row n . d2 about `ground`'s normal: a
+    CasADi (sum r, k) matrix of its parameters."""
+    C = stacked_rows(contacts, k)
+    rows, offset = [], 0
+    for c in contacts:
+        rows += [ca.DM(C[offset + i : offset + i + 1]) for i in range(c.n_rows)]
+        if c.full and not c.planar:  # level: e_z . d2, one entry at d2_z
+            d2 = int(np.flatnonzero(c.rows[-1])[0]) - 2
+            roll = np.zeros((3, k))
+            roll[:, d2 : d2 + 3] = np.eye(3)
+            rows[-1] = ground.along_normal(roll)
+        offset += c.n_rows
+    return ca.vertcat(*rows) if rows else ca.DM.zeros(0, k)
+
+
 def establishing_rows(mb: Multibody, before: tuple[BodyContact, ...],
-                      after: tuple[BodyContact, ...], ground: Ground = LEVEL,
-                      landing: frozenset[str] = frozenset()) -> tuple[np.ndarray, np.ndarray]:
+                      after: tuple[BodyContact, ...], ground: Ground | ParametricGround = LEVEL,
+                      landing: frozenset[str] = frozenset()):
     """Rows E (r, k) and heights e (r,) m with E q = e at the node where `after` starts:
     the height above the ground of every point that touches down there, n . p = its
     tread's height (n the ground's normal; on stairs tread 1 for the points of
     `landing`, the contact points not held at the half cycle's start, else tread 0), and,
     for a body whose full contact is completed there, its roll n . d2 = 0 (foot flat on
-    the ground). r may be 0."""
+    the ground). r may be 0. numpy arrays for a `Ground`, CasADi expressions of the
+    parameters for a `ParametricGround` (its roll row: `phase_rows`')."""
+    symbolic = isinstance(ground, ParametricGround)
     held = {p for c in before for p in c.points}
     rows, heights = [], []
     for c in after:
         new = [p for p in c.points if p not in held]
         for p in new:
             point = mb.scene.contact(p)
-            rows.append(ground.normal @ mb.point_matrix(point.body, point.point))
+            P = mb.point_matrix(point.body, point.point)
+            rows.append(ground.along_normal(P) if symbolic else ground.normal @ P)
             heights.append(ground.tread_height(1 if p in landing else 0))
         if new and c.full and not c.planar:
-            rows.append(c.rows[-1])  # roll row
+            rows.append(phase_rows((c,), mb.k, ground)[-1, :] if symbolic else c.rows[-1])
             heights.append(0.0)
+    if symbolic:
+        return (ca.vertcat(*rows) if rows else ca.DM.zeros(0, mb.k)), ca.vertcat(*heights)
     return (np.array(rows) if rows else np.zeros((0, mb.k))), np.array(heights)

@@ -120,9 +120,15 @@ def expand_nlp(tr: ElementNLP) -> ExpandedNLP:
 
 
 def nlp_derivatives(tr: ElementNLP, compiler: Compiler | None = None,
-                    expanded: ExpandedNLP | None = None) -> dict[str, ca.Function]:
+                    expanded: ExpandedNLP | None = None,
+                    compile_rest: bool = True) -> dict[str, ca.Function]:
     """{"grad_f", "jac_g", "hess_lag"} of the NLP (tr.x, tr.p, tr.cost, tr.g); expanded:
-    `expand_nlp(tr)` if the caller has it."""
+    `expand_nlp(tr)` if the caller has it; compile_rest: with a compiler, the rest's
+    derivatives are compiled too (else they stay in CasADi's virtual machine: the elements
+    are the same Functions on every grid, the rest is not: walker3d's refined grids' rest
+    took 42 s (80 intervals) and 217 s (160) to compile, and compiled or not a refined
+    grid's Hessian and Jacobian took 18-31 ms an evaluation in a noisy A/B, against 4.7 ms
+    saved on its own 40 intervals (9.0 against 13.7 ms); 2026-11-28, `ocp.solve.Planner`)."""
     nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
     x_sx, p_sx, f, f_rest, g, g_rest = expand_nlp(tr) if expanded is None else expanded
     lam_f_sx, lam_g_sx = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", ng)
@@ -135,10 +141,12 @@ def nlp_derivatives(tr: ElementNLP, compiler: Compiler | None = None,
     if compiler is None:
         pairs = [(_element_jacobian(group), _element_hessian(group)) for group in tr.elements]
     else:  # a cached library is loaded, not formed; large one-node derivatives stay in the VM
-        rest = [Source.formed(fn) for fn in (rest_grad, rest_jac, rest_hess)]
+        rest = [Source.formed(fn) for fn in (rest_grad, rest_jac, rest_hess)] \
+            if compile_rest else []
         done = iter(compiler(rest + [s for group in tr.elements
                                      for s in _element_derivatives(group)]))
-        rest_grad, rest_jac, rest_hess = next(done), next(done), next(done)
+        if compile_rest:
+            rest_grad, rest_jac, rest_hess = next(done), next(done), next(done)
         pairs = [(next(done), next(done)) for _ in tr.elements]
 
     x, p = ca.MX.sym("x", nx), ca.MX.sym("p", int(tr.p.shape[0]))

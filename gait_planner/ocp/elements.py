@@ -3,7 +3,9 @@ one interval's unknowns, and where those unknowns sit in x and p (`Layout`).
 
 x = (vec U, vec T, L, sigma): U (ndof, N-1) the nodal reparametrisations u_n of the free
 nodes 0..N-2, T (nt, N-1) their scaled torques, L the scaled contact multipliers of nodes
-1..N-1 (`lam_sizes` each), sigma the phase scalings. p = (vec Qref, step length, mu).
+1..N-1 (`lam_sizes` each), sigma the phase scalings. p = (vec Qref, step length, mu, the
+ground's parameters (`gait_planner.model.ground.PARAMETERS`), 1 / speed (0: free)): the
+request's values are parameters of one compiled problem, not constants of its code.
 Nodes N-1 and N are mirror images of nodes 0 and 1 (`Transcription`); where the mirror
 commutes with the reparametrisation their elements read mirror images of x and p appended
 to them (`Layout.images`, `Layout.element_inputs`) and so are the regular elements, which
@@ -19,6 +21,7 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
+from gait_planner.model.ground import PARAMETERS, parametric_rise
 from gait_planner.model.multibody import Multibody
 
 
@@ -46,20 +49,24 @@ class Layout:
     mb: the multibody; N: intervals; lam_sizes: contact multipliers of nodes 1..N-1;
     n_scalings: entries of sigma; scaling_of_interval (N,): the entry each interval's time
     step scales with;
-    A, shift, B, M: the configuration, torque and increment mirrors (`ocp.mirror`; M None
+    A, along, up, B, M: the configuration mirror and its position masks
+    (`ocp.mirror.mirror_parts`), the torque and increment mirrors (`ocp.mirror`; M None
     where the increments have no mirror image)."""
 
     def __init__(self, mb: Multibody, N: int, lam_sizes: list[int], n_scalings: int,
-                 scaling_of_interval: np.ndarray, A: np.ndarray, shift: np.ndarray,
-                 lift: np.ndarray, B: np.ndarray, M: np.ndarray | None):
+                 scaling_of_interval: np.ndarray, A: np.ndarray, along: np.ndarray,
+                 up: np.ndarray, B: np.ndarray, M: np.ndarray | None):
         self.mb, self.N, self.lam_sizes = mb, N, list(lam_sizes)
         self.scaling_of_interval = scaling_of_interval
-        self.A, self.shift, self.lift, self.B, self.M = A, shift, lift, B, M
+        self.A, self.along, self.up, self.B, self.M = A, along, up, B, M
         self.n_u, self.n_tau = mb.ndof * (N - 1), mb.nt * (N - 1)
         self.n_lam = int(sum(self.lam_sizes))
         self.nx = self.n_u + self.n_tau + self.n_lam + n_scalings
         self.step_index = mb.k * (N - 1)  # of the step length in p; mu follows it
-        self.np = self.step_index + 2
+        self.mu_index = self.step_index + 1
+        self.ground_index = self.step_index + 2 + np.arange(len(PARAMETERS))
+        self.inverse_speed_index = int(self.ground_index[-1]) + 1
+        self.np = self.inverse_speed_index + 1
 
     # ---- indices ------------------------------------------------------------------------
 
@@ -89,8 +96,8 @@ class Layout:
         return np.arange(k) + self.source(node) * k
 
     def node_p_index(self, node: int) -> np.ndarray:
-        """Indices into p of a node element's pz (qref_n, step length)."""
-        return np.append(self.qref_index(node), self.step_index)
+        """Indices into p of a node element's pz (qref_n, step length, ground)."""
+        return np.concatenate([self.qref_index(node), [self.step_index], self.ground_index])
 
     def tau_index(self, node: int) -> np.ndarray:
         """Indices into (x, its images) of node `node`'s torques (see `u_index`)."""
@@ -108,7 +115,8 @@ class Layout:
 
     def interval_p_index(self, n: int) -> np.ndarray:
         """Indices into p of an interval element's pz at interval n."""
-        return np.concatenate([self.qref_index(n), self.qref_index(n + 1), [self.step_index]])
+        return np.concatenate([self.qref_index(n), self.qref_index(n + 1), [self.step_index],
+                               self.ground_index])
 
     def mirrored(self, image: bool) -> bool:
         """Whether an element of a mirror image node (or interval) is a variant of its own:
@@ -123,8 +131,8 @@ class Layout:
         their configurations themselves (`M` None). Images of x: M u_0, M u_1, B T_0,
         entry i being x_sign[i] x[x_source[i]] (signed permutations); images of p: the
         references A qref_0 + s e + c and A qref_1 + s e + c (s the step length, e and c
-        the shift and lift of `ocp.mirror.configuration_mirror`), entry i being
-        p_sign[i] p[p_source[i]] + p_shift[i] s + p_lift[i]."""
+        the shift and lift of `ocp.mirror.configuration_mirror` from p's ground), entry i
+        being p_sign[i] p[p_source[i]] + p_along[i] s + p_up[i] rise(s)."""
         if self.M is None:
             return None
         nd, k = self.mb.ndof, self.mb.k
@@ -139,7 +147,7 @@ class Layout:
                 "x_sign": np.concatenate([b for _, b in parts]),
                 "p_source": np.concatenate([a for a, _ in refs]),
                 "p_sign": np.concatenate([b for _, b in refs]),
-                "p_shift": np.tile(self.shift, 2), "p_lift": np.tile(self.lift, 2)}
+                "p_along": np.tile(self.along, 2), "p_up": np.tile(self.up, 2)}
 
     def element_inputs(self, x, p):
         """(xe, pe): x and p (numbers or CasADi expressions) followed by their mirror
@@ -148,41 +156,48 @@ class Layout:
         if im is None:
             return x, p
         step = p[self.step_index]
+        rise = parametric_rise(p[int(self.ground_index[0]) :], step)
         if isinstance(x, np.ndarray):
             return (np.concatenate([x, im["x_sign"] * x[im["x_source"]]]),
-                    np.concatenate([p, im["p_sign"] * p[im["p_source"]] + im["p_shift"] * step
-                                    + im["p_lift"]]))
+                    np.concatenate([p, im["p_sign"] * p[im["p_source"]] + im["p_along"] * step
+                                    + im["p_up"] * rise]))
         return (ca.vertcat(x, ca.DM(im["x_sign"]) * x[im["x_source"].tolist()]),
                 ca.vertcat(p, ca.DM(im["p_sign"]) * p[im["p_source"].tolist()]
-                           + ca.DM(im["p_shift"]) * step + ca.DM(im["p_lift"])))
+                           + ca.DM(im["p_along"]) * step + ca.DM(im["p_up"]) * rise))
 
-    def image(self, q, step):
-        """The mirror image A q + step e + c of a configuration (SX; `images`)."""
-        return ca.mtimes(ca.DM(self.A), q) + step * ca.DM(self.shift) + ca.DM(self.lift)
+    def image(self, q, step, ground):
+        """The mirror image A q + step e + c of a configuration (SX or MX; `images`) on the
+        ground of parameters `ground` (`gait_planner.model.ground.PARAMETERS`)."""
+        return (ca.mtimes(ca.DM(self.A), q) + step * ca.DM(self.along)
+                + parametric_rise(ground, step) * ca.DM(self.up))
 
     # ---- element Functions --------------------------------------------------------------
 
     def node_element(self, fn: ca.Function, mirrored: bool) -> ca.Function:
-        """fn(q_n, c) of node n as an SX Function of z = u_n, pz = (qref_n, step length) and
-        c (node N-1, mirrored, is the image of node 0)."""
-        mb, nd, k = self.mb, self.mb.ndof, self.mb.k
-        z, pz = ca.SX.sym("z", nd), ca.SX.sym("pz", k + 1)
+        """fn(q_n, c[, ground]) of node n as an SX Function of z = u_n, pz = (qref_n, step
+        length, ground) and c (node N-1, mirrored, is the image of node 0)."""
+        mb, nd, k, G = self.mb, self.mb.ndof, self.mb.k, len(PARAMETERS)
+        z, pz = ca.SX.sym("z", nd), ca.SX.sym("pz", k + 1 + G)
         c = ca.SX.sym("c", fn.sparsity_in(1))
+        ground = pz[k + 1 :]
         q = mb.reparametrise(z, pz[0:k])
         if mirrored:
-            q = self.image(q, pz[k])
+            q = self.image(q, pz[k], ground)
         name = f"{fn.name()}_element" + ("_mirrored" if mirrored else "")
-        return ca.Function(name, [z, pz, c], [fn(q, c)], ["z", "pz", "c"], ["r"])
+        out = fn(q, c, ground) if fn.n_in() == 3 else fn(q, c)
+        return ca.Function(name, [z, pz, c], [out], ["z", "pz", "c"], ["r"])
 
     def interval_element(self, fn: ca.Function, next_mirrored: bool) -> ca.Function:
-        """fn(q_n, q_{n+1}, h_n, c) of interval n as an SX Function of z = (u_n, u_{n+1},
-        sigma_n), pz = (qref_n, qref_{n+1}, step length) and c = (base time step, constant)."""
-        mb, nd, k = self.mb, self.mb.ndof, self.mb.k
-        z, pz, c = ca.SX.sym("z", 2 * nd + 1), ca.SX.sym("pz", 2 * k + 1), ca.SX.sym("c", 2)
+        """fn(q_n, q_{n+1}, h_n, c[, ground]) of interval n as an SX Function of
+        z = (u_n, u_{n+1}, sigma_n), pz = (qref_n, qref_{n+1}, step length, ground) and
+        c = (base time step, constant)."""
+        mb, nd, k, G = self.mb, self.mb.ndof, self.mb.k, len(PARAMETERS)
+        z, pz, c = ca.SX.sym("z", 2 * nd + 1), ca.SX.sym("pz", 2 * k + 1 + G), ca.SX.sym("c", 2)
+        ground = pz[2 * k + 1 :]
         q0 = mb.reparametrise(z[0:nd], pz[0:k])
         q1 = mb.reparametrise(z[nd : 2 * nd], pz[k : 2 * k])
         if next_mirrored:
-            q1 = self.image(q1, pz[2 * k])
+            q1 = self.image(q1, pz[2 * k], ground)
         name = f"{fn.name()}_element" + ("_next_mirrored" if next_mirrored else "")
-        return ca.Function(name, [z, pz, c], [fn(q0, q1, c[0] * z[2 * nd], c)],
-                           ["z", "pz", "c"], ["r"])
+        args = (q0, q1, c[0] * z[2 * nd], c) + ((ground,) if fn.n_in() == 5 else ())
+        return ca.Function(name, [z, pz, c], [fn(*args)], ["z", "pz", "c"], ["r"])

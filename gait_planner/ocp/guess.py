@@ -19,6 +19,7 @@ import numpy as np
 
 from gait_planner.buffered import bind
 from gait_planner.model.angles import configuration
+from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.ocp.mirror import contact_partners
 from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
 
@@ -27,14 +28,15 @@ DIP = 0.07  # m, root lowered below the scene pose (legs must span a step)
 _W_CONTACT, _W_ROOT, _W_UPRIGHT, _W_SMALL = 1.0, 0.1, 0.3, 1e-3
 
 
-def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[str, np.ndarray]:
-    """Target world positions (N+1, 3) of every contact point."""
+def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float,
+                    ground: Ground = LEVEL) -> dict[str, np.ndarray]:
+    """Target world positions (N+1, 3) of every contact point on `ground`."""
     mb, N = tr.mb, tr.N
     S = np.diag([1.0, -1.0, 1.0])
     held = {c.name: [n for n in range(N) if c.name in
                      {p for bc in tr.contacts[tr.phase_of_interval[n]] for p in bc.points}]
             for c in mb.scene.contacts}
-    ground, G = {}, tr.ground
+    ground, G = {}, ground
     advance = np.array([step, 0.0, G.rise(step)])  # one half cycle further
     for c in mb.scene.contacts:
         x = mb.point_matrix(c.body, c.point) @ q_pose
@@ -97,11 +99,12 @@ def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float) -> dict[
     return targets
 
 
-def kinematic_guess(tr: Transcription, step: float) -> np.ndarray:
-    """Configurations (N+1, k) of a kinematic stepping motion for transcription `tr`."""
+def kinematic_guess(tr: Transcription, step: float, ground: Ground = LEVEL) -> np.ndarray:
+    """Configurations (N+1, k) of a kinematic stepping motion for transcription `tr` on
+    `ground`."""
     mb = tr.mb
     q_pose = configuration(mb.scene)
-    targets = contact_targets(tr, q_pose, step)
+    targets = contact_targets(tr, q_pose, step, ground)
     names = [c.name for c in mb.scene.contacts]
     root = mb.block(mb.scene.root.body).start
     points = [mb.point_matrix(mb.scene.contact(n).body, mb.scene.contact(n).point)
@@ -134,19 +137,19 @@ def kinematic_guess(tr: Transcription, step: float) -> np.ndarray:
     return out
 
 
-def standing_guess(tr: Transcription, step: float) -> np.ndarray:
+def standing_guess(tr: Transcription, step: float, ground: Ground = LEVEL) -> np.ndarray:
     """Configurations (N+1, k): the scene pose at every node (a cold start that knows
-    nothing of walking; `step` unused)."""
+    nothing of walking; `step` and `ground` unused)."""
     return np.tile(configuration(tr.mb.scene), (tr.N + 1, 1))
 
 
-def perturbed_guess(tr: Transcription, step: float, amplitude: float = 0.3,
-                    seed: int = 0) -> np.ndarray:
+def perturbed_guess(tr: Transcription, step: float, ground: Ground = LEVEL,
+                    amplitude: float = 0.3, seed: int = 0) -> np.ndarray:
     """Configurations (N+1, k): the kinematic guess with every node turned by seeded random
     rotation increments of up to `amplitude` rad in each rotational entry of u (the nodal
     reparametrisation, so joints stay assembled): a deliberately poor guess."""
     mb, rng = tr.mb, np.random.default_rng(seed)
-    out = kinematic_guess(tr, step)
+    out = kinematic_guess(tr, step, ground)
     for n in range(out.shape[0]):
         u = rng.uniform(-amplitude, amplitude, mb.ndof) * mb.rotation_mask
         out[n] = np.array(mb.reparametrise(u, out[n])).ravel()

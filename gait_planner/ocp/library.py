@@ -31,6 +31,8 @@ from gait_planner.io.atomic import atomic_target
 from gait_planner.ocp.compile import cache_folder
 
 MAX_PLANS = 16  # per problem; the oldest go first
+_REQUEST = ("slope", "step_height", "speed")  # StoredPlan's request beyond step and mu
+_FIELDS = ("step", "mu", "x", "lam_x", "lam_g", "qref", *_REQUEST)
 _CODE = ("model", "dynamics", "ocp")  # packages whose source defines the stored vectors
 
 
@@ -38,8 +40,9 @@ _CODE = ("model", "dynamics", "ocp")  # packages whose source defines the stored
 class StoredPlan:
     """An optimum to warm-start from: request (step length m, friction coefficient), the
     NLP's x (nx,) and multipliers lam_x (nx,), lam_g (ng,), the reference configurations
-    qref (N-1, k) of its reparametrisation, and where it came from ("this process" or the
-    library file)."""
+    qref (N-1, k) of its reparametrisation, where it came from ("this process" or the
+    library file), and the rest of its request: slope deg, step height m, speed m/s (one
+    problem serves every value of these, `ocp.transcription.shape_of`)."""
 
     step: float
     mu: float
@@ -48,6 +51,19 @@ class StoredPlan:
     lam_g: np.ndarray
     qref: np.ndarray
     source: str = "this process"
+    slope: float = 0.0
+    step_height: float = 0.0
+    speed: float = 0.0
+
+    @property
+    def request(self) -> tuple[float, ...]:
+        """(step, mu, slope, step_height, speed): what a later plan of it replaces."""
+        return (self.step, self.mu, self.slope, self.step_height, self.speed)
+
+    def on(self, settings) -> bool:
+        """Whether it is a plan on the ground and at the speed of `settings`."""
+        return (self.slope, self.step_height, self.speed) == (
+            settings.slope, settings.step_height, settings.speed)
 
 
 @functools.cache
@@ -82,38 +98,38 @@ class PlanLibrary:
         path = self.path(key)
         try:
             with np.load(path) as data:
-                fields = {name: data[name]
-                          for name in ("step", "mu", "x", "lam_x", "lam_g", "qref")}
+                fields = {name: data[name] for name in _FIELDS}
         except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
             return []
         count = fields["step"].shape[0]
         shapes_ok = (fields["x"].shape == (count, nx) and fields["lam_x"].shape == (count, nx)
                      and fields["lam_g"].shape == (count, ng) and fields["qref"].ndim == 3
-                     and fields["mu"].shape == (count,))
+                     and all(fields[name].shape == (count,) for name in ("mu", *_REQUEST)))
         finite = shapes_ok and all(np.all(np.isfinite(v)) for v in fields.values())
         if not finite:
             return []
         return [StoredPlan(float(fields["step"][i]), float(fields["mu"][i]), fields["x"][i],
                            fields["lam_x"][i], fields["lam_g"][i], fields["qref"][i],
-                           f"the plan library ({path.name[:12]})")
+                           f"the plan library ({path.name[:12]})",
+                           *(float(fields[name][i]) for name in _REQUEST))
                 for i in range(count)]
 
     def save(self, key: str, plans: list[StoredPlan]) -> None:
         """Write the newest MAX_PLANS of `plans` (one per request: a later plan of the same
-        step length and friction coefficient replaces an earlier one) as problem `key`'s
-        file, atomically. An unwritable folder is not an error: nothing is kept."""
-        kept: dict[tuple[float, float], StoredPlan] = {}
+        `StoredPlan.request` replaces an earlier one) as problem `key`'s file, atomically.
+        An unwritable folder is not an error: nothing is kept."""
+        kept: dict[tuple[float, ...], StoredPlan] = {}
         for plan in plans:
-            kept.pop((plan.step, plan.mu), None)
-            kept[(plan.step, plan.mu)] = plan
+            kept.pop(plan.request, None)
+            kept[plan.request] = plan
         newest = list(kept.values())[-MAX_PLANS:]
         if not newest:
             return
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
             with atomic_target(self.path(key)) as tmp, open(tmp, "wb") as out:
-                np.savez(out, step=np.array([p.step for p in newest]),
-                         mu=np.array([p.mu for p in newest]),
+                np.savez(out, **{name: np.array([getattr(p, name) for p in newest])
+                                 for name in ("step", "mu", *_REQUEST)},
                          x=np.stack([p.x for p in newest]),
                          lam_x=np.stack([p.lam_x for p in newest]),
                          lam_g=np.stack([p.lam_g for p in newest]),

@@ -37,18 +37,26 @@ def configuration_mirror(mb: Multibody, ground: Ground = LEVEL
     metre of step, 1 at each body's position x and tan(slope) at its z (the ground rises
     along a ramp, `gait_planner.model.ground`); c (k,) the constant lift, step_height at
     each body's z (stairs)."""
+    A, along, up = mirror_parts(mb)
+    return A, along + ground.rise_per_step * up, ground.step_height * up
+
+
+def mirror_parts(mb: Multibody) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A, x, z): `configuration_mirror`'s A, and the 0/1 masks (k,) of the bodies'
+    positions x and z, so that e = x + tan(slope) z and c = step_height z (a compiled
+    problem forms them from its ground's parameters, `ocp.elements.Layout`)."""
     gait = mb.scene.gait
     mirror = dict(gait.mirror) if gait else {}
     A = np.zeros((mb.k, mb.k))
-    shift, lift = np.zeros(mb.k), np.zeros(mb.k)
+    along, up = np.zeros(mb.k), np.zeros(mb.k)
     for name in mb.body_names:
         partner = mirror.get(name, name)
         src, dst = mb.block(name).start, mb.block(partner).start
         signs = (1.0, 1.0, -1.0, 1.0)  # phi, d1, d2, d3
         for j, sign in enumerate(signs):
             A[dst + 3 * j : dst + 3 * j + 3, src + 3 * j : src + 3 * j + 3] = sign * _S
-        shift[dst], shift[dst + 2], lift[dst + 2] = 1.0, ground.rise_per_step, ground.step_height
-    return A, shift, lift
+        along[dst], up[dst + 2] = 1.0, 1.0
+    return A, along, up
 
 
 def torque_mirror(mb: Multibody) -> np.ndarray:

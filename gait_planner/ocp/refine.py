@@ -44,10 +44,10 @@ def refined_settings(s: GaitSettings, factor: int = FACTOR) -> GaitSettings:
                                intervals=tuple(factor * i for i in s.intervals))
 
 
-def refined_start(coarse: Transcription, plan: StoredPlan,
-                  fine: Transcription) -> tuple[np.ndarray, np.ndarray]:
+def refined_start(coarse: Transcription, plan: StoredPlan, fine: Transcription,
+                  settings: GaitSettings) -> tuple[np.ndarray, np.ndarray]:
     """(x0 (nx_fine,), qref (N_fine - 1, k)): a start on `fine` from an optimum `plan` of
-    `coarse` (its x and reference configurations).
+    `coarse` (its x and reference configurations) for the request `settings`.
 
     Raises ValueError unless `fine` is `coarse`'s grid refined by a whole factor."""
     factor = fine.N // coarse.N
@@ -55,7 +55,7 @@ def refined_start(coarse: Transcription, plan: StoredPlan,
             not np.array_equal(np.repeat(coarse.phase_of_interval, factor), fine.phase_of_interval):
         raise ValueError(f"a grid of {fine.N} intervals is not a refinement of {coarse.N}")
     x = plan.x
-    p = np.concatenate([plan.qref.reshape(-1), [plan.step, plan.mu]])
+    p = coarse.parameters(plan.qref, settings, step=plan.step)
     Q, TAU = (np.array(v) for v in ca.Function("q_tau", [coarse.x, coarse.p],
                                                [coarse.Q, coarse.TAU])(x, p))
     times = coarse_times(coarse, fine)

@@ -332,6 +332,34 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
     return settings
 
 
+# A small stair (m) standing for every stair height of its sign in `form_requests`
+FORM_STAIR = 0.02
+
+
+def form_requests(scene: Scene, s: GaitSettings) -> list[GaitSettings]:
+    """One request of each problem shape that requests like `s` on `scene` may take
+    (`ocp.transcription.shape_of`): level ground with free durations, at a speed (the
+    middle of `speed_range`), on stairs up, on stairs down, and the stairs-down start with
+    the edge margin instead of the segment rows (`ocp.solve.Planner._stair_start`); the
+    shapes `scene` refuses (`check_ground`, `check_speed`) left out. Building these
+    compiles everything any request of the scene within its ranges needs
+    (`gait-planner prepare`)."""
+    out = [dataclasses.replace(s, slope=0.0, step_height=0.0, speed=0.0)]
+    slow, fast = speed_range(out[0])
+    candidates = [dataclasses.replace(out[0], speed=0.5 * (slow + fast))]
+    candidates += [dataclasses.replace(out[0], step_height=h) for h in (FORM_STAIR, -FORM_STAIR)]
+    candidates.append(dataclasses.replace(out[0], step_height=-FORM_STAIR,
+                                          stair_segment_rows=False))
+    for candidate in candidates:
+        try:
+            check_ground(candidate, scene)
+            check_speed(candidate, scene.name)
+        except SettingsError:
+            continue
+        out.append(candidate)
+    return out
+
+
 def ground_of(scene: Scene, s: GaitSettings) -> Ground:
     """The ground of `s` on `scene` (`gait_planner.model.ground`): a stair's first edge
     midway between the front of the foot that stands at the start of the half cycle (the

@@ -7,8 +7,8 @@ import numpy as np
 
 from gait_planner.model.angles import angle_names, joint_angles
 from gait_planner.model.scene import Scene
-from gait_planner.ocp.mirror import contact_partners
-from gait_planner.ocp.settings import GaitSettings
+from gait_planner.ocp.mirror import configuration_mirror, contact_partners
+from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
 from gait_planner.result import PlanResult, SolverStats
 
@@ -109,11 +109,15 @@ def node_kinetic_energy(mass_diagonal: np.ndarray, q: np.ndarray, h: np.ndarray)
     return np.concatenate([[T[0]], 0.5 * (T[:-1] + T[1:]), [T[-1]]])
 
 
-def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray, *,
-                 status: str, iterations: int, solve_time: float, build_time: float,
-                 evaluation_time: float, origin: str) -> PlanResult:
-    mb, mech, s, N = tr.mb, tr.mech, tr.settings, tr.N
+def build_result(tr: Transcription, settings: GaitSettings, x: np.ndarray, p: np.ndarray,
+                 g: np.ndarray, *, status: str, iterations: int, solve_time: float,
+                 build_time: float, evaluation_time: float, origin: str) -> PlanResult:
+    """The plan of request `settings` (solved on `tr`, a problem of its shape) from the
+    NLP's x, p (`Transcription.parameters`) and g."""
+    mb, mech, s, N = tr.mb, tr.mech, settings, tr.N
     scene = mb.scene
+    ground = ground_of(scene, settings)
+    step = float(p[tr.layout.step_index])
     Q, TAU, h, kinetic, torque = (np.array(v) for v in _extractor(tr)(x, p))
     q, tau, h = Q.T, TAU.T, h.ravel()
     times = np.concatenate([[0.0], np.cumsum(h)])
@@ -137,7 +141,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
     half = 0.5 * (np.concatenate([[0.0], h]) + np.concatenate([h, [0.0]]))  # w_n; ends h/2
     gen = half[:, None] * np.array(mb.actuation_force.map(N + 1)(q.T, tau.T)).T
     angles = joint_angles(scene, q)
-    rates = joint_rates(scene, (tr.A, tr.shift, tr.lift), q, times, float(p[-2]))
+    rates = joint_rates(scene, configuration_mirror(mb, ground), q, times, step)
 
     viol = violations(tr, g)
     constraint = max(float(np.abs(np.array(mb.constraints.map(N + 1)(q.T))).max()),
@@ -160,14 +164,15 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
     )
     return PlanResult(
         success=success, message=message, scene=scene, cost_name=s.cost,
-        cost_value=cost_value, step_length=float(p[-2]), friction_coefficient=float(p[-1]),
+        cost_value=cost_value, step_length=step,
+        friction_coefficient=float(p[tr.layout.mu_index]),
         times=times, q=q, tau=tau, joint_angle_names=angle_names(scene), joint_angles=angles,
         joint_velocities=rates[0], joint_accelerations=rates[1],
         phases=tuple(phases[k].name for k in node_phase), active_contacts=active,
         contact_forces=forces, roll_moments=rolls, generalized_force=gen,
         kinetic_energy=node_kinetic_energy(mb.mass_diagonal, q, h),
         potential_energy=q @ mech.gravity_gradient, phase_scaling=x[-int(tr.S.shape[0]):].copy(),
-        duration=float(times[N - 1] - times[0]), stats=stats, ground=tr.ground,
+        duration=float(times[N - 1] - times[0]), stats=stats, ground=ground,
         settings={
             "periodicity": "nodes N-1, N mirror nodes 0, 1 (paper eqs. 7-9)",
             "initial_guess": origin,
@@ -178,7 +183,7 @@ def build_result(tr: Transcription, x: np.ndarray, p: np.ndarray, g: np.ndarray,
             "foot_half_width": repr(s.foot_half_width),
             "strike_speed_max": repr(s.strike_speed_max),
             "speed": repr(s.speed),
-            **tr.ground.metadata(),
+            **ground.metadata(),
             "joint_limits_deg": ",".join(f"{name}:{np.degrees(lo):.6g}:{np.degrees(hi):.6g}"
                                          for name, lo, hi in s.joint_limits),
             "torque_squared": repr(float(torque.item())),

@@ -1,9 +1,11 @@
 """Solving the gait NLP with IPOPT, with progress, a time limit and warm starts.
 
-`Planner` caches one built transcription + solvers per (scene, settings other than step
-length, friction coefficient and time limit) and the plans it found, so a changed step
-length or friction coefficient re-plans from the nearest stored plan (primal and dual warm
-start) without rebuilding anything; with a `PlanLibrary` it also starts from, and adds to,
+`Planner` caches one built transcription + solvers per (scene, shape of the settings:
+`ocp.transcription.shape_of`, the time limit aside) and the plans it found: a request of
+another step length, friction coefficient, slope, stair height or speed is a new value of
+the problem's parameters, never a new build or compilation. A changed step length or
+friction coefficient re-plans from the nearest stored plan on the same ground at the same
+speed (primal and dual warm start), a new ground or speed cold; with a `PlanLibrary` it also starts from, and adds to,
 the plans of earlier processes (`ocp.library`). A cold plan that fails from its guess at a
 step length other than the scene's is continued from the scene's (`Planner._continuation`);
 a cold plan on stairs down starts from the plan on stairs at most `STAIR_COLD_MAX` deep
@@ -29,9 +31,9 @@ from gait_planner.ocp.guess import GUESSES, initial_multipliers
 from gait_planner.ocp.ipopt import IterationCallback, Progress, Stop, ipopt_options, run_attempt
 from gait_planner.ocp.library import PlanLibrary, StoredPlan
 from gait_planner.ocp.refine import refined_start
-from gait_planner.ocp.settings import GaitSettings
+from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.solution import STATUS_WORDS, build_result, failed_result
-from gait_planner.ocp.transcription import Transcription
+from gait_planner.ocp.transcription import Transcription, shape_of
 from gait_planner.result import PlanResult
 
 Stage = Callable[[str], None]  # the phase a plan enters ("building", "cold stage 1", ...)
@@ -121,8 +123,16 @@ class _Built:
 
 
 def _key(scene: Scene, s: GaitSettings):
-    fixed = dataclasses.replace(s, step_length=1.0, friction_coefficient=1.0, max_solve_time=1.0)
-    return scene.name, scene.source, fixed
+    return scene.name, scene.source, dataclasses.replace(shape_of(s), max_solve_time=1.0)
+
+
+def _stored(settings: GaitSettings, step: float, x: np.ndarray, duals: dict,
+            qref: np.ndarray) -> StoredPlan:
+    """The optimum x (with its multipliers) of the request `settings` at step length
+    `step`, to keep."""
+    return StoredPlan(step, settings.friction_coefficient, x, duals["lam_x0"], duals["lam_g0"],
+                      qref, slope=settings.slope, step_height=settings.step_height,
+                      speed=settings.speed)
 
 
 class Planner:
@@ -162,7 +172,10 @@ class Planner:
                 "jacobian_nonzeros": int(built.derivatives["jac_g"].sparsity_out(1).nnz()),
                 "hessian_nonzeros": int(np.sum(np.asarray(rows) <= np.asarray(cols)))}
 
-    def _build(self, scene: Scene, s: GaitSettings) -> _Built:
+    def _build(self, scene: Scene, s: GaitSettings, refinement: bool = False) -> _Built:
+        """The problem of (scene, s), built on first use; refinement: it is a refined grid
+        (`ocp.refine`), whose rest of the NLP is not compiled (`nlp_derivatives`): no
+        request compiles what `gait-planner prepare` left out."""
         key = _key(scene, s)
         if key not in self._built:
             start = time.perf_counter()
@@ -179,7 +192,8 @@ class Planner:
 
                 try:
                     derivatives = nlp_derivatives(
-                        tr, lambda sources: compile_sources(sources, notify=announce), expanded)
+                        tr, lambda sources: compile_sources(sources, notify=announce), expanded,
+                        compile_rest=not refinement)
                     used = "per-node elements compiled to C"
                 except CompileError as err:
                     used += f" (not compiled: {err})"
@@ -207,16 +221,18 @@ class Planner:
         return list(self._build(scene, settings).stored)
 
     def remember(self, scene: Scene, settings: GaitSettings, plan: StoredPlan) -> None:
-        """Keep `plan` (an optimum of this problem or of a neighbouring one: another
-        ground, speed or request of the same size) as the newest start of warm plans of
-        (scene, settings); ValueError if its sizes are not this problem's."""
+        """Keep `plan` (an optimum of this problem or of a neighbouring one of the same
+        size) as the newest start of warm plans of (scene, settings), on their ground and
+        at their speed (`StoredPlan.on`); ValueError if its sizes are not this problem's."""
         built = self._build(scene, settings)
         nx, ng = int(built.tr.x.shape[0]), int(built.tr.g.shape[0])
         if plan.x.shape != (nx,) or plan.lam_x.shape != (nx,) or plan.lam_g.shape != (ng,) \
                 or plan.qref.shape != (built.tr.N - 1, built.tr.mb.k):
             raise ValueError(f"a plan of {plan.x.size} variables and {plan.lam_g.size} "
                              f"constraints cannot start a problem of {nx} and {ng}")
-        built.stored.append(plan)
+        built.stored.append(dataclasses.replace(plan, slope=settings.slope,
+                                                step_height=settings.step_height,
+                                                speed=settings.speed))
 
     def _store(self, built: _Built, plan: StoredPlan) -> None:
         """Keep an optimum for warm starts, in the library too if the planner has one."""
@@ -264,11 +280,12 @@ class Planner:
         """(x, qref, origin in words) refined (`ocp.refine.refined_start`) from the stored
         plan of (step, mu) on the coarse grid of `coarse_settings`."""
         coarse = self._built.get(_key(scene, coarse_settings))
-        plans = [r for r in (coarse.stored if coarse else []) if (r.step, r.mu) == (step, mu)]
+        plans = [r for r in (coarse.stored if coarse else [])
+                 if (r.step, r.mu) == (step, mu) and r.on(coarse_settings)]
         if not plans:
             raise ValueError(f"no plan of step length {step} m, mu {mu} on the coarse grid "
                              "to refine")
-        x, qref = refined_start(coarse.tr, plans[-1], built.tr)
+        x, qref = refined_start(coarse.tr, plans[-1], built.tr, coarse_settings)
         return x, qref, (f"refined from the plan on {coarse.tr.N} intervals to {built.tr.N}; "
                          "sigma fixed and limits relaxed, then free")
 
@@ -286,14 +303,13 @@ class Planner:
         within 120 s, this way 64 + 146 iterations (in five steps of 0.05 m 64 + 127).
         Returns (x, g, duals, status, success, p) of the warm stage, or None if a stage
         failed. The scene's plan is kept for warm starts."""
-        mu = s.friction_coefficient
-        p0 = np.concatenate([qref.reshape(-1), [step0, mu]])
+        p0 = built.tr.parameters(qref, s, step=step0)
         x0, _, duals, _, success = self._attempt(built, s, COLD_ATTEMPTS[0], 0, x_start,
                                                  duals_start, p0, totals)
         if not success or time.perf_counter() > built.callback.deadline:
             return None
-        self._store(built, StoredPlan(step0, mu, x0, duals["lam_x0"], duals["lam_g0"], qref))
-        p = np.concatenate([qref.reshape(-1), [step, mu]])
+        self._store(built, _stored(s, step0, x0, duals, qref))
+        p = built.tr.parameters(qref, s)
         x, g, duals, status, success = self._attempt(built, s, WARM_ATTEMPTS[0], 0, x0, duals,
                                                      p, totals)
         return (x, g, duals, status, success, p) if success else None
@@ -338,8 +354,9 @@ class Planner:
         if guess not in GUESSES:
             raise ValueError(f"unknown guess {guess!r}; known: {', '.join(GUESSES)}")
         try:
-            built = self._build(scene, settings)
-            warm_start = warm_start and bool(built.stored)
+            built = self._build(scene, settings, refinement=refine_from is not None)
+            candidates = [r for r in built.stored if r.on(settings)]
+            warm_start = warm_start and bool(candidates)
             stairs_first = (not warm_start and refine_from is None
                             and settings.step_height < 0 and settings.stair_segment_rows)
             attempts = (WARM_ATTEMPTS if warm_start or stairs_first
@@ -372,14 +389,14 @@ class Planner:
                       f"{lower.stats.iterations} iterations); continued to "
                       f"{settings.step_height:g} m with the segment rows (warm)")
         elif warm_start:
-            nearest = min(built.stored, key=lambda r: abs(r.step - step) + abs(r.mu - mu))
+            nearest = min(candidates, key=lambda r: abs(r.step - step) + abs(r.mu - mu))
             x_start, qref = nearest.x, nearest.qref
             duals_start = {"lam_x0": nearest.lam_x, "lam_g0": nearest.lam_g}
             origin = (f"warm start from the plan for step length {nearest.step:.4f} m, "
                       f"mu {nearest.mu:.3g} ({nearest.source})")
         else:
             self.stage("initial guess")
-            qref = GUESSES[guess](tr, step)[: tr.N - 1]
+            qref = GUESSES[guess](tr, step, ground_of(scene, settings))[: tr.N - 1]
             x_start = np.concatenate([
                 np.zeros(tr.U.numel() + tr.T.numel()), initial_multipliers(tr),
                 np.full(nsig, settings.scaling_bounds[1])])
@@ -392,7 +409,7 @@ class Planner:
             # derivatives: J 20.7683, 20.7683, 20.7801, 20.7801, 20.7801 (0.06 % apart);
             # from sigma = 1: 20.7801, 20.7801, 20.8470, 20.8936, 20.7644 (0.6 %)
             origin = f"{guess} guess; sigma fixed at its upper bound and limits relaxed, then free"
-        p = np.concatenate([qref.reshape(-1), [step, mu]])
+        p = tr.parameters(qref, settings)
         built.callback.deadline = start + settings.max_solve_time
         built.callback.started, built.callback.iteration = start, 0
         built.callback.report, built.callback.stop = self.progress, stopped
@@ -406,7 +423,8 @@ class Planner:
             origin += (f"; the inertia-free attempt stopped ({STATUS_WORDS.get(status, status)})"
                        f" after {totals[0]} iterations")
             if number == 0 and step != scene.gait.step_length:
-                qref_c = GUESSES[guess](tr, scene.gait.step_length)[: tr.N - 1]
+                qref_c = GUESSES[guess](tr, scene.gait.step_length,
+                                        ground_of(scene, settings))[: tr.N - 1]
                 found = self._continuation(built, settings, x_start, duals_start, qref_c,
                                            scene.gait.step_length, step, totals)
                 if found is not None:
@@ -422,11 +440,11 @@ class Planner:
         iterations, evaluation = totals
         if stopped():
             return failed_result(scene, settings, STOPPED)
-        result = build_result(tr, x0, p, g, status=status, iterations=iterations,
+        result = build_result(tr, settings, x0, p, g, status=status, iterations=iterations,
                               solve_time=time.perf_counter() - start,
                               build_time=built.build_time, evaluation_time=evaluation,
                               origin=origin)
         result.settings["derivatives"] = built.derivatives_used
         if result.success:
-            self._store(built, StoredPlan(step, mu, x0, duals["lam_x0"], duals["lam_g0"], qref))
+            self._store(built, _stored(settings, step, x0, duals, qref))
         return result

@@ -32,12 +32,16 @@ expressions of q_0, q_1, tau_0, tau_1, the configurations shifted by the step le
 eqs. 7-9). Where each unknown sits in x, and the per-node element Functions of the
 derivatives: `ocp.elements`.
 
-Parameters (changeable without rebuilding): the reference configurations, the step length
-and the friction coefficient.
+Parameters (changeable without rebuilding or compiling): the reference configurations, the
+step length, the friction coefficient, the ground's slope or stair height
+(`gait_planner.model.ground.ParametricGround`) and the requested speed (`parameters`). A
+Transcription is built for one request and serves every request with the same settings
+but these values and the same `Ground.form` (`shape_of`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import casadi as ca
@@ -49,9 +53,10 @@ from gait_planner.ocp.clearance import (clearance_rows, clearance_schedule, grou
                                         midpoint_heights, segment_heights,
                                         segment_schedule,
                                         schedule_heights, strike_rows, strike_schedule)
-from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows
+from gait_planner.model.ground import PARAMETERS, ParametricGround
+from gait_planner.ocp.contacts import body_contacts, establishing_rows, phase_rows, stacked_rows
 from gait_planner.ocp.elements import ElementGroup, Layout
-from gait_planner.ocp.mirror import configuration_mirror, increment_mirror, torque_mirror
+from gait_planner.ocp.mirror import increment_mirror, mirror_parts, torque_mirror
 from gait_planner.ocp.posture import (JOINT_RANGE_ROW_UPPER, joint_limit_constants,
                                       joint_limit_rows, joint_speed_margins, twist_squares)
 from gait_planner.ocp.settings import GaitSettings, ground_of
@@ -77,10 +82,17 @@ class Transcription:
         self.N = N = int(self.phase_of_interval.size)
         if N < 3:
             raise ValueError(f"a half cycle needs at least 3 intervals, got {N}")
-        self.ground = ground_of(scene, settings)
-        self.contacts = [body_contacts(mb, p.contacts, self.ground) for p in phases]
-        self.rows = [stacked_rows(c, mb.k) for c in self.contacts]
-        self.A, self.shift, self.lift = configuration_mirror(mb, self.ground)
+        # the ground's form shapes the NLP, its values are parameters: symbols gs of the
+        # element Functions, the entries gp of p in the NLP's own graph
+        self.gs = ParametricGround.symbols(ground_of(scene, settings))
+        self.ground_p = ca.MX.sym("ground", len(PARAMETERS))
+        self.gp = self.gs.like(self.ground_p)
+        self.contacts = [body_contacts(mb, p.contacts) for p in phases]  # rows: level ground
+        self.rows = [stacked_rows(c, mb.k) for c in self.contacts]  # (their sizes)
+        self.rows_of = [ca.Function(f"contact_rows_phase{k}", [self.gs.values],
+                                    [phase_rows(c, mb.k, self.gs)])
+                        for k, c in enumerate(self.contacts)]  # ground -> C_k
+        self.A, along, up = mirror_parts(mb)
         self.B = torque_mirror(mb)
         # Nodes N-1 and N are mirror images of nodes 0 and 1. Where the mirror commutes with
         # the reparametrisation (`increment_mirror`), their elements are the regular ones
@@ -99,12 +111,13 @@ class Transcription:
         self.L = ca.MX.sym("lambda", int(sum(self.lam_sizes)))
         self.layout = Layout(mb, N, self.lam_sizes, nsig,
                              np.array([phases[k].scaling for k in self.phase_of_interval]),
-                             self.A, self.shift, self.lift, self.B, self.M)
+                             self.A, along, up, self.B, self.M)
         self.Qref = ca.MX.sym("qref", mb.k, N - 1)
         self.step, self.mu = ca.MX.sym("step_length"), ca.MX.sym("mu")
+        self.inverse_speed = ca.MX.sym("inverse_speed")
 
         q_free = mb.reparametrise.map(N - 1)(self.U, self.Qref)
-        q_end = [self.layout.image(q_free[:, j], self.step) for j in (0, 1)]
+        q_end = [self.layout.image(q_free[:, j], self.step, self.ground_p) for j in (0, 1)]
         self.Q = ca.horzcat(q_free, *q_end)  # (k, N+1)
         tau = TORQUE_SCALE * self.T
         self.TAU = ca.horzcat(tau, ca.mtimes(ca.DM(self.B), tau[:, 0:2]))  # (nt, N+1) nodes
@@ -158,17 +171,20 @@ class Transcription:
             h0, h1 = ca.SX.sym("h_prev"), ca.SX.sym("h")
             tau = ca.SX.sym("tau", mb.nt)  # node n's torque acts on both its half intervals
             lam = ca.SX.sym("lambda", C.shape[0])
+            ground = ca.SX.sym("ground", len(PARAMETERS))
             w = 0.5 * (h0 + h1)
             r = self.mech.discrete_euler_lagrange(q0, q1, q2, h0, h1, tau, tau)
-            contact = mb.null_space_transpose(q1, ca.mtimes(ca.DM(C).T, lam)) / FORCE_SCALE
+            contact = mb.null_space_transpose(
+                q1, ca.mtimes(self.rows_of[k](ground).T, lam)) / FORCE_SCALE
             res = mb.null_space_transpose(q1, r) / (w * FORCE_SCALE) + contact
-            f = ca.Function(f"dynamics_phase{k}", [q0, q1, q2, h0, h1, tau, lam], [res])
+            f = ca.Function(f"dynamics_phase{k}", [q0, q1, q2, h0, h1, tau, lam, ground], [res])
             idx = np.array(nodes)
             lam_cols = ca.horzcat(*[self._row_multipliers(n) for n in nodes]) if C.shape[0] \
                 else ca.DM.zeros(0, len(nodes))
             out = f.expand().map(len(nodes))(
                 self.Q[:, idx - 1], self.Q[:, idx], self.Q[:, idx + 1], self.h[idx - 1].T,
-                self.h[idx].T, self.TAU[:, idx], lam_cols)
+                self.h[idx].T, self.TAU[:, idx], lam_cols,
+                ca.repmat(self.ground_p, 1, len(nodes)))
             name = f"dynamics[{self._phase_name(k)}]"
             self._eq.append((name, ca.vec(out)))
             self._without_elements[name] = ca.MX(out.numel(), 1)  # contact part: _node_rows
@@ -199,17 +215,17 @@ class Transcription:
         """The phase-independent part of a node's dynamics row (ndof,) as an SX Function
         of z = (u_{n-1}, u_n, u_{n+1}, T_n, sigma_{n-1}, sigma_n) (scaled unknowns, a
         mirrored node given by the u and T of its source node), pz = (qref_{n-1}, qref_n,
-        qref_{n+1}, step length) and c = (base time step)."""
+        qref_{n+1}, step length, ground) and c = (base time step)."""
         mb = self.mb
         nd, nt, k = mb.ndof, mb.nt, mb.k
         z = ca.SX.sym("z", 3 * nd + nt + 2)
-        pz = ca.SX.sym("pz", 3 * k + 1)
+        pz = ca.SX.sym("pz", 3 * k + 1 + len(PARAMETERS))
         c = ca.SX.sym("c", 1)
-        step = pz[3 * k]
+        step, ground = pz[3 * k], pz[3 * k + 1 :]
         q = [mb.reparametrise(z[i * nd : (i + 1) * nd], pz[i * k : (i + 1) * k]) for i in range(3)]
         for i, flag in ((1, mirrored), (2, next_mirrored)):
             if flag:
-                q[i] = self.layout.image(q[i], step)
+                q[i] = self.layout.image(q[i], step, ground)
         tau = TORQUE_SCALE * z[3 * nd : 3 * nd + nt]
         if mirrored:  # tau_{N-1} is the image of tau_0
             tau = ca.mtimes(ca.DM(self.B), tau)
@@ -229,15 +245,15 @@ class Transcription:
         """Indices into p of the dynamics element's pz at node n."""
         lay = self.layout
         return np.concatenate([lay.qref_index(n - 1), lay.qref_index(n), lay.qref_index(n + 1),
-                               [lay.step_index]])
+                               [lay.step_index], lay.ground_index])
 
     def _contacts(self):
         mb, N = self.mb, self.N
-        chain = []
+        chain, rows = [], [f(self.ground_p) for f in self.rows_of]
         for n in range(N - 1):  # interval N-1 is the mirror image of interval 0
-            C = self.rows[self.phase_of_interval[n]]
-            if C.shape[0]:
-                chain.append(ca.mtimes(ca.DM(C), self.Q[:, n + 1] - self.Q[:, n]))
+            k = self.phase_of_interval[n]
+            if self.rows[k].shape[0]:
+                chain.append(ca.mtimes(rows[k], self.Q[:, n + 1] - self.Q[:, n]))
         self._hold_elements(sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
         self._eq.append(("contact_hold", ca.vertcat(*chain)))
         self._without_elements["contact_hold"] = ca.MX(sum(int(c.shape[0]) for c in chain), 1)
@@ -248,23 +264,23 @@ class Transcription:
             k_prev, k = self.phase_of_interval[n - 1], self.phase_of_interval[n]
             if k != k_prev:
                 E, e = establishing_rows(mb, self.contacts[k_prev], self.contacts[k],
-                                         self.ground, landing)
+                                         self.gp, landing)
                 if E.shape[0]:
-                    est.append(ca.mtimes(ca.DM(E), self.Q[:, n]) - ca.DM(e))
+                    est.append(ca.mtimes(E, self.Q[:, n]) - e)
         if est:
             self._eq.append(("contact_establish", ca.vertcat(*est)))
         first = self.contacts[0][0].points[0]
         self._eq.append(("pin_x", ca.mtimes(ca.DM(mb.contact_rows(first)[0:1]), self.Q[:, 0])))
         if self.settings.speed > 0:  # an equality: before the first inequality group
             self._eq.append(("speed", speed_row(self.step, ca.sum1(self.h[0 : N - 1]),
-                                                self.settings.speed)))
+                                                self.inverse_speed)))
         cones = []
         for n in self.lam_nodes:
             lam = self.lam_of_node[n]
             offset = 0
             for bc in self.contacts[self.phase_of_interval[n]]:
                 cones += bc.cone_rows(lam[offset : offset + bc.n_multipliers], self.Q[:, n],
-                                      self.mu, *self._cone_constants)
+                                      self.mu, *self._cone_constants, normal=self.gp.normal)
                 offset += bc.n_multipliers
         self._ineq.append(("friction_cone", ca.vertcat(*cones)))
         self._without_elements["friction_cone"] = ca.MX(len(cones), 1)  # _node_rows
@@ -280,6 +296,7 @@ class Transcription:
         N, mb = self.N, self.mb
         q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
             ca.SX.sym("c", 2)
+        ground = ca.SX.sym("ground", len(PARAMETERS))
         intervals: dict[tuple[int, bool], list[tuple[int, np.ndarray]]] = {}
         row = first_row
         for n in range(N - 1):
@@ -289,9 +306,9 @@ class Transcription:
                 intervals.setdefault(key, []).append((n, row + np.arange(C.shape[0])))
                 row += C.shape[0]
         for (k, next_mirrored), chosen in intervals.items():
-            fn = ca.Function(f"contact_hold_phase{k}", [q0, q1, h, c],
-                             [ca.mtimes(ca.DM(self.rows[k]), q1 - q0)],
-                             ["q", "q_next", "h", "c"], ["r"])
+            fn = ca.Function(f"contact_hold_phase{k}", [q0, q1, h, c, ground],
+                             [ca.mtimes(self.rows_of[k](ground), q1 - q0)],
+                             ["q", "q_next", "h", "c", "ground"], ["r"])
             self.elements.append(ElementGroup(
                 self.layout.interval_element(fn, next_mirrored),
                 np.stack([self.layout.interval_z_index(n) for n, _ in chosen], 1),
@@ -305,7 +322,7 @@ class Transcription:
                 for k in self.phase_of_interval[: N - 1]]  # interval N-1: the image of 0
         schedule = clearance_schedule(mb.scene, held, s, s.base_time_step)
         ground, self.clearances = clearance_rows(mb, lambda n: self.Q[:, n], schedule,
-                                                 s.foot_half_width, self.ground)
+                                                 s.foot_half_width, self.gs, (self.ground_p,))
         if ground:
             first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
             self._clearance_elements(schedule, first_row)
@@ -315,19 +332,19 @@ class Transcription:
         if strikes:
             c = np.array([s.base_time_step, s.strike_speed_max])
             rows = self._interval_groups(
-                strikes, lambda points: strike_rows(mb, points, self.ground),
+                strikes, lambda points: strike_rows(mb, points, self.gs),
                 dict.fromkeys(strikes, c),
                 sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
             self._ineq.append(("strike_speed", rows))
             self._without_elements["strike_speed"] = ca.MX(rows.shape[0], 1)
-        segments = (segment_schedule(mb.scene, held, self.ground, schedule)
+        segments = (segment_schedule(mb.scene, held, self.gs, schedule)
                     if s.ground_clearance else {})
         if segments:  # stairs down: segment rows, or midpoint rows with the edge margin
-            exact = self.ground.segment_rows
+            exact = self.gs.segment_rows
             rows = self._interval_groups(
                 {n: points for n, (points, _) in segments.items()},
                 lambda points: (segment_heights if exact else midpoint_heights)(
-                    mb, points, s.foot_half_width, self.ground),
+                    mb, points, s.foot_half_width, self.gs),
                 {n: np.array([s.base_time_step, required]) if exact else np.zeros(2)
                  for n, (_, required) in segments.items()},
                 sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
@@ -381,11 +398,11 @@ class Transcription:
                 nodes.setdefault((tuple(points), self.layout.mirrored(n == self.N - 1)), []).append(
                     (n, row + np.arange(size)))
                 row += size
-        q, c = ca.SX.sym("q", self.mb.k), ca.SX.sym("c", 1)
+        q, c, ground = ca.SX.sym("q", self.mb.k), ca.SX.sym("c", 1), self.gs.values
         for (points, mirrored), chosen in nodes.items():
-            heights = ground_heights(self.mb, points, half_width, self.ground)
-            fn = ca.Function("clearance_" + "_".join(points), [q, c], [heights(q)],
-                             ["q", "c"], ["z"])
+            heights = ground_heights(self.mb, points, half_width, self.gs)
+            fn = ca.Function("clearance_" + "_".join(points), [q, c, ground],
+                             [heights(q, ground)], ["q", "c", "ground"], ["z"])
             self.elements.append(ElementGroup(
                 self.layout.node_element(fn, mirrored),
                 np.stack([self.layout.u_index(n) for n, _ in chosen], 1),
@@ -410,7 +427,8 @@ class Transcription:
             groups.setdefault((points, self.layout.mirrored(n == self.N - 2), c), []).append(
                 (n, row + np.arange(size)))
             row += size
-            out.append(fn(self.Q[:, n], self.Q[:, n + 1], self.h[n], ca.DM(c)))
+            out.append(fn(self.Q[:, n], self.Q[:, n + 1], self.h[n], ca.DM(c),
+                          *([self.ground_p] if fn.n_in() == 5 else [])))
         for (points, next_mirrored, c), chosen in groups.items():
             self.elements.append(ElementGroup(
                 self.layout.interval_element(functions[points], next_mirrored),
@@ -450,29 +468,31 @@ class Transcription:
                 self._node_rows_element(k, mirrored),
                 np.stack([np.concatenate([self.layout.u_index(n), self.layout.lam_index(n)])
                           for n, _ in chosen], 1),
-                np.stack([np.append(self.layout.node_p_index(n), self.layout.step_index + 1)
+                np.stack([np.append(self.layout.node_p_index(n), self.layout.mu_index)
                           for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), np.array(self._cone_constants)))
 
     def _node_rows_element(self, k: int, mirrored: bool) -> ca.Function:
         """`_node_rows` of a node of phase k as an SX Function of z = (u_n, lambda_n),
-        pz = (qref_n, step length, mu) and c = `_cone_constants`: the contact term
+        pz = (qref_n, step length, ground, mu) and c = `_cone_constants`: the contact term
         P(q_n)^T C^T lambda_n / FORCE_SCALE (ndof,) if the phase holds contacts, the
         friction cones, then the torso's d3_z and height if they are limited."""
-        mb, s, nd, kq = self.mb, self.settings, self.mb.ndof, self.mb.k
+        mb, s, nd, kq, G = self.mb, self.settings, self.mb.ndof, self.mb.k, len(PARAMETERS)
         contacts = self.contacts[k]
         z = ca.SX.sym("z", nd + sum(bc.n_multipliers for bc in contacts))
-        pz, c = ca.SX.sym("pz", kq + 2), ca.SX.sym("c", 2)
+        pz, c = ca.SX.sym("pz", kq + 2 + G), ca.SX.sym("c", 2)
+        ground, mu = self.gs.like(pz[kq + 1 : kq + 1 + G]), pz[kq + 1 + G]
         q = mb.reparametrise(z[0:nd], pz[0:kq])
         if mirrored:
-            q = self.layout.image(q, pz[kq])
+            q = self.layout.image(q, pz[kq], ground.values)
         lam, held, cones, offset = FORCE_SCALE * z[nd:], [], [], 0
         for bc in contacts:
             part = lam[offset : offset + bc.n_multipliers]
             held.append(part[0 : bc.n_rows])
-            cones += bc.cone_rows(part, q, pz[kq + 1], c[0], c[1])
+            cones += bc.cone_rows(part, q, mu, c[0], c[1], normal=ground.normal)
             offset += bc.n_multipliers
-        out = [mb.null_space_transpose(q, ca.mtimes(ca.DM(self.rows[k]).T, ca.vertcat(*held)))
+        C = self.rows_of[k](ground.values)
+        out = [mb.null_space_transpose(q, ca.mtimes(C.T, ca.vertcat(*held)))
                / FORCE_SCALE] + cones if contacts else []
         root = mb.block(mb.scene.root.body).start
         out += [q[root + 11]] if self._lean_bound > 0 else []
@@ -574,7 +594,23 @@ class Transcription:
 
     @property
     def p(self):
-        return ca.vertcat(ca.vec(self.Qref), self.step, self.mu)
+        return ca.vertcat(ca.vec(self.Qref), self.step, self.mu, self.ground_p,
+                          self.inverse_speed)
+
+    def parameters(self, qref: np.ndarray, settings: GaitSettings,
+                   step: float | None = None) -> np.ndarray:
+        """The numeric p of a request (`settings`, of this problem's `shape_of`) with the
+        references qref (N-1, k): step length (`step`, else the request's), friction
+        coefficient, its ground's parameters (`Ground.parameters`, of the request's step
+        length) and 1 / speed (0 with free durations)."""
+        ground = ground_of(self.mb.scene, settings)
+        if ground.form != self.gs.form:
+            raise ValueError(f"a request on {ground.form} cannot use a problem built for "
+                             f"{self.gs.form}")
+        inverse = 1.0 / settings.speed if settings.speed > 0 else 0.0
+        return np.concatenate([np.asarray(qref, dtype=float).reshape(-1),
+                               [settings.step_length if step is None else step,
+                                settings.friction_coefficient], ground.parameters, [inverse]])
 
     @property
     def g_without_elements(self):
@@ -623,15 +659,25 @@ class Transcription:
         return relaxed_lower_bounds(self.constraint_groups(), lbg, self.clearances)
 
 
-def speed_row(step, duration, speed: float):
+def shape_of(settings: GaitSettings) -> GaitSettings:
+    """The settings that shape a Transcription: `settings` with the values that enter it as
+    parameters (step length, friction coefficient, slope, step height, speed) replaced by
+    representatives of their form (level or stairs up or down; free or requested speed),
+    so that two requests of one shape share one problem (`Transcription.parameters`)."""
+    height = math.copysign(1.0, settings.step_height) if settings.step_height else 0.0
+    return dataclasses.replace(settings, step_length=1.0, friction_coefficient=1.0, slope=0.0,
+                               step_height=height, speed=1.0 if settings.speed > 0 else 0.0)
+
+
+def speed_row(step, duration, inverse_speed):
     """The row of a requested mean forward speed (m/s) of the half cycle (both
-    transcriptions): 1/speed - duration/step (s/m), 0 when step / duration = speed. Linear
-    in sigma; the constant 1/speed drops out of its derivatives, so the compiled derivatives
-    of the NLP's rest (`ocp.derivatives`) are the same for every speed. Below 0 when the half
+    transcriptions): 1/speed - duration/step (s/m), 0 when step / duration = speed, with
+    inverse_speed = 1/speed (a parameter, or a number). Linear in sigma; the constant
+    1/speed drops out of its derivatives. Below 0 when the half
     cycle is shorter than step/speed, above when longer: with only its upper bound (the
     first stage, `relaxed_lower_bounds`) it asks for a half cycle at least that long, which
     sigma fixed at its upper bound gives within `settings.speed_range`."""
-    return 1.0 / speed - duration / step
+    return inverse_speed - duration / step
 
 
 def relaxed_lower_bounds(groups, lbg: np.ndarray, clearances: list[float]) -> np.ndarray:

@@ -34,7 +34,7 @@ def _problem(name: str, **overrides):
     x = 0.05 * rng.standard_normal(tr.x.shape[0])
     x[-tr.S.shape[0]:] = 1.0 + 0.4 * rng.random(tr.S.shape[0])
     qref = kinematic_guess(tr, s.step_length)[: tr.N - 1]
-    p = np.concatenate([qref.reshape(-1), [s.step_length, s.friction_coefficient]])
+    p = tr.parameters(qref, s)
     lam_g = rng.standard_normal(tr.g.shape[0])
     return tr, x, p, lam_g
 

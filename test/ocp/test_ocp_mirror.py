@@ -4,6 +4,8 @@ be the regular elements at mirrored unknowns (`Layout.images`)."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -76,7 +78,8 @@ def test_element_inputs_are_the_mirrored_unknowns_and_references():
     rng = np.random.default_rng(3)
     x = rng.standard_normal(tr.x.shape[0])
     qref = guess[: tr.N - 1]
-    p = np.concatenate([qref.reshape(-1), [0.7, 0.8]])
+    p = tr.parameters(qref, dataclasses.replace(tr.settings, step_length=0.7,
+                                                friction_coefficient=0.8))
     xe, pe = tr.layout.element_inputs(x, p)
     A, e, _ = configuration_mirror(mb)
     nd, nt = mb.ndof, mb.nt

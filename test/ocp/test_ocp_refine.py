@@ -49,8 +49,8 @@ def _refined(coarse_walker2d):
     built = planner._built[next(iter(planner._built))]
     coarse, plan = built.tr, built.stored[-1]
     fine = Transcription(coarse.mech, refined_settings(settings))
-    x0, qref = refined_start(coarse, plan, fine)
-    return coarse, fine, x0, qref, np.concatenate([qref.reshape(-1), [plan.step, plan.mu]])
+    x0, qref = refined_start(coarse, plan, fine, settings)
+    return coarse, fine, x0, qref, fine.parameters(qref, refined_settings(settings))
 
 
 def test_refined_start_keeps_the_coarse_plan_at_shared_nodes(coarse_walker2d):
@@ -88,7 +88,7 @@ def test_refined_start_refuses_a_grid_that_is_not_a_refinement(coarse_walker2d):
     built = planner._built[next(iter(planner._built))]
     other = Transcription(built.tr.mech, settings_for(scene, intervals_per_phase=4))
     with pytest.raises(ValueError, match="not a refinement"):
-        refined_start(built.tr, built.stored[-1], other)
+        refined_start(built.tr, built.stored[-1], other, settings)
 
 
 def test_refinements_must_be_a_small_whole_number():

@@ -52,8 +52,7 @@ def test_simulated_stance_satisfies_the_transcription(model):
     qref = traj.q[: N - 1].T  # (k, N-1): nodes 0..N-2
     x = np.concatenate([U.ravel(order="F"), T.ravel(order="F"), np.concatenate(lam),
                         np.ones(tr.S.shape[0])])
-    p = np.concatenate([qref.ravel(order="F"), [settings.step_length,
-                                                settings.friction_coefficient]])
+    p = tr.parameters(qref.T, settings)
     g = np.array(ca.Function("g", [tr.x, tr.p], [tr.g])(x, p)).ravel()
 
     groups, offset = {}, 0

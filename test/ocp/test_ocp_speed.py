@@ -44,8 +44,8 @@ def test_the_reachable_speeds_are_the_step_over_the_durations_sigma_allows():
 
 
 def test_the_row_is_zero_at_the_speed_and_only_a_lower_bound_on_the_duration_first():
-    assert speed_row(0.6, 0.5, 1.2) == pytest.approx(0.0, abs=1e-15)
-    assert speed_row(0.6, 0.4, 1.2) > 0 > speed_row(0.6, 0.6, 1.2)  # too short, too long
+    assert speed_row(0.6, 0.5, 1 / 1.2) == pytest.approx(0.0, abs=1e-15)
+    assert speed_row(0.6, 0.4, 1 / 1.2) > 0 > speed_row(0.6, 0.6, 1 / 1.2)  # short, long
     groups = [("pin_x", 1, True), ("speed", 1, True), ("friction_cone", 2, False)]
     lower = relaxed_lower_bounds(groups, np.zeros(4), [])
     assert lower[1] == -np.inf and np.all(lower[[0, 2, 3]] == 0)
