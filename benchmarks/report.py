@@ -614,11 +614,47 @@ def robots(doc) -> list[str]:
     return out
 
 
+def any_request(doc) -> list[str]:
+    out = ["## 12. Any request without compiling", ""]
+    if doc is None:
+        return out + ["Not measured (run `make bench`).", ""]
+    h, t = doc["header"], doc["header"]["totals"]
+    out += [provenance(doc), "",
+            f"`any_request.py` (issue #39): one fresh process after `make setup` answers "
+            f"{t['requests']} requests drawn at random (seed {h['seed']}) across "
+            f"{h['scene']}'s ranges (a third each level, ramp within ±10°, stairs within "
+            f"±0.15 m; half at a speed within 0.8-1.6 m/s; friction 0.4-1.2, step 0.4-0.9 m), "
+            f"each cold and certified as the node certifies it (refined grids included), "
+            f"{h['time_limit_s']:g} s per request. A request whose speed its step cannot "
+            "reach within the scene's durations is refused before planning, with the "
+            "reachable range.", "",
+            "| requests | refused | compilations | converged | certified | median s | p95 s "
+            "| max s | median iterations |", "|---|---|---|---|---|---|---|---|---|",
+            f"| {t['requests']} | {t['refused']} | {t['compilations']} | {t['converged']} | "
+            f"{t['certified']} | {t['median_s']:.2f} | {t['p95_s']:.1f} | {t['max_s']:.1f} | "
+            f"{t['median_iterations']:.0f} |", ""]
+    rows = [dict(r, ground=("slope %g°" % r["request"]["slope"] if "slope" in r["request"]
+                            else "stairs %+g m" % r["request"]["step_height"]
+                            if "step_height" in r["request"] else "level"),
+                 speed=r["request"].get("speed", "free"), step=r["request"]["step_length"],
+                 mu=r["request"]["friction_coefficient"],
+                 outcome=("refused" if "refused" in r else
+                          "certified" if r["certified"] else
+                          "converged, not certified" if r["success"] else "failed"))
+            for r in doc["rows"]]
+    out += table(rows, [("ground", "ground", ""), ("speed m/s", "speed", ""),
+                        ("step m", "step", ""), ("mu", "mu", ""), ("outcome", "outcome", ""),
+                        ("iterations", "iterations", ".0f"), ("answer s", "answer_s", ".2f"),
+                        ("compiled", "compiled", "")])
+    return out + [""]
+
+
 def main() -> None:
     docs = {name: load(name) for name in ("work_precision", "integrators", "model_size",
                                          "model_size_compiled", "hard_cases", "cold_solve",
                                          "node_latency_walker3d", "request_sweep", "walk",
-                                         "gait_trends", "gait_library", "peers", "robots")}
+                                         "gait_trends", "gait_library", "peers", "robots",
+                                         "any_request")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
              "`benchmarks/results/*.json`; every number below is in those files with the "
@@ -637,6 +673,7 @@ def main() -> None:
     lines += gait_library(docs["gait_library"])
     lines += peers(docs["peers"])
     lines += robots(docs["robots"])
+    lines += any_request(docs["any_request"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
