@@ -24,6 +24,7 @@ FULL = [
     ["cold_solve.py"],
     ["node_latency.py"],
     ["request_sweep.py"],
+    ["any_request.py"],
     ["work_precision.py"],
     ["hard_cases.py", "--time-limit", "45"],
     ["integrators.py", "--long-steps", "30000"],
@@ -42,6 +43,7 @@ QUICK = [
     ["gait_trends.py", "--quick"],
     ["gait_library.py", "--quick"],
     ["robots.py", "--quick"],
+    ["any_request.py", "--scene", "walker2d", "--requests", "5"],
 ]
 
 
