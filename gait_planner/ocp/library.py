@@ -4,8 +4,9 @@
 the same problem. `PlanLibrary` keeps them beyond the process: in
 `<cache folder>/plans/<key>.npz` (`gait_planner.ocp.compile.cache_folder`), one file per
 problem, the key the SHA-256 of what the stored vectors mean: the scene file, the settings
-other than step length, friction coefficient and time limit, the NLP's size and the source
-of the model, dynamics and transcription code. A stored plan is only a starting point: a
+that shape the problem (`ocp.transcription.shape_of`: the request's step length, friction,
+slope, stair height and speed are parameters, kept with each plan), the NLP's size and the
+source of the model, dynamics and transcription code. A stored plan is only a starting point: a
 warm start is solved to the full tolerance and checked like any plan, so a stale or damaged
 file costs iterations, never a wrong plan; one that cannot be read, or whose sizes do not
 match, is ignored.
