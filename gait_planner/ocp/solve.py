@@ -5,10 +5,11 @@
 another step length, friction coefficient, slope, stair height or speed is a new value of
 the problem's parameters, never a new build or compilation. A changed step length or
 friction coefficient re-plans from the nearest stored plan on the same ground at the same
-speed (primal and dual warm start), a new ground or speed cold; with a `PlanLibrary` it also starts from, and adds to,
-the plans of earlier processes (`ocp.library`). A cold plan that fails from its guess at a
-step length other than the scene's is continued from the scene's (`Planner._continuation`);
-a cold plan on stairs down starts from the plan on stairs at most `STAIR_COLD_MAX` deep
+speed (primal and dual warm start), a new ground or speed cold; with a `PlanLibrary` it also
+starts from, and adds to, the plans of earlier processes (`ocp.library`). A cold plan that
+fails from its guess at a step length other than the scene's, or on a ramp, is continued
+from the scene's step length on level ground (`Planner._continuation`); a cold plan on
+stairs down starts from the plan on stairs at most `STAIR_COLD_MAX` deep
 whose segments are kept above the edges by the edge margin instead of the segment rows
 (`Planner._stair_start`).
 """
@@ -124,6 +125,22 @@ class _Built:
 
 def _key(scene: Scene, s: GaitSettings):
     return scene.name, scene.source, dataclasses.replace(shape_of(s), max_solve_time=1.0)
+
+
+def _continuation_base(scene: Scene, s: GaitSettings) -> GaitSettings | None:
+    """The request a failed cold plan of `s` is continued from (`Planner._continuation`):
+    `s` at the scene's step length and, on a ramp, on level ground (one problem: the same
+    shape); None if that is `s` itself."""
+    base = dataclasses.replace(s, step_length=scene.gait.step_length,
+                               slope=0.0 if s.step_height == 0 else s.slope)
+    return None if base == s else base
+
+
+def _described(s: GaitSettings) -> str:
+    """A request's step length and ground, in words."""
+    ground = (f"a {s.slope:g} deg ramp" if s.slope else
+              f"{s.step_height:g} m stairs" if s.step_height else "level ground")
+    return f"step length {s.step_length:.4f} m on {ground}"
 
 
 def _stored(settings: GaitSettings, step: float, x: np.ndarray, duals: dict,
@@ -289,12 +306,16 @@ class Planner:
         return x, qref, (f"refined from the plan on {coarse.tr.N} intervals to {built.tr.N}; "
                          "sigma fixed and limits relaxed, then free")
 
-    def _continuation(self, built: _Built, s: GaitSettings, x_start: np.ndarray,
-                      duals_start: dict, qref: np.ndarray, step0: float, step: float,
-                      totals: list):
-        """A cold plan of a step length other than the scene's that failed from its own
-        guess: plan the scene's step length `step0` cold from its guess (qref), then
-        re-plan `step` warm from that optimum (the continuation is one jump). walker3d
+    def _continuation(self, built: _Built, s: GaitSettings, base: GaitSettings,
+                      x_start: np.ndarray, duals_start: dict, qref: np.ndarray, totals: list):
+        """A cold plan of request `s` that failed from its own guess, continued from `base`
+        (`_continuation_base`: the scene's step length, on level ground if `s` asks for a
+        ramp): plan `base` cold from its guess (qref), then re-plan `s` warm from that
+        optimum (the continuation is one jump; the same problem, other parameters).
+        walker3d on a 10 deg ramp, 2026-11-28: from its own guess the inertia-free attempt
+        stopped at the iteration cap and the inertia test reached the 600 s limit (877
+        iterations); from the level plan 470 warm iterations, 9.6 s, J 21.7118 (the plan the
+        ground's constants had reached cold in 123). walker3d
         at 1.1 m (scene: 0.6338 m): its inertia-free attempt stops at the iteration cap,
         the continuation then converges (746 iterations in all, 22 s; 2026-11-24; 1.0 m
         needed it too before the contact rows were elements, and now converges from its
@@ -303,12 +324,12 @@ class Planner:
         within 120 s, this way 64 + 146 iterations (in five steps of 0.05 m 64 + 127).
         Returns (x, g, duals, status, success, p) of the warm stage, or None if a stage
         failed. The scene's plan is kept for warm starts."""
-        p0 = built.tr.parameters(qref, s, step=step0)
+        p0 = built.tr.parameters(qref, base)
         x0, _, duals, _, success = self._attempt(built, s, COLD_ATTEMPTS[0], 0, x_start,
                                                  duals_start, p0, totals)
         if not success or time.perf_counter() > built.callback.deadline:
             return None
-        self._store(built, _stored(s, step0, x0, duals, qref))
+        self._store(built, _stored(base, base.step_length, x0, duals, qref))
         p = built.tr.parameters(qref, s)
         x, g, duals, status, success = self._attempt(built, s, WARM_ATTEMPTS[0], 0, x0, duals,
                                                      p, totals)
@@ -422,20 +443,20 @@ class Planner:
                 break
             origin += (f"; the inertia-free attempt stopped ({STATUS_WORDS.get(status, status)})"
                        f" after {totals[0]} iterations")
-            if number == 0 and step != scene.gait.step_length:
-                qref_c = GUESSES[guess](tr, scene.gait.step_length,
-                                        ground_of(scene, settings))[: tr.N - 1]
-                found = self._continuation(built, settings, x_start, duals_start, qref_c,
-                                           scene.gait.step_length, step, totals)
+            base = _continuation_base(scene, settings)
+            if number == 0 and base is not None:
+                qref_c = GUESSES[guess](tr, base.step_length, ground_of(scene, base))[: tr.N - 1]
+                found = self._continuation(built, settings, base, x_start, duals_start, qref_c,
+                                           totals)
                 if found is not None:
                     x0, g, duals, status, success, p = found
                     qref = qref_c
-                    origin += (f"; continued from the scene's step length "
-                               f"{scene.gait.step_length:.4f} m (cold) to {step:.4f} m (warm)")
+                    origin += (f"; continued from {_described(base)} (cold) to "
+                               f"{_described(settings)} (warm)")
                     break
                 if stopped() or time.perf_counter() > built.callback.deadline:
                     break
-                origin += "; the continuation from the scene's step length failed"
+                origin += f"; the continuation from {_described(base)} failed"
             origin += ", restarted with IPOPT's inertia test"
         iterations, evaluation = totals
         if stopped():
