@@ -103,7 +103,7 @@ class Ground:
     def rise(self, step: float) -> float:
         """Height (m) the mirror image of a half cycle of step length `step` m is shifted
         up: step tan(slope) + step_height."""
-        return step * self.rise_per_step + self.step_height
+        return parametric_rise(self.parameters, step)
 
     def tread_height(self, tread: int) -> float:
         """Height (m) of tread `tread` (0: the standing foot's, 1: the landing foot's)."""
@@ -132,11 +132,7 @@ class Ground:
         `edge_margin` and 5 widths towards the lower tread, for the edges -1, 0 and 1 (the
         three a half cycle's swing foot passes over, from tread -1 to tread 1). sigmoid: the
         logistic function of the caller's algebra (CasADi or numpy)."""
-        h = self.step_height
-        ahead = (self.edge_margin + 5 * EDGE_WIDTH) * (1.0 if h > 0 else -1.0)
-        steps = sum(sigmoid((x - self.riser - j * self.tread + ahead) / EDGE_WIDTH)
-                    for j in (-1, 0, 1))
-        return h * (steps - 1.0)
+        return parametric_clearance_height(self.parameters, x, sigmoid)
 
     @property
     def descending(self) -> bool:
@@ -199,6 +195,15 @@ def parametric_rise(parameters, step):
     return step * parameters[2] + parameters[3]
 
 
+def parametric_clearance_height(parameters, x, sigmoid):
+    """`Ground.clearance_height` of the ground of `parameters` (`Ground.parameters`, any
+    algebra): h (sum of the three edges' smooth steps - 1), each edge shifted by the
+    parameters' edge shift towards the lower tread."""
+    h, riser, tread, ahead = (parameters[i] for i in (3, 4, 5, 6))
+    steps = sum(sigmoid((x - riser - j * tread + ahead) / EDGE_WIDTH) for j in (-1, 0, 1))
+    return h * (steps - 1.0)
+
+
 class ParametricGround:
     """A ground of one `Ground.form` as CasADi expressions of its `Ground.parameters`
     (values: a (len(PARAMETERS),) DM, SX or MX column), with `Ground`'s algebra: one
@@ -215,9 +220,10 @@ class ParametricGround:
         return cls(values, ground.form, (values,))
 
     @classmethod
-    def constant(cls, ground: Ground) -> "ParametricGround":
-        """`ground` itself: its parameters as constants."""
-        return cls(ca.DM(ground.parameters), ground.form)
+    def of(cls, ground: "Ground | ParametricGround") -> "ParametricGround":
+        """`ground` as CasADi expressions: a `Ground`'s parameters as constants."""
+        return ground if isinstance(ground, ParametricGround) else \
+            cls(ca.DM(ground.parameters), ground.form)
 
     def like(self, values) -> "ParametricGround":
         """The same form with other values (e.g. the parameter vector's MX entries)."""
@@ -258,7 +264,5 @@ class ParametricGround:
                    if not (isinstance(n, float) and n == 0.0))
 
     def clearance_height(self, x, sigmoid):
-        """`Ground.clearance_height`, with the edge shift `Ground.parameters` gives."""
-        h, riser, tread, ahead = (self.values[i] for i in (3, 4, 5, 6))
-        steps = sum(sigmoid((x - riser - j * tread + ahead) / EDGE_WIDTH) for j in (-1, 0, 1))
-        return h * (steps - 1.0)
+        """`Ground.clearance_height`."""
+        return parametric_clearance_height(self.values, x, sigmoid)

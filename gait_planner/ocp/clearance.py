@@ -130,11 +130,6 @@ def strike_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]]
     return out
 
 
-def _parametric(ground: Ground | ParametricGround) -> ParametricGround:
-    """The ground as CasADi expressions: a `Ground`'s parameters as constants."""
-    return ground if isinstance(ground, ParametricGround) else ParametricGround.constant(ground)
-
-
 def strike_rows(mb: Multibody, points: Sequence[str], ground: Ground | ParametricGround = LEVEL
                 ) -> ca.Function:
     """CasADi Function (q_n, q_{n+1}, h_n, c[, ground]) -> one margin (>= 0) per striking
@@ -145,7 +140,7 @@ def strike_rows(mb: Multibody, points: Sequence[str], ground: Ground | Parametri
     stairs; the row is smooth, and O(1) at sigma = 1). In planar scenes in the x-z plane."""
     q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
         ca.SX.sym("c", 2)
-    ground = _parametric(ground)
+    ground = ParametricGround.of(ground)
     rows = []
     for point in points:
         contact = mb.scene.contact(point)
@@ -177,9 +172,8 @@ def edge_heights(mb: Multibody, point: str, half_width: float,
     """Rows (Z, X), each (r, k), of what must clear the ground for a swing contact
     point: its two foot edges p_C -+ half_width d2 (r = 2) in a 3D scene with half_width
     > 0, else the point itself (r = 1). Z q is their height along the ground's normal n
-    (n . p: above a ramp's plane; z on level ground and stairs), X q their x (m). numpy
-    arrays for a `Ground`, Z a CasADi expression of the parameters for a
-    `ParametricGround`."""
+    (n . p: above a ramp's plane; z on level ground and stairs), X q their x (m). Z is a
+    CasADi expression (of a `ParametricGround`'s parameters), X a numpy array."""
     c = mb.scene.contact(point)
     P = mb.point_matrix(c.body, c.point)
     if mb.scene.planar or half_width <= 0:
@@ -189,10 +183,8 @@ def edge_heights(mb: Multibody, point: str, half_width: float,
         start = mb.block(c.body).start + 6
         d2[:, start : start + 3] = half_width * np.eye(3)
         edges = [P - d2, P + d2]
-    X = np.array([E[0] for E in edges])
-    if isinstance(ground, ParametricGround):
-        return ca.vertcat(*[ground.along_normal(E) for E in edges]), X
-    return np.array([ground.normal @ E for E in edges]), X
+    ground = ParametricGround.of(ground)
+    return ca.vertcat(*[ground.along_normal(E) for E in edges]), np.array([E[0] for E in edges])
 
 
 def _stacked_edges(mb: Multibody, points: Sequence[str], half_width: float,
@@ -210,7 +202,7 @@ def ground_heights(mb: Multibody, points: Sequence[str], half_width: float,
     edge a smooth step moved towards the lower tread (`gait_planner.model.ground`);
     ground: the parameters of a symbolic `ParametricGround`."""
     q = ca.SX.sym("q", mb.k)
-    ground = _parametric(ground)
+    ground = ParametricGround.of(ground)
     Z, X = _stacked_edges(mb, points, half_width, ground)
     height = ca.mtimes(Z, q)
     if ground.stairs:
@@ -232,7 +224,7 @@ def segment_heights(mb: Multibody, points: Sequence[str], half_width: float,
     the edge's corner (module docstring)."""
     q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
         ca.SX.sym("c", 2)
-    ground = _parametric(ground)
+    ground = ParametricGround.of(ground)
     Z, X = _stacked_edges(mb, points, half_width, ground)
 
     def g(x):
@@ -253,7 +245,7 @@ def midpoint_heights(mb: Multibody, points: Sequence[str], half_width: float,
     signature)."""
     q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
         ca.SX.sym("c", 2)
-    ground = _parametric(ground)
+    ground = ParametricGround.of(ground)
     heights = ground_heights(mb, points, half_width, ground)(0.5 * (q0 + q1), *ground.inputs)
     return ca.Function("midpoint_heights_" + "_".join(points), [q0, q1, h, c, *ground.inputs],
                        [heights], ["q", "q_next", "h", "c", *_names(ground)], ["z"])

@@ -157,21 +157,20 @@ def stacked_rows(contacts: tuple[BodyContact, ...], k: int) -> np.ndarray:
     return np.vstack([c.rows for c in contacts]) if contacts else np.zeros((0, k))
 
 
-def phase_rows(contacts: tuple[BodyContact, ...], k: int, ground: ParametricGround):
-    """`stacked_rows` of contacts built on level ground (`body_contacts` without a
-    ground), with each full 3D contact's roll row n . d2 about `ground`'s normal: a
-    CasADi (sum r, k) matrix of its parameters."""
-    C = stacked_rows(contacts, k)
-    rows, offset = [], 0
+def phase_rows(mb: Multibody, contacts: tuple[BodyContact, ...],
+               ground: Ground | ParametricGround):
+    """`stacked_rows` of `contacts` with each full 3D contact's roll row n . d2 about
+    `ground`'s normal: a CasADi (sum r, k) matrix (of a `ParametricGround`'s parameters)."""
+    ground = ParametricGround.of(ground)
+    rows = []
     for c in contacts:
-        rows += [ca.DM(C[offset + i : offset + i + 1]) for i in range(c.n_rows)]
-        if c.full and not c.planar:  # level: e_z . d2, one entry at d2_z
-            d2 = int(np.flatnonzero(c.rows[-1])[0]) - 2
-            roll = np.zeros((3, k))
+        rows += [ca.DM(c.rows[i : i + 1]) for i in range(c.n_rows)]
+        if c.full and not c.planar:
+            d2 = mb.block(c.body).start + 6
+            roll = np.zeros((3, mb.k))
             roll[:, d2 : d2 + 3] = np.eye(3)
             rows[-1] = ground.along_normal(roll)
-        offset += c.n_rows
-    return ca.vertcat(*rows) if rows else ca.DM.zeros(0, k)
+    return ca.vertcat(*rows) if rows else ca.DM.zeros(0, mb.k)
 
 
 def establishing_rows(mb: Multibody, before: tuple[BodyContact, ...],
@@ -182,21 +181,18 @@ def establishing_rows(mb: Multibody, before: tuple[BodyContact, ...],
     tread's height (n the ground's normal; on stairs tread 1 for the points of
     `landing`, the contact points not held at the half cycle's start, else tread 0), and,
     for a body whose full contact is completed there, its roll n . d2 = 0 (foot flat on
-    the ground). r may be 0. numpy arrays for a `Ground`, CasADi expressions of the
-    parameters for a `ParametricGround` (its roll row: `phase_rows`')."""
-    symbolic = isinstance(ground, ParametricGround)
+    the ground). r may be 0. CasADi expressions (of a `ParametricGround`'s parameters;
+    the roll row `phase_rows`')."""
+    ground = ParametricGround.of(ground)
     held = {p for c in before for p in c.points}
     rows, heights = [], []
     for c in after:
         new = [p for p in c.points if p not in held]
         for p in new:
             point = mb.scene.contact(p)
-            P = mb.point_matrix(point.body, point.point)
-            rows.append(ground.along_normal(P) if symbolic else ground.normal @ P)
+            rows.append(ground.along_normal(mb.point_matrix(point.body, point.point)))
             heights.append(ground.tread_height(1 if p in landing else 0))
         if new and c.full and not c.planar:
-            rows.append(phase_rows((c,), mb.k, ground)[-1, :] if symbolic else c.rows[-1])
+            rows.append(phase_rows(mb, (c,), ground)[-1, :])
             heights.append(0.0)
-    if symbolic:
-        return (ca.vertcat(*rows) if rows else ca.DM.zeros(0, mb.k)), ca.vertcat(*heights)
-    return (np.array(rows) if rows else np.zeros((0, mb.k))), np.array(heights)
+    return (ca.vertcat(*rows) if rows else ca.DM.zeros(0, mb.k)), ca.vertcat(*heights)

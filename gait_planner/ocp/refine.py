@@ -55,7 +55,7 @@ def refined_start(coarse: Transcription, plan: StoredPlan, fine: Transcription,
             not np.array_equal(np.repeat(coarse.phase_of_interval, factor), fine.phase_of_interval):
         raise ValueError(f"a grid of {fine.N} intervals is not a refinement of {coarse.N}")
     x = plan.x
-    p = coarse.parameters(plan.qref, settings, step=plan.step)
+    p = coarse.parameters(plan.qref, settings)
     Q, TAU = (np.array(v) for v in ca.Function("q_tau", [coarse.x, coarse.p],
                                                [coarse.Q, coarse.TAU])(x, p))
     times = coarse_times(coarse, fine)

@@ -143,11 +143,10 @@ def _described(s: GaitSettings) -> str:
     return f"step length {s.step_length:.4f} m on {ground}"
 
 
-def _stored(settings: GaitSettings, step: float, x: np.ndarray, duals: dict,
-            qref: np.ndarray) -> StoredPlan:
-    """The optimum x (with its multipliers) of the request `settings` at step length
-    `step`, to keep."""
-    return StoredPlan(step, settings.friction_coefficient, x, duals["lam_x0"], duals["lam_g0"],
+def _stored(settings: GaitSettings, x: np.ndarray, duals: dict, qref: np.ndarray
+            ) -> StoredPlan:
+    """The optimum x (with its multipliers) of the request `settings`, to keep."""
+    return StoredPlan(settings.step_length, settings.friction_coefficient, x, duals["lam_x0"], duals["lam_g0"],
                       qref, slope=settings.slope, step_height=settings.step_height,
                       speed=settings.speed)
 
@@ -329,7 +328,7 @@ class Planner:
                                                  duals_start, p0, totals)
         if not success or time.perf_counter() > built.callback.deadline:
             return None
-        self._store(built, _stored(base, base.step_length, x0, duals, qref))
+        self._store(built, _stored(base, x0, duals, qref))
         p = built.tr.parameters(qref, s)
         x, g, duals, status, success = self._attempt(built, s, WARM_ATTEMPTS[0], 0, x0, duals,
                                                      p, totals)
@@ -467,5 +466,5 @@ class Planner:
                               origin=origin)
         result.settings["derivatives"] = built.derivatives_used
         if result.success:
-            self._store(built, _stored(settings, step, x0, duals, qref))
+            self._store(built, _stored(settings, x0, duals, qref))
         return result

@@ -90,7 +90,7 @@ class Transcription:
         self.contacts = [body_contacts(mb, p.contacts) for p in phases]  # rows: level ground
         self.rows = [stacked_rows(c, mb.k) for c in self.contacts]  # (their sizes)
         self.rows_of = [ca.Function(f"contact_rows_phase{k}", [self.gs.values],
-                                    [phase_rows(c, mb.k, self.gs)])
+                                    [phase_rows(mb, c, self.gs)])
                         for k, c in enumerate(self.contacts)]  # ground -> C_k
         self.A, along, up = mirror_parts(mb)
         self.B = torque_mirror(mb)
@@ -170,8 +170,7 @@ class Transcription:
             q0, q1, q2 = (ca.SX.sym(s, mb.k) for s in ("q_prev", "q", "q_next"))
             h0, h1 = ca.SX.sym("h_prev"), ca.SX.sym("h")
             tau = ca.SX.sym("tau", mb.nt)  # node n's torque acts on both its half intervals
-            lam = ca.SX.sym("lambda", C.shape[0])
-            ground = ca.SX.sym("ground", len(PARAMETERS))
+            lam, ground = ca.SX.sym("lambda", C.shape[0]), self.gs.values
             w = 0.5 * (h0 + h1)
             r = self.mech.discrete_euler_lagrange(q0, q1, q2, h0, h1, tau, tau)
             contact = mb.null_space_transpose(
@@ -296,7 +295,7 @@ class Transcription:
         N, mb = self.N, self.mb
         q0, q1, h, c = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h"), \
             ca.SX.sym("c", 2)
-        ground = ca.SX.sym("ground", len(PARAMETERS))
+        ground = self.gs.values
         intervals: dict[tuple[int, bool], list[tuple[int, np.ndarray]]] = {}
         row = first_row
         for n in range(N - 1):
@@ -597,20 +596,18 @@ class Transcription:
         return ca.vertcat(ca.vec(self.Qref), self.step, self.mu, self.ground_p,
                           self.inverse_speed)
 
-    def parameters(self, qref: np.ndarray, settings: GaitSettings,
-                   step: float | None = None) -> np.ndarray:
+    def parameters(self, qref: np.ndarray, settings: GaitSettings) -> np.ndarray:
         """The numeric p of a request (`settings`, of this problem's `shape_of`) with the
-        references qref (N-1, k): step length (`step`, else the request's), friction
-        coefficient, its ground's parameters (`Ground.parameters`, of the request's step
-        length) and 1 / speed (0 with free durations)."""
+        references qref (N-1, k): step length, friction coefficient, its ground's
+        parameters (`Ground.parameters`) and 1 / speed (0 with free durations)."""
         ground = ground_of(self.mb.scene, settings)
         if ground.form != self.gs.form:
             raise ValueError(f"a request on {ground.form} cannot use a problem built for "
                              f"{self.gs.form}")
         inverse = 1.0 / settings.speed if settings.speed > 0 else 0.0
         return np.concatenate([np.asarray(qref, dtype=float).reshape(-1),
-                               [settings.step_length if step is None else step,
-                                settings.friction_coefficient], ground.parameters, [inverse]])
+                               [settings.step_length, settings.friction_coefficient],
+                               ground.parameters, [inverse]])
 
     @property
     def g_without_elements(self):
