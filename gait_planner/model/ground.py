@@ -246,10 +246,6 @@ class ParametricGround:
         """[n_x, 0, n_z]: the ramp's unit normal (`Ground.normal`)."""
         return [self.values[0], 0.0, self.values[1]]
 
-    @property
-    def step_height(self):
-        return self.values[3]
-
     def rise(self, step):
         """`Ground.rise`: step tan(slope) + step_height."""
         return parametric_rise(self.values, step)
