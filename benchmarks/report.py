@@ -51,10 +51,10 @@ def provenance(doc: dict) -> str:
             f"CasADi {h['casadi']}{', quick run' if h.get('quick') else ''}.*")
 
 
-def time_to_reach(rows, level, key):
-    """Solve time at which the error first drops to `level` (log-log interpolation between
-    the grids that bracket it); None if never."""
-    pts = sorted((r["solve_time_s"], r[key]) for r in rows
+def time_to_reach(rows, level, key, time_key="solve_time_s"):
+    """Solve time (`time_key`) at which the error `key` first drops to `level` (log-log
+    interpolation between the grids that bracket it); None if never."""
+    pts = sorted((r[time_key], r[key]) for r in rows
                  if r.get(key) is not None and r["converged"])
     best = np.inf
     for i, (t, e) in enumerate(pts):
@@ -483,14 +483,16 @@ PEER_NOTES = {
 }
 
 
-def peers(doc) -> list[str]:
+PEER_LEVELS = (1.0, 0.5, 0.2)  # one-interval drift RMS, deg: the peers' time-to-reach levels
+
+
+def peers(docs: dict) -> list[str]:
     out = ["## 10. DMOCC against Crocoddyl, Drake and OpenSim Moco", ""]
-    if doc is None:
+    if not docs:
         return out + ["Not measured (`make bench-peers`).", ""]
-    rows = doc["rows"]
-    versions = sorted({f"{r['peer']} {r['version']}" for r in rows if r.get("version")})
-    out += [provenance(doc), "",
-            "`make bench-peers` (`benchmarks/peers/run.py`, each peer in its own environment "
+    every = [r for doc in docs.values() for r in doc["rows"]]
+    versions = sorted({f"{r['peer']} {r['version']}" for r in every if r.get("version")})
+    out += ["`make bench-peers` (`benchmarks/peers/run.py`, each peer in its own environment "
             "`.venv-peers/<peer>`): the same walker (the project's URDF), DMOCC's contact "
             "schedule, foot placements and phase durations, the same friction coefficient; "
             "every plan measured by the project's instruments: one-interval drift against "
@@ -500,31 +502,72 @@ def peers(doc) -> list[str]:
             "(every method's, whatever it minimised); DMOCC's plan and every converged "
             "peer plan recorded by the product's writer and walked in MuJoCo by the "
             "reference controller (config/walk.yaml), as a user walks a plan: half cycles "
-            "walked of 10 and the joints' RMS tracking error. Time limit "
-            f"{doc['header'].get('time_limit_s', 300):g} s per solve. Versions: "
-            f"{', '.join(versions) or 'see the requirements files'}. Rows measured at "
-            f"different times carry their own `measured` stamp in the JSON (and rows measured "
-            "again from a saved plan, `run.py --remeasure`, the time it was solved: "
-            "`solved`). Figure: "
-            "[peers.png](peers.png).", ""]
-    out += table(sorted(rows, key=lambda r: (r["scene"], r["grid"], r["method"] != "DMOCC",
-                                             r["method"])), [
-        ("scene", "scene", ""), ("n", "grid", "d"), ("method", "method", ""),
+            "walked of 10 and the joints' RMS tracking error. Each scene's table is one run "
+            "(its header says so, or says which runs it joins): every row, DMOCC's included, "
+            "solved one at a time after the 1-minute load average fell to the threshold, "
+            "re-run once when it did not or when the rest of the machine added more than "
+            "the threshold during the solve (*load*: before the kept solve; *loaded*: still "
+            "so); *thr* the solver's threads. Versions: "
+            f"{', '.join(versions) or 'see the requirements files'}. Figure (solve time "
+            "against drift, each method's grids joined): [peers.png](peers.png).", ""]
+    for scene, doc in docs.items():
+        out += peer_table(scene, doc)
+    out += ["What is and is not comparable:", "",
+            "* DMOCC: frees the start state and the phase durations, imposes periodicity, "
+            "cones, limits, swing clearance and strike speed as hard constraints, and minimises "
+            "kinetic energy; its row is the plan the product answers with."]
+    out += [f"* {text}" for peer, text in PEER_NOTES.items()
+            if any(r["peer"] == peer for r in every)]
+    return out + [""]
+
+
+def peer_table(scene: str, doc: dict) -> list[str]:
+    """One scene's peer table with its run's provenance, and the time each method takes to
+    reach PEER_LEVELS of drift and to a plan that walks 10 half cycles."""
+    h, rows = doc["header"], doc["rows"]
+    run = ("one run" if h.get("one_run") else
+           f"**not one run**: rows of several runs joined (`{h.get('argv', '')}`), each "
+           "with its `measured` stamp in the JSON")
+    load = (f", load before a solve at most {h['load_before_max']:.2f} (threshold "
+            f"{h['load_threshold']}), {h['rows_re_run']} rows re-run, "
+            f"{h['rows_under_load']} still under load" if h.get("load_before_max") is not None
+            else "")
+    out = [f"### {scene}", "", provenance(doc), "",
+           f"{run}; threads {h.get('threads', 'not recorded')}{load}; time limit "
+           f"{h.get('time_limit_s', 300):g} s per solve (a row saying otherwise had its own).",
+           ""]
+    out += table(sorted(rows, key=lambda r: (r["grid"], r["method"] != "DMOCC", r["method"])), [
+        ("n", "grid", "d"), ("method", "method", ""),
         ("conv", "converged", ""), ("build s", "build_time", ".2g"),
-        ("solve s", "solve_time", ".3g"), ("iter", "iterations", ""),
+        ("solve s", "solve_time", ".3g"), ("iter", "iterations", ""), ("thr", "threads", ""),
+        ("load", "load_before", ".2f"), ("loaded", "under_load", ""),
         ("int tau^2", "squared_torque", ".4g"), ("node RMS deg", "drift_node_rms_deg", ".3g"),
         ("node max deg", "drift_node_max_deg", ".3g"), ("swing mm", "swing_phase_mm", ".3g"),
         ("hold mm", "contact_hold_mm", ".2g"), ("cone N", "cone_violation_n", ".2g"),
         ("limit deg", "joint_limit_deg", ".2g"), ("periodic mm", "plan_periodicity_mm", ".3g"),
         ("walked", "walk_half_cycles", "d"), ("walk RMS deg", "walk_joint_rms_deg", ".3g"),
         ("status", "status", "")])
-    out += ["", "What is and is not comparable:", "",
-            "* DMOCC: frees the start state and the phase durations, imposes periodicity, "
-            "cones, limits, swing clearance and strike speed as hard constraints, and minimises "
-            "kinetic energy; its row is the plan the product answers with."]
-    out += [f"* {text}" for peer, text in PEER_NOTES.items()
-            if any(r["peer"] == peer for r in rows)]
-    return out + [""]
+    methods = {m: [r for r in rows if r["method"] == m and r.get("solve_time") is not None]
+               for m in sorted({r["method"] for r in rows}, key=lambda m: (m != "DMOCC", m))}
+    dmocc = methods.get("DMOCC", [])
+    lines = []
+    for method, mine in methods.items():
+        cells = []
+        for level in PEER_LEVELS:
+            t = time_to_reach(mine, level, "drift_node_rms_deg", "solve_time")
+            ref = time_to_reach(dmocc, level, "drift_node_rms_deg", "solve_time")
+            cells.append("never" if t is None else f"{t:.3g}" + (
+                f" ({t / ref:.2g}×)" if ref and method != "DMOCC" else ""))
+        walks = [r["solve_time"] for r in mine if r.get("walk_half_cycles") == 10]
+        cells.append(f"{min(walks):.3g}" if walks else "none")
+        lines.append(f"| {method} | " + " | ".join(cells) + " |")
+    levels = " | ".join(f"drift ≤ {v:g} deg" for v in PEER_LEVELS)
+    return out + ["", "Time to reach a one-interval drift (RMS over the nodes; solve s, "
+                  "converged rows only, interpolated between grids as in section 1; in "
+                  "brackets the ratio to DMOCC's time in this run), and the shortest solve "
+                  "whose plan walked 10 of 10 half cycles:", "",
+                  f"| method | {levels} | walks 10 |",
+                  "|---" * (len(PEER_LEVELS) + 2) + "|", *lines, ""]
 
 
 def _certificate(text: str) -> str:
@@ -653,7 +696,7 @@ def main() -> None:
     docs = {name: load(name) for name in ("work_precision", "integrators", "model_size",
                                          "model_size_compiled", "hard_cases", "cold_solve",
                                          "node_latency_walker3d", "request_sweep", "walk",
-                                         "gait_trends", "gait_library", "peers", "robots",
+                                         "gait_trends", "gait_library", "robots",
                                          "any_request")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
@@ -671,7 +714,8 @@ def main() -> None:
     lines += walk(docs["walk"])
     lines += gait_trends(docs["gait_trends"])
     lines += gait_library(docs["gait_library"])
-    lines += peers(docs["peers"])
+    lines += peers({scene: doc for scene in ("walker2d", "walker3d")
+                    if (doc := load(f"peers_{scene}"))})
     lines += robots(docs["robots"])
     lines += any_request(docs["any_request"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"

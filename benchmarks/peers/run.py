@@ -61,6 +61,7 @@ from gait_planner.ocp.solve import Planner
 REPO = Path(__file__).resolve().parents[2]
 PEER_ROOT = REPO / ".venv-peers"
 WORK = REPO / "build" / "peers"
+SCENES = ("walker2d", "walker3d")
 GRIDS = (4, 8, 16)
 # (label, argv) per peer: each peer's variants; {n} is the grid (intervals per phase)
 VARIANTS = {
@@ -91,6 +92,12 @@ VARIANTS["crocoddyl"] += (
     ("CSQP euler, x0 DMOCC", ["--solver", "csqp", "--integrator", "euler",
                               "--start", "dmocc"]),
 )
+# once per table, a variant given a longer limit (issue #38): whether Moco converges at all
+# on walker2d at 4 per phase (at 300 s and the example's 1000 iterations it stops at ~450
+# iterations, not converged); (scene, grid), time limit s, label, argv
+LONG_VARIANTS = {"opensim": ((("walker2d", 4), 1200.0, "Moco HS, x0 DMOCC, 1200 s",
+                              ["--intervals", "{n}", "--start", "dmocc",
+                               "--max-iterations", "5000"]),)}
 SOLVE_KEYS = ("build_time", "solve_time", "wall_time", "iterations")  # kept by --remeasure
 THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
               "DRAKE_NUM_THREADS")
@@ -238,7 +245,10 @@ def scene_rows(scene: str, n: int, peers: list[str], time_limit: float,
                        solved=remeasure.get("measured", ""))
     for peer in peers:
         python, why = peer_python(peer)
-        for label, argv in VARIANTS[peer]:
+        variants = [(label, argv, time_limit) for label, argv in VARIANTS[peer]] + \
+            [(label, argv, limit) for where, limit, label, argv in LONG_VARIANTS.get(peer, ())
+             if where == (scene, n)]
+        for label, argv, limit in variants:
             for pinned in thread_sets:
                 method = f"{peer} {label}" + ("" if pinned else " [default threads]")
                 row = {**base, "method": method, "peer": peer,
@@ -257,9 +267,9 @@ def scene_rows(scene: str, n: int, peers: list[str], time_limit: float,
                         continue
                     plan, why_not = exchange.read_plan(out), ""
                 else:
-                    def solve(out=out, args=args, pinned=pinned):
+                    def solve(out=out, args=args, pinned=pinned, limit=limit):
                         out.unlink(missing_ok=True)  # a re-run reads only its own plan
-                        return run_peer(python, peer, args, path, out, time_limit, pinned)
+                        return run_peer(python, peer, args, path, out, limit, pinned)
 
                     (plan, why_not), load = measured(solve, threshold, wait)
                     row.update(load)
@@ -298,20 +308,19 @@ def table(rows: list[dict]) -> str:
                      for line in [head] + lines)
 
 
-def plot(rows: list[dict], path: Path) -> None:
-    """Solve time against the one-interval drift (RMS deg), a panel per scene, each
-    method's grids joined in order."""
+def plot(tables: dict[str, list[dict]], path: Path) -> None:
+    """Solve time against the one-interval drift (RMS deg), a panel per scene's table,
+    each method's grids joined in order."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    scenes = sorted({r["scene"] for r in rows})
-    fig, axes = plt.subplots(1, len(scenes), figsize=(6 * len(scenes), 4.5), squeeze=False)
-    for ax, scene in zip(axes[0], scenes):
-        methods = sorted({r["method"] for r in rows if r["scene"] == scene})
+    fig, axes = plt.subplots(1, len(tables), figsize=(6 * len(tables), 4.5), squeeze=False)
+    for ax, (scene, rows) in zip(axes[0], tables.items()):
+        methods = sorted({r["method"] for r in rows})
         for method in methods:
             points = sorted((r["grid"], r["solve_time"], r["drift_node_rms_deg"],
                              r["converged"]) for r in rows
-                            if r["scene"] == scene and r["method"] == method
+                            if r["method"] == method
                             and math.isfinite(r.get("drift_node_rms_deg", math.nan)))
             if not points:
                 continue
@@ -331,7 +340,7 @@ def plot(rows: list[dict], path: Path) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenes", nargs="+", default=["walker2d", "walker3d"])
+    parser.add_argument("--scenes", nargs="+", default=list(SCENES), choices=SCENES)
     parser.add_argument("--grids", nargs="+", type=int, default=list(GRIDS))
     parser.add_argument("--peers", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     parser.add_argument("--time-limit", type=float, default=300.0)
@@ -340,8 +349,8 @@ def main() -> None:
                         help="do not run the peers: measure the plans the last run left in "
                              f"{WORK.relative_to(REPO)} again (DMOCC is planned again)")
     parser.add_argument("--merge", action="store_true",
-                        help="keep the rows of results/peers.json that this run does not "
-                             "measure again (another peer, scene or grid; the table is then "
+                        help="keep the rows of results/peers_<scene>.json that this run does not "
+                             "measure again (another peer or grid; the table is then "
                              "no longer one run)")
     parser.add_argument("--threads", choices=("single", "default", "both"), default="single",
                         help="peers single-threaded, at their libraries' defaults, or both "
@@ -363,42 +372,57 @@ def main() -> None:
     if args.quick:
         args.scenes, args.grids = ["walker2d"], [4]
     thread_sets = {"single": (True,), "default": (False,), "both": (True, False)}[args.threads]
-    load_start = os.getloadavg()[0]
     planner = Planner()
-    old = load_results("peers")
-    previous = {(r["scene"], r["grid"]): {"measured": old["header"]["date_utc"], **r}
+    for scene in args.scenes:
+        run_scene(scene, args, planner, thread_sets)
+    plot({scene: doc["rows"] for scene in SCENES if (doc := load_results(result_name(scene)))},
+         figure_path("peers.png"))
+
+
+def result_name(scene: str) -> str:
+    """The results file of a scene's table (benchmarks/results/peers_<scene>.json): each
+    scene's table is one run."""
+    return f"peers_{scene}"
+
+
+def run_scene(scene: str, args, planner: Planner, thread_sets: tuple[bool, ...]) -> None:
+    """One scene's table at args.grids, written with its run's header (machine, date,
+    commit, load) to `result_name(scene)`; with --merge the rows this run does not measure
+    again are kept (the header then says the table is not one run)."""
+    load_start = os.getloadavg()[0]
+    old = load_results(result_name(scene))
+    previous = {r["grid"]: {"measured": old["header"]["date_utc"], **r}
                 for r in (old["rows"] if old else []) if r["method"] == "DMOCC"}
     rows = []
-    for scene in args.scenes:
-        for n in args.grids:
-            new = scene_rows(scene, n, args.peers, args.time_limit, planner,
-                             previous.get((scene, n), {}) if args.remeasure else None,
-                             thread_sets=thread_sets, threshold=args.load_threshold,
-                             wait=args.settle)
-            rows += new
-            print(table(new), flush=True)
+    for n in args.grids:
+        new = scene_rows(scene, n, args.peers, args.time_limit, planner,
+                         previous.get(n, {}) if args.remeasure else None,
+                         thread_sets=thread_sets, threshold=args.load_threshold,
+                         wait=args.settle)
+        rows += new
+        print(table(new), flush=True)
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     rows = [{**row, "measured": stamp} for row in rows]
     argv = " ".join(sys.argv[1:])
     # read again: another run may have merged its rows since this one started
-    if args.merge and (old := load_results("peers")) is not None:
-        again = {(r["scene"], r["grid"], r["method"]) for r in rows}
+    if args.merge and (old := load_results(result_name(scene))) is not None:
+        again = {(r["grid"], r["method"]) for r in rows}
         kept = [{**r, "measured": r.get("measured", old["header"]["date_utc"])}
-                for r in old["rows"] if (r["scene"], r["grid"], r["method"]) not in again]
+                for r in old["rows"] if (r["grid"], r["method"]) not in again]
         rows = kept + rows
         argv = f"{old['header'].get('argv', '')} | then {argv}"
     print(table(rows))
     this_run = [r for r in rows if r.get("measured") == stamp and "load_before" in r]
-    path = write_results("peers", rows, {
-        "time_limit_s": args.time_limit, "argv": argv, "one_run": not args.merge,
-        "threads": args.threads, "thread_env_pinned": dict.fromkeys(THREAD_ENV, "1"),
+    path = write_results(result_name(scene), rows, {
+        "scene": scene, "time_limit_s": args.time_limit, "argv": argv,
+        "one_run": not args.merge, "threads": args.threads,
+        "thread_env_pinned": dict.fromkeys(THREAD_ENV, "1"),
         "load_threshold": args.load_threshold, "settle_s": args.settle,
         "load_average_1min_at_start": load_start,
         "load_average_1min_at_end": os.getloadavg()[0],
         "load_before_max": max((r["load_before"] for r in this_run), default=None),
         "rows_under_load": sum(bool(r.get("under_load")) for r in this_run),
         "rows_re_run": sum(r.get("attempts", 1) > 1 for r in this_run)})
-    plot(rows, figure_path("peers.png"))
     print(path)
 
 
