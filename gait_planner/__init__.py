@@ -1,5 +1,8 @@
 """gait_planner: DMOCC gait optimisation of multibody walkers (ROS 2 package).
 
+The Python API (`gait_planner.api`; loaded on first use, so importing a submodule stays
+light): ``from gait_planner import PlanRequest, plan, check, record, summary``.
+
 One BLAS thread for CasADi's bundled OpenBLAS (read when CasADi first loads its IPOPT
 plugin, so this has to run before the first solver is built): MUMPS then factorises the
 same way every time and IPOPT takes the same path on every run. With two threads walker3d's cold solve took 160 or 199 iterations
@@ -24,3 +27,15 @@ for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
     os.environ.setdefault(_name, "1")
 if platform.machine() in ("x86_64", "AMD64"):
     os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
+
+_API = ("PlanRequest", "PlanResult", "Planner", "RequestError", "check", "plan", "record",
+        "summary")
+__all__ = list(_API)
+
+
+def __getattr__(name: str):
+    if name in _API:
+        import importlib
+
+        return getattr(importlib.import_module("gait_planner.api"), name)
+    raise AttributeError(f"module 'gait_planner' has no attribute {name!r}")

@@ -103,7 +103,7 @@ def prepare(planner: Planner, request: PlanRequest, rrd: bool = True,
     `plan_and_record` would load on first use (scenes: as in `request_settings`):
     Pinocchio, the MCAP writer and its message
     encoder (~0.4 s) and, with rrd, rerun (~0.45 s; the node leaves it to its .rrd helper,
-    `io.rrd_recorder`). Returns how the problem's derivatives are evaluated."""
+    `viz.rrd_recorder`). Returns how the problem's derivatives are evaluated."""
     how = planner.prepare(*request_settings(request, scenes))
     from gait_planner.io.mcap_writer import recording_encoder
 
@@ -111,14 +111,42 @@ def prepare(planner: Planner, request: PlanRequest, rrd: bool = True,
     import gait_planner.verify.continuous  # noqa: F401
     import gait_planner.verify.mechanics  # noqa: F401
     if rrd:
-        import gait_planner.io.rerun_view  # noqa: F401
+        import gait_planner.viz.rerun_view  # noqa: F401
     return how
+
+
+def plan_request(planner: Planner, request: PlanRequest,
+                 scenes: SceneLookup = load_scene) -> PlanResult:
+    """The plan of `request`, nothing written (`request_settings`, then `plan_joined`);
+    scenes: as in `request_settings`."""
+    request = checked(request)
+    scene, settings = request_settings(request, scenes)
+    return plan_joined(planner, scene, settings, steps=request.steps,
+                       warm_start=not request.cold_start)
+
+
+def plan_joined(planner: Planner, scene: Scene, settings: GaitSettings, *, steps: int = 1,
+                warm_start: bool = True) -> PlanResult:
+    """A plan certified against the continuous dynamics and refined while the certificate
+    asks (`plan_certified`; a speed without a step length searches the step:
+    `plan_free_step`), then joined to `steps` half cycles (`ocp.walk_on`) and certified
+    again; the certificate's maxima in its settings (`certificate_metadata`). A plan that
+    does not converge has success False."""
+    plan = plan_free_step if settings.step_length_free else plan_certified
+    result, cert = plan(planner, scene, settings, warm_start=warm_start)
+    if not result.success:
+        return result
+    walked = walk_on(result, steps)
+    if walked is not result:  # more half cycles: certify what is published
+        result, cert = walked, continuous_certificate(walked)
+    result.settings.update(certificate_metadata(cert))
+    return result
 
 
 def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Path, *,
                     rrd: bool = True, stage: Callable[[str], None] | None = None,
                     scenes: SceneLookup = load_scene) -> Outcome:
-    """Plan `request`; on success write <output_dir>/<stem>.mcap (and .rrd).
+    """Plan `request` (`plan_request`); on success write <output_dir>/<stem>.mcap (and .rrd).
 
     stage: called with "recording" once the plan is found, before anything is written (an
     exception it raises ends the request with nothing recorded); scenes: as in
@@ -128,16 +156,12 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
     stem = output_stem(request, scene.name)
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    plan = plan_free_step if settings.step_length_free else plan_certified
-    result, cert = plan(planner, scene, settings, warm_start=not request.cold_start)
+    result = plan_joined(planner, scene, settings, steps=request.steps,
+                         warm_start=not request.cold_start)
     if not result.success:
         return Outcome(result, None, None)
     if stage is not None:
         stage("recording")
-    walked = walk_on(result, request.steps)
-    if walked is not result:  # more half cycles: certify what is published
-        result, cert = walked, continuous_certificate(walked)
-    result.settings.update(certificate_metadata(cert))
     from gait_planner.io.mcap_writer import write_plan_mcap
 
     if not request.output_name:  # an automatic name never replaces an earlier recording
@@ -145,7 +169,7 @@ def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Pa
     mcap = write_plan_mcap(result, folder / f"{stem}.mcap", allowed_dirs=[folder])
     rrd_path = None
     if rrd:
-        from gait_planner.io.rerun_view import save_rrd
+        from gait_planner.viz.rerun_view import save_rrd
 
         rrd_path = save_rrd(result, folder / f"{stem}.rrd")
     return Outcome(result, mcap, rrd_path)
@@ -314,8 +338,11 @@ def certificate_metadata(cert) -> dict[str, str]:
             "continuous_dynamics": cert.summary()}
 
 
-def summary(outcome: Outcome) -> dict:
-    """The JSON summary of a plan (command line and logs)."""
+def summary(outcome: Outcome | PlanResult) -> dict:
+    """The JSON summary of a plan (command line, logs, the Python API), its files' paths
+    empty for a result not recorded."""
+    if isinstance(outcome, PlanResult):
+        outcome = Outcome(outcome, None, None)
     r, s = outcome.result, outcome.result.stats
     return {
         "success": r.success, "message": r.message, "scene": r.scene.name,

@@ -27,6 +27,8 @@ from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
+from gait_planner.result import PlanResult
+from synthetic_result import START_NS, make_result
 
 SCENES = ("compass", "walker2d", "walker3d")
 
@@ -78,3 +80,20 @@ def example_robots() -> Path:
     except metadata.PackageNotFoundError:
         pytest.skip("example-robot-data is not installed")
     return Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
+
+
+@pytest.fixture(scope="session")
+def result() -> PlanResult:
+    """The default synthetic result (10 intervals, walker3d; test/synthetic_result.py)."""
+    return make_result()
+
+
+@pytest.fixture(name="make_result", scope="session")
+def make_result_fixture():
+    """`make_result(**changes)`: a synthetic result with some fields replaced."""
+    return make_result
+
+
+@pytest.fixture
+def start_ns() -> int:
+    return START_NS

@@ -14,7 +14,7 @@ CHILD = """
 import sys
 from gait_planner.ocp.solve import Planner
 from gait_planner.pipeline import PlanRequest, prepare
-recording = ["gait_planner.io.mcap_writer", "gait_planner.io.rerun_view", "pinocchio",
+recording = ["gait_planner.io.mcap_writer", "gait_planner.viz.rerun_view", "pinocchio",
              "gait_planner.verify.continuous", "gait_planner.io.messages"]
 before = [m for m in recording if m in sys.modules]
 planner = Planner()
@@ -23,7 +23,7 @@ print(before, [m for m in recording if m not in sys.modules], len(planner._built
 """
 
 
-@pytest.mark.parametrize("rrd, left", [(True, []), (False, ["gait_planner.io.rerun_view"])])
+@pytest.mark.parametrize("rrd, left", [(True, []), (False, ["gait_planner.viz.rerun_view"])])
 def test_prepare_builds_the_problem_and_loads_the_recording_path(rrd, left):
     out = subprocess.run([sys.executable, "-c", CHILD.format(rrd=rrd)], capture_output=True,
                          text=True, check=True, timeout=300)

@@ -209,7 +209,7 @@ def _run(args: argparse.Namespace) -> int:
     import shutil
     import subprocess
 
-    from gait_planner.io.plots import plot_recording
+    from gait_planner.viz.figures import plot_recording
 
     data = _plan_and_print(args, args.out)
     if not data["success"]:
@@ -250,7 +250,7 @@ def _add_report(commands: argparse._SubParsersAction) -> None:
 def _report(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from gait_planner.io.plots import plot_recording
+    from gait_planner.viz.figures import plot_recording
     from gait_planner.verify import verify_recording
 
     source = Path(args.mcap)

@@ -91,7 +91,7 @@ def draft_of(args: argparse.Namespace, folder: Path | None = None):
 
 def write_draft(draft, out: Path) -> Path:
     """Write the draft's YAML to `out` atomically, after loading it as a scene."""
-    from gait_planner.io.atomic import atomic_target
+    from gait_planner.atomic import atomic_target
     from gait_planner.model.loader import SceneError, scene_from_text
 
     try:

@@ -3,7 +3,7 @@
 (`gait_planner.walk.simulate`): a line on stderr at each half cycle's end, the summary
 (`gait_planner.walk.summary`) on stdout; --out records the walk
 (`gait_planner.walk.recording`), --rrd draws it over the plan in rerun
-(`gait_planner.walk.rerun_walk`). --self-test walks it again with the plan's torques scaled
+(`gait_planner.viz.rerun_walk`). --self-test walks it again with the plan's torques scaled
 by config/walk.yaml's self_test_scales (0 and 0.5) and says whether each did measurably worse
 (fewer half cycles or a larger feedback share).
 """
@@ -86,7 +86,7 @@ def _write(key: str, path: str, result: dict[str, Any]) -> None:
     if key == "out":
         from gait_planner.walk.recording import write_walk_mcap as writer
     else:
-        from gait_planner.walk.rerun_walk import save_walk_rrd as writer
+        from gait_planner.viz.rerun_walk import save_walk_rrd as writer
     try:
         result[key] = str(writer(result, path))
     except OSError as error:

@@ -29,7 +29,7 @@ from typing import Callable
 from gait_planner.gaitlib.grid import Grid, parse_grid
 from gait_planner.gaitlib.index import (PLANS, LibraryError, LibraryIndex, Manifest, PlanRow,
                                         write_manifest)
-from gait_planner.io.atomic import remove_stale_temporaries
+from gait_planner.atomic import remove_stale_temporaries
 
 MAX_ATTEMPTS = 3  # per point: neighbours first, then cold
 TASK_RETRIES = 3  # Ray's re-runs of a task whose worker died

@@ -6,7 +6,7 @@
     <folder>/plans/<name>.start.npz   its optimum, to continue neighbours from (`save_start`)
 
 A point is finished when its row is in the index; a row is written only after the point's
-files are complete (each written atomically, `gait_planner.io.atomic`), so the index never
+files are complete (each written atomically, `gait_planner.atomic`), so the index never
 lists a plan whose file is missing. Workers write their own rows (SQLite serialises the
 writers), so a driver killed mid-build loses no finished plan, and a build on an existing
 folder (`gaitlib.build`) plans only the points without a row.
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gait_planner.io.atomic import atomic_target
+from gait_planner.atomic import atomic_target
 from gait_planner.ocp.library import StoredPlan
 
 MANIFEST = "library.json"

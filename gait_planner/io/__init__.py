@@ -1,14 +1,14 @@
-"""Adapters from a `PlanResult` to ROS messages, an MCAP recording, a URDF and rerun.
+"""The formats: a `PlanResult` as ROS messages, an MCAP recording and a URDF (pictures of
+it, figures and rerun, are `gait_planner.viz`).
 
 * `gait_planner.io.messages`: message layouts as plain dicts (+ `fill_message` for rclpy);
 * `gait_planner.io.urdf`: `scene_to_urdf` and the frame scheme /tf follows;
 * `gait_planner.io.mcap_writer`: `write_plan_mcap` (ROS 2 profile, atomic);
 * `gait_planner.io.mcap_reader`: `read_plan_mcap` -> `RecordedPlan` (independent of the writer);
-* `gait_planner.io.rerun_view`: `log_plan`, `save_rrd`, `show`;
-* `gait_planner.io.rrd_recorder`: `RrdRecorder`, `save_rrd` in a helper process (the node).
+* `gait_planner.io.robot_tree`, `ros_definitions`: the robot's frames, the messages' definitions.
 
 The names below are imported lazily, so ``import gait_planner.io.messages`` (the ROS node)
-loads neither mcap nor rerun.
+does not load mcap.
 """
 
 from __future__ import annotations
@@ -23,10 +23,6 @@ _EXPORTS = {
     "write_plan_mcap": "mcap_writer",
     "read_plan_mcap": "mcap_reader",
     "RecordedPlan": "mcap_reader",
-    "log_plan": "rerun_view",
-    "save_rrd": "rerun_view",
-    "show": "rerun_view",
-    "RrdRecorder": "rrd_recorder",
 }
 
 __all__ = sorted(_EXPORTS)

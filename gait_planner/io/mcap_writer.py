@@ -18,7 +18,7 @@ The file appears atomically: it is written to a hidden temporary file in the tar
 and renamed over `path` (replacing an existing file) only when complete; on any error the
 temporary file is removed and an existing file at `path` is left as it was. A process
 killed while writing leaves only the temporary file, which
-`gait_planner.io.atomic.remove_stale_temporaries` removes later.
+`gait_planner.atomic.remove_stale_temporaries` removes later.
 
 Schemas, channels (with their metadata, which mcap_ros2's Writer cannot attach) and records
 are written with mcap's `Writer`; chunks are zstd-compressed (the ``zstandard`` package, a
@@ -42,7 +42,7 @@ from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from gait_planner.io import messages
-from gait_planner.io.atomic import atomic_target
+from gait_planner.atomic import atomic_target
 from gait_planner.io.ros_definitions import STANDARD_DEFINITIONS, custom_definitions, schema_text
 from gait_planner.result import PlanResult
 

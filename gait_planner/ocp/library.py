@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gait_planner.io.atomic import atomic_target
+from gait_planner.atomic import atomic_target
 from gait_planner.ocp.compile import cache_folder
 
 MAX_PLANS = 16  # per problem; the oldest go first

@@ -16,7 +16,7 @@ Topics (reliable; volatile so a restarting controller never re-runs an old plan)
 ``/gait_planner/joint_trajectory`` (one message per plan), ``/gait_planner/state`` and
 ``/gait_planner/contact_forces`` (one message per node). A plan is answered once its MCAP
 recording is written and its topics are published; its rerun recording (.rrd, same stem)
-follows from a helper process (`gait_planner.io.rrd_recorder`; "wrote the rerun
+follows from a helper process (`gait_planner.viz.rrd_recorder`; "wrote the rerun
 recording" in the log). With the parameter walk_steps > 0 the recorded plan is then walked
 in MuJoCo (`gait_planner.walk`; action phase "walking", then "walking (k of K half cycles
 done)" at each half cycle's end) before the answer, which carries how it went (walk_*
@@ -46,8 +46,8 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from gait_planner.gaitlib.index import LibraryError
 from gait_planner.gaitlib.serve import library_start
 from gait_planner.io import messages
-from gait_planner.io.atomic import remove_stale_temporaries
-from gait_planner.io.rrd_recorder import RrdRecorder
+from gait_planner.atomic import remove_stale_temporaries
+from gait_planner.viz.rrd_recorder import RrdRecorder
 from gait_planner.model.loader import SceneError, load_scene, scene_dirs
 from gait_planner.model.urdf_errors import UrdfError
 from gait_planner.ocp.library import PlanLibrary

@@ -21,7 +21,7 @@ import threading
 from pathlib import Path
 from typing import Callable, Sequence
 
-from gait_planner.io.atomic import atomic_target
+from gait_planner.atomic import atomic_target
 from gait_planner.model.loader import SceneError, load_scene_file
 from gait_planner.model.scene import Scene
 from gait_planner.model.urdf_errors import UrdfError

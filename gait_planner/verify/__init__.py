@@ -100,10 +100,12 @@ from typing import Sequence
 
 from gait_planner.io.mcap_reader import read_plan_mcap
 from gait_planner.verify.checks import verify_plan
-from gait_planner.verify.continuous import ContinuousCertificate, certificate_of_recording
+from gait_planner.verify.continuous import ContinuousCertificate
+from gait_planner.verify.recorded import certificate_of_recording
 from gait_planner.verify.physical import PhysicalReport, check_physical
 from gait_planner.verify.mechanics import Mechanics, SceneData, parse_scene
-from gait_planner.verify.report import LIMITS, VerificationReport
+from gait_planner.verify.limits import LIMITS
+from gait_planner.verify.report import VerificationReport
 
 __all__ = ["LIMITS", "SceneData", "Mechanics", "VerificationReport", "parse_scene",
            "ContinuousCertificate", "certificate_of_recording", "PhysicalReport", "check_physical",

@@ -10,11 +10,12 @@ from gait_planner.io.mcap_reader import RecordedPlan
 from gait_planner.verify.mechanics import MIRROR, Mechanics, SceneData, parse_scene
 from gait_planner.verify.actuation import (effort_couples, effort_slots, joint_couples,
                                            periodic_torque_error)
-from gait_planner.verify.continuous import certificate_of_recording
+from gait_planner.verify.recorded import certificate_of_recording
 from gait_planner.verify.ground import RecordedGround
 from gait_planner.verify.joined import verify_joined
 from gait_planner.verify.physical import check_physical
-from gait_planner.verify.report import LIMITS, VerificationReport
+from gait_planner.verify.limits import LIMITS
+from gait_planner.verify.report import VerificationReport
 
 
 def _norm(v) -> float:

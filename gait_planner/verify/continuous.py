@@ -48,7 +48,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pinocchio as pin
 
-from gait_planner.verify.mechanics import SceneData, parse_scene
+from gait_planner.verify.mechanics import SceneData
 
 # Judged maxima: torque error relative to the plan's peak |effort|, base force relative to
 # the body weight, base moment relative to weight x MOMENT_ARM; "switch" = at a contact
@@ -336,22 +336,3 @@ def foot_wrenches_of_recording(rec, scene: SceneData) -> tuple[dict[str, np.ndar
                               np.asarray(rec.contact_force_vectors[n])):
             out[scene.contacts[name][0]][n] += np.concatenate([f, np.cross(p, f)])
     return out, "point forces"
-
-
-def certificate_of_recording(rec) -> ContinuousCertificate:
-    """The certificate of a decoded recording (`gait_planner.io.mcap_reader.RecordedPlan`)."""
-    scene = parse_scene(rec.scene_text)
-    names = list(rec.joint_names)
-    missing = [n for n in effort_names(scene) if n not in names]
-    if missing:
-        raise ValueError(f"the JointTrajectory has no efforts {missing}")
-    columns = [names.index(n) for n in effort_names(scene)]
-    efforts = np.asarray(rec.effort, dtype=float)[:, columns]
-    wrenches, source = foot_wrenches_of_recording(rec, scene)
-    if scene.robot_root is not None:  # drafted from a URDF: certified on it
-        from gait_planner.verify.robot import robot_certificate
-
-        return robot_certificate(scene, rec.urdf, rec.times, rec.q,
-                                 np.asarray(rec.positions, dtype=float)[:, columns], efforts,
-                                 wrenches, rec.active_contacts, source)[0]
-    return certificate(scene, rec.times, rec.q, efforts, wrenches, rec.active_contacts, source)

@@ -18,11 +18,12 @@ import dataclasses
 
 import numpy as np
 
-from gait_planner.verify.continuous import certificate_of_recording
+from gait_planner.verify.recorded import certificate_of_recording
 from gait_planner.verify.ground import RecordedGround
 from gait_planner.verify.mechanics import MIRROR, Mechanics, SceneData, parse_scene
 from gait_planner.verify.physical import check_physical
-from gait_planner.verify.report import LIMITS, VerificationReport
+from gait_planner.verify.limits import LIMITS
+from gait_planner.verify.report import VerificationReport
 
 
 def half_cycle(rec, nodes: int):

@@ -1,4 +1,4 @@
-"""Limits and the report of the independent verifier."""
+"""The report of the independent verifier (its limits: `gait_planner.verify.limits`)."""
 
 from __future__ import annotations
 
@@ -6,21 +6,7 @@ from dataclasses import dataclass
 
 from gait_planner.verify.continuous import ContinuousCertificate
 from gait_planner.verify.physical import PhysicalReport
-
-LIMITS = {
-    "constraint": 1e-9,  # m (and dimensionless for director conditions), every node
-    "contact": 1e-9,  # m, held points: drift over an interval and height
-    "ground": 1e-9,  # m, lowest contact point
-    "dynamics": 1e-8,  # relative full discrete Euler-Lagrange residual
-    "actuation": 1e-9,  # relative: phi entries, couple form, net moment, axis, efforts
-    "force": 1e-9,  # relative to max(1 N, |F|): unilateral and friction cone
-    "periodicity": 1e-8,  # m
-    "periodic_force": 1e-9,  # relative
-    "cost": 1e-9,  # relative
-    "time": 1e-9,  # relative (interval lengths, duration)
-    "scaling": 1e-9,  # relative excess of sigma over its bounds (IPOPT relaxes bounds)
-    "energy": 1e-9,  # relative, potential energy
-}
+from gait_planner.verify.report_text import report_lines
 
 
 # ----------------------------------------------------------------------------- the report
@@ -87,8 +73,6 @@ class VerificationReport:
         with its value, unit, limit and mark (ok / FAILED / noted / blank: measured, not
         judged), then notes, the failures' sentences and a last verdict line (the
         verifier's: `failures`)."""
-        from gait_planner.verify.report_text import report_lines  # the text, kept apart
-
         return "\n".join(report_lines(self))
 
     __str__ = summary

@@ -22,7 +22,7 @@ import math
 
 from gait_planner.verify.continuous import LIMITS as CONTINUOUS_LIMITS, MOMENT_ARM
 from gait_planner.verify.physical import GROUND_BAND, SOLID_TOLERANCE
-from gait_planner.verify.report import LIMITS
+from gait_planner.verify.limits import LIMITS
 
 __all__ = ["report_lines"]
 

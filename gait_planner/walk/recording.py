@@ -20,7 +20,7 @@ from typing import Any
 
 from mcap.writer import CompressionType, Writer
 
-from gait_planner.io.atomic import atomic_target
+from gait_planner.atomic import atomic_target
 from gait_planner.io.mcap_writer import (STREAM, encoder_for, recording_schemas,
                                          register_topics)
 from gait_planner.io.messages import header, vector3

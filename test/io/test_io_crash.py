@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
-from gait_planner.io.atomic import remove_stale_temporaries
+from gait_planner.atomic import remove_stale_temporaries
 from gait_planner.io.mcap_reader import read_plan_mcap
 from gait_planner.io.mcap_writer import TOPICS
 

@@ -89,7 +89,7 @@ def _static(rrd, entity: str, component: str):
 def views(make_result, tmp_path_factory):
     """ground -> a saved .rrd of the synthetic walker3d result made on that ground."""
     pytest.importorskip("rerun")
-    from gait_planner.io.rerun_view import save_rrd
+    from gait_planner.viz.rerun_view import save_rrd
 
     folder = tmp_path_factory.mktemp("ground_views")
     return {g: save_rrd(make_result(ground=g), folder / f"{i}.rrd")

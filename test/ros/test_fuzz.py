@@ -624,13 +624,13 @@ def _check(live: Live, answer: Answer) -> str:
     return "accepted"
 
 
-# an .rrd being written (`gait_planner.io.atomic.atomic_target`): group 1 is its file name
+# an .rrd being written (`gait_planner.atomic.atomic_target`): group 1 is its file name
 _RRD_TEMPORARY = re.compile(r"\.(.+\.rrd)\.[0-9]{1,9}\.[0-9a-f]{12}\.tmp")
 
 
 def _check_output_folder(live: Live) -> None:
     """Only the recordings of answered plans, and the temporaries of .rrd files still being
-    written (`gait_planner.io.rrd_recorder` writes them after the answer)."""
+    written (`gait_planner.viz.rrd_recorder` writes them after the answer)."""
     allowed = set()
     for path in live.recorded:
         stem = Path(path).stem

@@ -90,7 +90,7 @@ def test_the_ground_carries_both_walkers_and_the_plan_holds_its_contacts(walked)
     the second half cycle)."""
     plan, _, rrd = walked
     from gait_planner.io.mcap_reader import read_plan_mcap
-    from gait_planner.io.rerun_view import FORCE_SCALE
+    from gait_planner.viz.rerun_view import FORCE_SCALE
     from gait_planner.walk.reference import Reference
 
     ref = Reference.from_recording(read_plan_mcap(plan), 2)

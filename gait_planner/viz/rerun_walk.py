@@ -6,7 +6,7 @@ with the layout of `walk_blueprint`. Timeline ``time``: s of simulated time, the
 joined half cycles on the same clock. The simulation is drawn every `every`-th step (200 Hz
 at the default step of 0.5 ms), the plan at its nodes. Entities:
 
-* ``world``, ``world/ground``: z up, a grid along the walk (`gait_planner.io.rerun_draw`);
+* ``world``, ``world/ground``: z up, a grid along the walk (`gait_planner.viz.rerun_draw`);
 * ``world/sim/<body>``, ``world/sim/skeleton``: the simulated walker, its body poses from the
   simulated torso pose and joint angles through the planner's own kinematics
   (`gait_planner.model.angles.configuration`); ``world/plan/<body>``, ``world/plan/skeleton``:
@@ -35,14 +35,14 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from gait_planner.io.atomic import atomic_target
+from gait_planner.atomic import atomic_target
 from gait_planner.io.mcap_reader import read_plan_mcap
-from gait_planner.io.rerun_blueprint import plot_view
-from gait_planner.io.rerun_draw import (Columns, log_bodies, log_boundaries, log_ground,
+from gait_planner.viz.rerun_blueprint import plot_view
+from gait_planner.viz.rerun_draw import (Columns, log_bodies, log_boundaries, log_ground,
                                         log_poses, send_scalars, skeleton)
-from gait_planner.io.rerun_series import (AXIS_COLORS, PlotGroup, joint_color, joint_of,
+from gait_planner.viz.rerun_series import (AXIS_COLORS, PlotGroup, joint_color, joint_of,
                                           poses, side_of)
-from gait_planner.io.rerun_view import APPLICATION_ID, FORCE_SCALE
+from gait_planner.viz.rerun_view import APPLICATION_ID, FORCE_SCALE
 from gait_planner.model.angles import configuration, root_angles
 from gait_planner.model.scene import InitialPose
 from gait_planner.ocp.mirror import contact_partners

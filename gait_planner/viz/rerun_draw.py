@@ -1,5 +1,5 @@
 """Drawing a walker in rerun (rerun-sdk 0.41), shared by a plan's view
-(`gait_planner.io.rerun_view`) and a walk's (`gait_planner.walk.rerun_walk`).
+(`gait_planner.viz.rerun_view`) and a walk's (`gait_planner.viz.rerun_walk`).
 
 * `log_ground`: ``world`` z up and a grid on the ground a plan was made for (``world/ground``:
   z = 0, the tilted plane of a ramp, the treads of stairs, with the treads' boxes at
@@ -21,7 +21,7 @@ import numpy as np
 import rerun as rr
 
 from gait_planner.io.messages import quaternion_msg
-from gait_planner.io.rerun_series import BOUNDARY_COLOR, PlotGroup
+from gait_planner.viz.rerun_series import BOUNDARY_COLOR, PlotGroup
 from gait_planner.io.urdf import body_shapes, ground_boxes
 from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.model.scene import Scene

@@ -1,6 +1,6 @@
 """The layout of a plan's rerun view (rerun-sdk 0.41): `blueprint`.
 
-A large 3D view beside the plots of `gait_planner.io.rerun_series.plot_groups`, one row per
+A large 3D view beside the plots of `gait_planner.viz.rerun_series.plot_groups`, one row per
 joint (angles of the right and left leg, then their torques)::
 
     +-------------------------------+---------+---------+---------+---------+
@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 import rerun.blueprint as rrb
 
-from gait_planner.io.rerun_series import (PlotGroup, joint_of, plot_groups, poses,
+from gait_planner.viz.rerun_series import (PlotGroup, joint_of, plot_groups, poses,
                                           whole_body_com)
 from gait_planner.result import PlanResult
 

@@ -14,7 +14,7 @@ import pytest
 
 rr = pytest.importorskip("rerun")
 
-from gait_planner.io.rerun_view import log_plan, save_rrd, show  # noqa: E402
+from gait_planner.viz.rerun_view import log_plan, save_rrd, show  # noqa: E402
 
 RERUN = Path(sys.executable).with_name("rerun")
 
@@ -75,7 +75,7 @@ def test_every_node_holds_its_contact_forces_and_skeleton(rrd, result):
     """Read back: at every node the force arrows are the active contacts' ground forces
     (FORCE_SCALE m per N), labelled with their names and magnitudes, and the skeleton has
     the same strips at every node (columnar chunks, one row per node)."""
-    from gait_planner.io.rerun_view import FORCE_SCALE
+    from gait_planner.viz.rerun_view import FORCE_SCALE
 
     vectors = _node_values(rrd, "/world/contacts/forces", "Arrows3D:vectors")
     labels = _node_values(rrd, "/world/contacts/forces", "Arrows3D:labels")
@@ -92,7 +92,7 @@ def test_every_node_holds_its_contact_forces_and_skeleton(rrd, result):
 
 
 def test_failed_save_leaves_nothing(result, tmp_path, monkeypatch):
-    import gait_planner.io.rerun_view as view
+    import gait_planner.viz.rerun_view as view
 
     def fail(*_args):
         raise RuntimeError("logging failed")
@@ -133,8 +133,8 @@ def test_show_without_display_says_what_to_do(result, monkeypatch):
 
 import rerun.blueprint as rrb  # noqa: E402
 
-from gait_planner.io.rerun_blueprint import blueprint  # noqa: E402
-from gait_planner.io.rerun_series import (BOUNDARY_COLOR, COLOUR_KEY,  # noqa: E402
+from gait_planner.viz.rerun_blueprint import blueprint  # noqa: E402
+from gait_planner.viz.rerun_series import (BOUNDARY_COLOR, COLOUR_KEY,  # noqa: E402
                                           angular_momentum, phase_boundaries, plot_groups,
                                           series_color, series_values)
 
@@ -305,7 +305,7 @@ def test_blueprint_is_saved_in_the_rrd(rrd, result):
 
 # ------------------------------------------------ the view as a person sees it (Chromium)
 
-from gait_planner.io.rerun_screenshot import chromium, rerun_cli, screenshot_rrd  # noqa: E402
+from gait_planner.viz.rerun_screenshot import chromium, rerun_cli, screenshot_rrd  # noqa: E402
 
 
 @pytest.mark.slow

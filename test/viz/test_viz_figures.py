@@ -11,7 +11,7 @@ import pytest
 
 from gait_planner.cli import main
 from gait_planner.io.mcap_writer import write_plan_mcap
-from gait_planner.io.plots import plot_recording
+from gait_planner.viz.figures import plot_recording
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +76,7 @@ def figure(recording):
     import matplotlib.pyplot as plt
 
     from gait_planner.io.mcap_reader import read_plan_mcap
-    from gait_planner.io.plots import recording_figure
+    from gait_planner.viz.figures import recording_figure
 
     rec = read_plan_mcap(recording)
     fig = recording_figure(rec)
@@ -153,7 +153,7 @@ def test_report_marks_a_value_over_its_limit(recording):
     import dataclasses
 
     from gait_planner.verify import verify_recording
-    from gait_planner.verify.report import LIMITS
+    from gait_planner.verify.limits import LIMITS
 
     report = dataclasses.replace(
         verify_recording(recording), max_dynamics_residual=100 * LIMITS["dynamics"],

@@ -14,7 +14,7 @@
 `plot_groups` says which series share a plot: the angles, and the torques, of one joint of
 one leg (hip, knee, ankle; right, left; a joint of no side, e.g. compass's hip, alone), ground
 forces per foot (heel and forefoot), roll moments, energies, angular momentum components.
-The plots show no legend (`gait_planner.io.rerun_blueprint`): a title names its series and
+The plots show no legend (`gait_planner.viz.rerun_blueprint`): a title names its series and
 their colours where there is room (a joint plot's title is short, for narrow plots: joint,
 leg R or L and unit, deg for angles and N m for torques), `COLOUR_KEY` says them for all
 plots. Each plot also draws the phase boundaries (`phase_boundaries`) as grey vertical

@@ -1,4 +1,5 @@
-"""A small synthetic but kinematically consistent PlanResult of walker3d for the io tests.
+"""A small synthetic but kinematically consistent PlanResult of walker3d for the io and viz tests
+(their fixtures `result`, `make_result` and `start_ns` are in test/conftest.py).
 
 `make_result()` moves the walker through a few poses: q from
 `gait_planner.model.angles.configuration` (every joint constraint exact), joint angles
@@ -12,7 +13,6 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-import pytest
 
 from gait_planner.model.angles import angle_names, configuration, joint_angles
 from gait_planner.model.loader import load_scene
@@ -115,20 +115,3 @@ def make_result(scene_name: str = "walker3d", intervals: int = 10, **changes) ->
         settings={"torque_weight": "1e-06", "nodes_per_phase": "2"},
     )
     return dataclasses.replace(result, **changes) if changes else result
-
-
-@pytest.fixture(scope="session")
-def result() -> PlanResult:
-    """The default synthetic result (10 intervals, walker3d)."""
-    return make_result()
-
-
-@pytest.fixture(name="make_result", scope="session")
-def make_result_fixture():
-    """`make_result(**changes)`: a synthetic result with some fields replaced."""
-    return make_result
-
-
-@pytest.fixture
-def start_ns() -> int:
-    return START_NS

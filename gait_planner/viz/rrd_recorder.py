@@ -1,7 +1,7 @@
 """Rerun recordings (.rrd) written by a helper process, after the plan has been answered.
 
 The node answers a plan once its MCAP recording is written and its topics are published;
-the plan's .rrd (`gait_planner.io.rerun_view.save_rrd`, atomic) follows from a helper
+the plan's .rrd (`gait_planner.viz.rerun_view.save_rrd`, atomic) follows from a helper
 process. So neither importing rerun (about 0.45 s, which a fresh node's first request
 paid) nor writing the file (about 0.17 s for walker3d's half cycle; more for many joined
 half cycles) holds up an answer or the next solve: the helper runs on another core, where
@@ -17,7 +17,7 @@ builds a node at its top level would build one in the helper too. The helper ign
 SIGINT (a terminal's Ctrl-C reaches the whole process group; the node decides when to
 stop) and ends when its stdin closes, after the files it was given. A helper that dies is
 replaced at the next submission; what it had not written is reported failed. A killed
-process leaves at most a temporary file, which `gait_planner.io.atomic` removes at the
+process leaves at most a temporary file, which `gait_planner.atomic` removes at the
 next start.
 """
 
@@ -45,7 +45,7 @@ Done = Callable[[Path | None, BaseException | None], None]
 
 _ROOT = str(Path(gait_planner.__file__).resolve().parent.parent)  # the helper imports this copy
 _HELPER = [sys.executable, "-c", f"import sys; sys.path.insert(0, {_ROOT!r}); "
-           "from gait_planner.io.rrd_recorder import helper_main; helper_main()"]
+           "from gait_planner.viz.rrd_recorder import helper_main; helper_main()"]
 
 
 def _read_only(items: dict) -> MappingProxyType:
@@ -68,7 +68,7 @@ def helper_main() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     answers = os.fdopen(os.dup(1), "wb")
     os.dup2(2, 1)  # rerun's or numpy's messages must not corrupt the answers
-    from gait_planner.io.rerun_view import save_rrd
+    from gait_planner.viz.rerun_view import save_rrd
 
     requests = sys.stdin.buffer
     while True:

@@ -33,9 +33,9 @@ import yaml  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
-from gait_planner.io.atomic import atomic_target  # noqa: E402
+from gait_planner.atomic import atomic_target  # noqa: E402
 from gait_planner.io.mcap_reader import RecordedPlan, read_plan_mcap  # noqa: E402
-from gait_planner.io.rerun_series import axis_of, joint_of, side_of  # noqa: E402
+from gait_planner.viz.rerun_series import axis_of, joint_of, side_of  # noqa: E402
 
 __all__ = ["plot_recording", "recording_figure"]
 
@@ -246,7 +246,7 @@ def _certificate_panel(ax, rec: RecordedPlan, cert: Any) -> None:
 
 
 def _certificate_of(rec: RecordedPlan) -> Any:
-    from gait_planner.verify.continuous import certificate_of_recording
+    from gait_planner.verify.recorded import certificate_of_recording
 
     try:
         return certificate_of_recording(rec)

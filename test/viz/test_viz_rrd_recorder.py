@@ -17,8 +17,8 @@ pytest.importorskip("rerun")
 
 from rerun.chunk import RrdReader  # noqa: E402
 
-from gait_planner.io.rerun_view import save_rrd  # noqa: E402
-from gait_planner.io.rrd_recorder import RrdRecorder  # noqa: E402
+from gait_planner.viz.rerun_view import save_rrd  # noqa: E402
+from gait_planner.viz.rrd_recorder import RrdRecorder  # noqa: E402
 
 WAIT = 120  # s for a helper to start (imports rerun) and write one file
 
@@ -90,8 +90,8 @@ def test_a_script_without_a_main_guard_is_not_run_again(tmp_path):
         "import sys\n"
         "sys.path.insert(0, sys.argv[1])\n"
         "import queue\n"
-        "from conftest import make_result\n"
-        "from gait_planner.io.rrd_recorder import RrdRecorder\n"
+        "from synthetic_result import make_result\n"
+        "from gait_planner.viz.rrd_recorder import RrdRecorder\n"
         f"open({str(marker)!r}, 'a').write('run\\n')\n"
         "reports = queue.Queue()\n"
         "recorder = RrdRecorder()\n"
@@ -99,7 +99,7 @@ def test_a_script_without_a_main_guard_is_not_run_again(tmp_path):
         "lambda *r: reports.put(r))\n"
         "print(reports.get(timeout=120))\n"
         "recorder.close(120)\n")
-    done = subprocess.run([sys.executable, str(script), str(Path(__file__).parent)],
+    done = subprocess.run([sys.executable, str(script), str(Path(__file__).parents[1])],
                           capture_output=True, text=True, timeout=WAIT)
     assert done.returncode == 0, done.stderr
     assert marker.read_text() == "run\n"

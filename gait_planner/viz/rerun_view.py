@@ -7,7 +7,7 @@ Entities (timeline ``time``: s from the start of the half cycle, duration type; 
   (`PlanResult.ground`: z = 0, a ramp's tilted plane, or stairs, whose treads are boxes at
   ``world/ground/treads``), over the plan's x range (level ground: -1.5 to 1.5 m).
 * ``world/robot``: for a scene drafted from a URDF, the robot's own meshes moved by /tf
-  (`gait_planner.io.rerun_robot`) instead of ``world/walker``.
+  (`gait_planner.viz.rerun_robot`) instead of ``world/walker``.
 * ``world/walker/<body>``: the body's drawing primitive (`gait_planner.io.urdf.body_shapes`,
   box or cylinder, in body coordinates, partly transparent), placed per node by a
   Transform3D (the COM phi and the directors [d1 d2 d3] from q); ``world/skeleton``: line
@@ -22,12 +22,12 @@ Entities (timeline ``time``: s from the start of the half cycle, duration type; 
   contact, its net ground force drawn from its centre of pressure
   (`gait_planner.io.messages.foot_wrenches`; the label gives the free moment).
 * ``phase``: the gait phase (StateChange at each phase start).
-* ``plots/...``: the time series of `gait_planner.io.rerun_series` (joint angles and
+* ``plots/...``: the time series of `gait_planner.viz.rerun_series` (joint angles and
   torques, contact forces and roll moments, energies, angular momentum about the centre of
   mass, phase boundaries) as Scalars with their SeriesLines style.
 * ``plan``: a text summary (cost, duration, step length, sigma, solver statistics).
 
-`save_rrd` and `show` also send the layout of `gait_planner.io.rerun_blueprint` as the
+`save_rrd` and `show` also send the layout of `gait_planner.viz.rerun_blueprint` as the
 recording's active and default blueprint, so the saved .rrd opens in it.
 """
 
@@ -40,13 +40,13 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
-from gait_planner.io.atomic import atomic_target
+from gait_planner.atomic import atomic_target
 from gait_planner.io.messages import contact_points, foot_wrenches
-from gait_planner.io.rerun_blueprint import blueprint
-from gait_planner.io.rerun_robot import log_robot_model, log_robot_motion
-from gait_planner.io.rerun_draw import (Columns, log_bodies, log_boundaries, log_ground,
+from gait_planner.viz.rerun_blueprint import blueprint
+from gait_planner.viz.rerun_robot import log_robot_model, log_robot_motion
+from gait_planner.viz.rerun_draw import (Columns, log_bodies, log_boundaries, log_ground,
                                         log_poses, send_scalars, skeleton)
-from gait_planner.io.rerun_series import (COLOUR_KEY, phase_boundaries, plot_groups, poses,
+from gait_planner.viz.rerun_series import (COLOUR_KEY, phase_boundaries, plot_groups, poses,
                                           series_color, series_name, series_values, side_of,
                                           whole_body_com)
 from gait_planner.result import PlanResult

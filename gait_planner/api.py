@@ -1,0 +1,72 @@
+"""The Python API: plan a gait, check it, record it and summarise it, as the command line
+and the ROS node do (`gait_planner.pipeline`), from a script or a notebook:
+
+    from gait_planner import PlanRequest, check, plan, record, summary
+
+    result = plan(PlanRequest("walker3d", slope=5.0, compiled=True))  # RequestError if it
+    # cannot be planned; result.success False if it did not converge
+    print(check(result).summary())
+    record(result, "runs/ramp.mcap")
+    print(summary(result))
+
+`plan` keeps one `Planner` per process (its built problems and its warm starts: a second
+request of the same form reuses the first's problem); pass your own to keep several apart.
+`compiled=True` evaluates the derivatives with the per-node elements compiled to C, as the
+node and the command line do by default (`make setup` compiles the shipped scenes' once);
+without it CasADi builds them for the process (walker3d: about 20 s).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from gait_planner.model.loader import load_scene
+from gait_planner.ocp.solve import Planner
+from gait_planner.pipeline import SceneLookup, plan_request, summary
+from gait_planner.request import PlanRequest, RequestError
+from gait_planner.result import PlanResult
+
+__all__ = ["PlanRequest", "PlanResult", "Planner", "RequestError", "check", "plan", "record",
+           "summary"]
+
+_planner: Planner | None = None
+
+
+def plan(request: PlanRequest | str, planner: Planner | None = None,
+         scenes: SceneLookup = load_scene) -> PlanResult:
+    """The plan of `request` (a `PlanRequest`, or a scene's name for its default request
+    with compiled derivatives),
+    certified against the continuous dynamics, refined while the certificate asks and
+    joined to request.steps half cycles, as the node plans it; nothing is written.
+    Raises `RequestError` naming what cannot be planned; a plan that does not converge has
+    success False and says why in its message. planner: the process's own by default;
+    scenes: finds a scene by its name (`model.loader.load_scene`: the shipped scenes)."""
+    global _planner
+    if planner is None:
+        _planner = planner = _planner or Planner()
+    if isinstance(request, str):
+        request = PlanRequest(request, compiled=True)
+    return plan_request(planner, request, scenes)
+
+
+def check(result: PlanResult):
+    """The independent verifier's report of `result` (`gait_planner.verify`: the plan
+    recorded to a temporary MCAP and read back; `.ok`, `.failures`, `.summary()`)."""
+    from gait_planner.verify import verify_result
+
+    return verify_result(result)
+
+
+def record(result: PlanResult, path: str | Path, rrd: bool = False) -> Path:
+    """Write `result` to the MCAP recording `path` (atomically; its topics are the node's)
+    and, with rrd, the rerun recording beside it (same stem, .rrd), making the folder if
+    needed; the MCAP's path."""
+    from gait_planner.io.mcap_writer import write_plan_mcap
+
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    mcap = write_plan_mcap(result, path)
+    if rrd:
+        from gait_planner.viz.rerun_view import save_rrd
+
+        save_rrd(result, mcap.with_suffix(".rrd"))
+    return mcap
