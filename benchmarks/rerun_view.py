@@ -5,7 +5,7 @@ Usage: .venv/bin/python benchmarks/rerun_view.py [--rrd FILE] [--out benchmarks/
 
 Without --rrd it plans walker3d's default request (compiled derivatives, ~10 s once they
 are cached) and saves the .rrd in a temporary folder. The recording is shown in rerun's web
-viewer in headless Chromium (`gait_planner.io.rerun_screenshot`, 1600 x 1000), the time
+viewer in headless Chromium (`gait_planner.viz.rerun_screenshot`, 1600 x 1000), the time
 cursor is moved to --time (s) and the page is saved as --out.
 
 Moving the time cursor clicks the viewer's pause button and drags the cursor along the
@@ -20,14 +20,14 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from gait_planner.io.rerun_screenshot import screenshot_rrd
+from gait_planner.viz.rerun_screenshot import screenshot_rrd
 
 PAUSE = (26, 985)  # the play/pause button of the collapsed time panel
 BAR_Y, BAR_T0, BAR_END = 985, 267, 1393  # the time bar: y, x at t = 0, x of the last node
 
 
 def _plan_rrd(folder: Path) -> Path:
-    from gait_planner.io.rerun_view import save_rrd
+    from gait_planner.viz.rerun_view import save_rrd
     from gait_planner.model.loader import load_scene
     from gait_planner.ocp.settings import settings_for
     from gait_planner.ocp.solve import Planner

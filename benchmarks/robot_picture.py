@@ -1,6 +1,6 @@
 """Each benchmarked robot at its mid-step node as rerun draws it: its own URDF's meshes
-placed by the recording's /tf (`gait_planner.io.rerun_robot` draws plans the same way),
-photographed in rerun's web viewer by headless Chromium (`gait_planner.io.rerun_screenshot`)
+placed by the recording's /tf (`gait_planner.viz.rerun_robot` draws plans the same way),
+photographed in rerun's web viewer by headless Chromium (`gait_planner.viz.rerun_screenshot`)
 and set side by side in one PNG.
 
 The mid-step node is the node nearest half the half cycle (t_(N-1) / 2). The URDF's
@@ -25,8 +25,8 @@ def _pose_rrd(mcap: str, rrd: Path, package_root: Path) -> str:
     import rerun.blueprint as rrb
 
     from gait_planner.io.mcap_reader import read_plan_mcap
-    from gait_planner.io.rerun_draw import log_ground
-    from gait_planner.io.rerun_robot import log_transform, log_urdf
+    from gait_planner.viz.rerun_draw import log_ground
+    from gait_planner.viz.rerun_robot import log_transform, log_urdf
 
     rec = read_plan_mcap(mcap)
     n = int(np.argmin(np.abs(rec.times - rec.times[-2] / 2)))
@@ -52,7 +52,7 @@ def mid_step_picture(recordings: dict[str, str], path: Path, package_root: Path)
     """robot -> recording: one PNG with each robot at mid-step, captioned (module docstring)."""
     from PIL import Image, ImageDraw
 
-    from gait_planner.io.rerun_screenshot import screenshot_rrd
+    from gait_planner.viz.rerun_screenshot import screenshot_rrd
 
     pictures = []
     with tempfile.TemporaryDirectory() as tmp:

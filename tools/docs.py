@@ -367,7 +367,7 @@ def plan_defaults() -> None:
 
 
 def check_chromium() -> None:
-    from gait_planner.io.rerun_screenshot import chromium
+    from gait_planner.viz.rerun_screenshot import chromium
 
     if chromium() is None:
         raise SystemExit("tools/docs.py: the screenshot needs Chromium: apt-get install "
