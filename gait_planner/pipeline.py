@@ -138,9 +138,9 @@ def plan_joined(planner: Planner, scene: Scene, settings: GaitSettings, *, steps
         return result
     walked = walk_on(result, steps)
     if walked is not result:  # more half cycles: certify what is published
-        result, cert = walked, continuous_certificate(walked)
-    result.settings.update(certificate_metadata(cert))
-    return result
+        result, cert = certified(walked)
+    return dataclasses.replace(result, settings={**result.settings,
+                                                 **certificate_metadata(cert)})
 
 
 def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Path, *,
@@ -191,7 +191,7 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
     result = planner.plan(scene, settings, warm_start=warm_start, guess=guess)
     if not result.success:
         return result, None
-    cert = continuous_certificate(result)
+    result, cert = certified(result)
     best = latest = (result, cert, grid_defects(result, cert))
     coarse, notes, runs = settings, [], [result.stats]
     for _ in range(settings.refinements):
@@ -211,7 +211,7 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
         if not refined.success:
             notes.append(f"{why}; refined to {sum(fine.intervals)}: {refined.message}")
             break
-        refined_cert = continuous_certificate(refined)
+        refined, refined_cert = certified(refined)
         latest, coarse = (refined, refined_cert, grid_defects(refined, refined_cert)), fine
         notes.append(f"{why}; refined to {sum(fine.intervals)}: "
                      + ("; ".join(latest[2]) or refined_cert.summary()))
@@ -229,7 +229,8 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
             result, stats=stats,
             message=f"{result.message} {grid} ({stats.iterations} iterations in all)")
     if notes:
-        result.settings["refinement"] = " | ".join(notes)
+        result = dataclasses.replace(result, settings={**result.settings,
+                                                       "refinement": " | ".join(notes)})
     return result, cert
 
 
@@ -278,12 +279,12 @@ def plan_free_step(planner: Planner, scene: Scene, settings: GaitSettings, *,
     result = dataclasses.replace(result, stats=dataclasses.replace(
         result.stats, iterations=result.stats.iterations + spent[0],
         solve_time=result.stats.solve_time + spent[1]))
-    result.settings["step_length_search"] = (
-        f"step length free at {settings.speed:g} m/s within [{low:.4f}, {high:.4f}] m: "
-        f"{len(tried)} plans in {time.perf_counter() - start:.1f} s, least J per metre at "
-        f"{best:.4f} m; J/m tried: "
-        + ", ".join(f"{s:.4f} m: {j:.4f}" for s, j in sorted(tried.items())))
-    return result, cert
+    search = (f"step length free at {settings.speed:g} m/s within [{low:.4f}, {high:.4f}] m: "
+              f"{len(tried)} plans in {time.perf_counter() - start:.1f} s, least J per metre "
+              f"at {best:.4f} m; J/m tried: "
+              + ", ".join(f"{s:.4f} m: {j:.4f}" for s, j in sorted(tried.items())))
+    return dataclasses.replace(result, settings={**result.settings,
+                                                 "step_length_search": search}), cert
 
 
 def grid_defects(result: PlanResult, cert) -> list[str]:
@@ -301,11 +302,17 @@ def grid_defects(result: PlanResult, cert) -> list[str]:
 
 
 def continuous_certificate(result: PlanResult):
-    """`gait_planner.verify.continuous` on what the result's messages will publish: the
-    efforts of `node_efforts` and the foot wrenches of `foot_wrenches` (moved to the world
-    origin), so the certificate in the metadata is the one a reader of the recording gets.
-    A scene drafted from a URDF is certified on that URDF (`gait_planner.verify.robot`),
-    which also sets the locked joints' `held_efforts`."""
+    """The certificate of `certified(result)`, the result left as it is."""
+    return certified(result)[1]
+
+
+def certified(result: PlanResult):
+    """(result, certificate): `gait_planner.verify.continuous` on what the result's messages
+    will publish: the efforts of `node_efforts` and the foot wrenches of `foot_wrenches`
+    (moved to the world origin), so the certificate in the metadata is the one a reader of
+    the recording gets. A scene drafted from a URDF is certified on that URDF
+    (`gait_planner.verify.robot`), and the result returned carries its locked joints'
+    `held_efforts` (a new result; `result` is not changed)."""
     from gait_planner.io.messages import foot_wrenches, node_efforts
     from gait_planner.verify.continuous import certificate
     from gait_planner.verify.mechanics import parse_scene
@@ -321,10 +328,9 @@ def continuous_certificate(result: PlanResult):
         cert, held = robot_certificate(
             scene, result.scene.robot.urdf, result.times, result.q, result.joint_angles,
             node_efforts(result), wrenches, result.active_contacts)
-        result.held_efforts.update(held)
-        return cert
-    return certificate(scene, result.times, result.q, node_efforts(result), wrenches,
-                       result.active_contacts)
+        return dataclasses.replace(result, held_efforts={**result.held_efforts, **held}), cert
+    return result, certificate(scene, result.times, result.q, node_efforts(result), wrenches,
+                               result.active_contacts)
 
 
 def certificate_metadata(cert) -> dict[str, str]:

@@ -13,12 +13,21 @@ lasts t_{N-1} - t_0 (`duration`).
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.model.scene import Scene
+
+
+class PlanStatus(enum.Enum):
+    """How a plan ended; `PlanResult.message` says it in words, with the solver's detail."""
+
+    CONVERGED = "converged"  # the solver met its tolerances: success True
+    FAILED = "failed"  # did not converge (iteration cap, infeasible, time limit, error)
+    STOPPED = "stopped"  # ended on request (`Planner.stop`: a cancel, the node's shutdown)
 
 
 @dataclass(frozen=True)
@@ -38,7 +47,9 @@ class SolverStats:
 
 @dataclass(frozen=True)
 class PlanResult:
-    """A planned half-cycle gait (or a failed attempt, with `success = False`).
+    """A planned half-cycle gait (or a failed attempt, with `success = False`). Built once:
+    a step that adds to it (the certificate, a refinement's note, the joined half cycles)
+    makes a new one (`dataclasses.replace`); its arrays and dicts are not changed after.
 
     Shapes: N intervals, N + 1 nodes, nb bodies, k = 12 nb, na joint angles,
     nt joint torque components (= na), C contact points of the scene.
@@ -98,6 +109,12 @@ class PlanResult:
     settings: dict[str, str] = field(default_factory=dict)  # extra metadata, strings
     ground: Ground = LEVEL  # what the plan stands on (`gait_planner.model.ground`)
     held_efforts: dict[str, np.ndarray] = field(default_factory=dict)
+    status: PlanStatus | None = None  # None: CONVERGED if success else FAILED
+
+    def __post_init__(self) -> None:
+        if self.status is None:
+            object.__setattr__(self, "status", PlanStatus.CONVERGED if self.success
+                               else PlanStatus.FAILED)
 
     @property
     def n_nodes(self) -> int:

@@ -80,6 +80,7 @@ plan mapped to the collocation (4 per phase) it still needed 163 + 178 iteration
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import casadi as ca
@@ -209,5 +210,4 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
     result = build_result(tr, x, p, g, status=status, iterations=iterations,
                           solve_time=time.perf_counter() - start, build_time=build_time,
                           evaluation_time=evaluation, origin=origin, sizes=size)
-    result.settings["derivatives"] = used
-    return result
+    return dataclasses.replace(result, settings={**result.settings, "derivatives": used})

@@ -10,7 +10,7 @@ from gait_planner.model.scene import Scene
 from gait_planner.ocp.mirror import configuration_mirror, contact_partners
 from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
-from gait_planner.result import PlanResult, SolverStats
+from gait_planner.result import PlanResult, PlanStatus, SolverStats
 
 STATUS_WORDS = {
     "Solve_Succeeded": "converged",
@@ -192,8 +192,9 @@ def build_result(tr: Transcription, settings: GaitSettings, x: np.ndarray, p: np
     )
 
 
-def failed_result(scene: Scene, settings: GaitSettings | None, message: str) -> PlanResult:
-    """A result with no trajectory, success False and the reason."""
+def failed_result(scene: Scene, settings: GaitSettings | None, message: str,
+                  status: PlanStatus = PlanStatus.FAILED) -> PlanResult:
+    """A result with no trajectory, success False, the reason and how it ended."""
     empty = np.zeros((0,))
     k = 12 * len(scene.bodies)
     return PlanResult(
@@ -207,5 +208,5 @@ def failed_result(scene: Scene, settings: GaitSettings | None, message: str) -> 
         roll_moments={},
         generalized_force=np.zeros((0, k)), kinetic_energy=empty, potential_energy=empty,
         phase_scaling=empty, duration=float("nan"),
-        stats=SolverStats(status="not solved", iterations=0, solve_time=0.0),
+        stats=SolverStats(status="not solved", iterations=0, solve_time=0.0), status=status,
     )

@@ -35,7 +35,7 @@ from gait_planner.ocp.refine import refined_start
 from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.solution import STATUS_WORDS, build_result, failed_result
 from gait_planner.ocp.transcription import Transcription, shape_of
-from gait_planner.result import PlanResult
+from gait_planner.result import PlanResult, PlanStatus
 
 Stage = Callable[[str], None]  # the phase a plan enters ("building", "cold stage 1", ...)
 STOPPED = "stopped on request"  # the message of a plan ended by `Planner.stop`
@@ -156,7 +156,7 @@ class Planner:
 
     progress: called every IPOPT iteration; stage: called when a plan enters a phase;
     stop: polled every iteration and between phases: once it returns True the plan ends
-    within one iteration as a failed result with the message `STOPPED` (a problem being
+    within one iteration as a failed result of status `PlanStatus.STOPPED` (message `STOPPED`) (a problem being
     built is finished first and kept for later plans); library: the plans of earlier
     processes (`ocp.library`), read when a problem is built and written after every
     successful plan (None: this process's plans only)."""
@@ -388,7 +388,7 @@ class Planner:
         except (ValueError, RuntimeError) as err:
             return failed_result(scene, settings, f"could not build the problem: {err}")
         if stopped():
-            return failed_result(scene, settings, STOPPED)
+            return failed_result(scene, settings, STOPPED, PlanStatus.STOPPED)
         start = time.perf_counter()
         tr, step, mu = built.tr, settings.step_length, settings.friction_coefficient
         nsig = int(tr.S.shape[0])
@@ -459,12 +459,13 @@ class Planner:
             origin += ", restarted with IPOPT's inertia test"
         iterations, evaluation = totals
         if stopped():
-            return failed_result(scene, settings, STOPPED)
+            return failed_result(scene, settings, STOPPED, PlanStatus.STOPPED)
         result = build_result(tr, settings, x0, p, g, status=status, iterations=iterations,
                               solve_time=time.perf_counter() - start,
                               build_time=built.build_time, evaluation_time=evaluation,
                               origin=origin)
-        result.settings["derivatives"] = built.derivatives_used
+        result = dataclasses.replace(result, settings={
+            **result.settings, "derivatives": built.derivatives_used})
         if result.success:
             self._store(built, _stored(settings, x0, duals, qref))
         return result

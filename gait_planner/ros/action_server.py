@@ -34,7 +34,7 @@ from rclpy.action.server import ServerGoalHandle
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
-from gait_planner.ocp.solve import STOPPED
+from gait_planner.result import PlanStatus
 from gait_planner.ros.worker import Closed, Lapsed, PlanWorker
 from gait_planner_msgs.action import PlanGait as PlanGaitAction
 
@@ -42,8 +42,9 @@ ACTION = "/gait_planner/plan_gait"
 CANCEL_MARK_WAIT = 0.5  # s, the longest a stopped goal waits for rclpy's "canceling" mark
 FEEDBACK_HEARTBEAT = 0.5  # s without feedback after which the last one is sent again
 
-# plan(request, answer): plans a request and fills the answer (Response or Result fields)
-Plan = Callable[[object, object], None]
+# plan(request, answer): plans a request, fills the answer (Response or Result fields) and
+# says how the plan ended (None: refused)
+Plan = Callable[[object, object], "PlanStatus | None"]
 
 
 class PlanGaitActionServer:
@@ -119,18 +120,19 @@ class PlanGaitActionServer:
                         phase=message.phase, iteration=message.iteration, cost=math.nan,
                         constraint_violation=math.nan))
 
-        result = PlanGaitAction.Result()
+        result, status = PlanGaitAction.Result(), None
         try:
-            self._worker.run(self._tickets[id(goal_handle.request)],
-                             lambda: self._plan(goal_handle.request, result), feedback,
-                             tick=heartbeat)
+            status = self._worker.run(self._tickets[id(goal_handle.request)],
+                                      lambda: self._plan(goal_handle.request, result), feedback,
+                                      tick=heartbeat)
         except (Closed, Lapsed) as err:
             result.success, result.message = False, str(err)
         self._tickets.pop(id(goal_handle.request), None)
-        if result.message == STOPPED:
+        stopped = status is PlanStatus.STOPPED
+        if stopped:
             self._await_cancel_mark(goal_handle)
         try:
-            if goal_handle.is_cancel_requested and result.message == STOPPED:
+            if goal_handle.is_cancel_requested and stopped:
                 goal_handle.canceled()
             elif result.success:
                 goal_handle.succeed()

@@ -52,6 +52,7 @@ from gait_planner.model.loader import SceneError, load_scene, scene_dirs
 from gait_planner.model.urdf_errors import UrdfError
 from gait_planner.ocp.library import PlanLibrary
 from gait_planner.ocp.solve import STOPPED, Planner
+from gait_planner.result import PlanStatus
 from gait_planner.pipeline import plan_and_record, prepare
 from gait_planner.request import PlanRequest, RequestError, plan_request
 from gait_planner.ros import parameters
@@ -200,10 +201,11 @@ class GaitPlannerNode(Node):
             f"request {ticket}, accepted {age:.1f} s ago, never started (its acceptance did not "
             "reach the client); the node takes the next request")
 
-    def _plan_into(self, request, answer) -> None:
+    def _plan_into(self, request, answer) -> PlanStatus | None:
         """Plan `request` (service request or action goal), record and publish the plan,
-        and fill `answer` (service response or action result: the same fields). Runs in
-        the worker's plan thread."""
+        and fill `answer` (service response or action result: the same fields); how the
+        plan ended (None: refused, or an internal error). Runs in the worker's plan
+        thread."""
         walk_steps = int(self._param("walk_steps"))  # as set when the request arrived
         try:
             planned = plan_request(  # 0 or empty fields: the node's or the scene's defaults
@@ -219,18 +221,18 @@ class GaitPlannerNode(Node):
         except Stopped:
             answer.success, answer.message = False, self._stopped_message()
             self.get_logger().info(f"{answer.message}: nothing recorded")
-            return
+            return PlanStatus.STOPPED
         except (RequestError, LibraryError, OSError) as err:
             answer.success, answer.message = False, str(err)
             self.get_logger().warning(f"plan request refused: {err}")
-            return
+            return None
         except Exception as err:  # noqa: BLE001  (a bug must not stop the service)
             answer.success = False
             answer.message = f"internal error ({type(err).__name__}): {err}"
             self.get_logger().error(f"plan request failed: {answer.message}")
-            return
+            return None
         result = outcome.result
-        stopped = not result.success and result.message == STOPPED
+        stopped = result.status is PlanStatus.STOPPED
         stamp = self.get_clock().now().nanoseconds
         messages.fill_message(answer, messages.plan_response_fields(
             result, str(outcome.mcap_path or ""), stamp) if result.success else {
@@ -252,6 +254,7 @@ class GaitPlannerNode(Node):
             self.get_logger().info(f"{answer.message}: nothing recorded")
         else:
             self.get_logger().warning(f"plan failed: {result.message}")
+        return result.status
 
     def _walk(self, mcap_path: Path, steps: int) -> dict:
         """Walk the recorded plan `steps` half cycles in MuJoCo (parameter walk_steps; phase
