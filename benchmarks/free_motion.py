@@ -28,7 +28,7 @@ import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.dynamics.free_motion import energies, run_free_motion
-from gait_planner.dynamics.simulate import SimulationError, Simulator
+from gait_planner.dynamics.forward import SimulationError, Simulator
 from gait_planner.model.angles import configuration
 from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody

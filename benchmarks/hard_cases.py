@@ -138,7 +138,7 @@ def integrator_row(dt: float = 0.05, steps: int = 400) -> dict:
     """The variational integrator's passive walker3d hanging from its heel, large steps."""
     from free_motion import hanging
     from gait_planner.dynamics.free_motion import run_free_motion
-    from gait_planner.dynamics.simulate import SimulationError
+    from gait_planner.dynamics.forward import SimulationError
 
     scene = hanging(load_scene("walker3d"))
     start = time.perf_counter()

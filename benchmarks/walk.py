@@ -120,7 +120,7 @@ def _rounded(x, digits: int = 3):
 def walk_row(recording: Path, steps: int) -> dict:
     """The walk of the recording and its self-test, as JSON-ready numbers."""
     from gait_planner.cli.walk import self_test
-    from gait_planner.walk.simulate import walk
+    from gait_planner.walk.walk_plan import walk
 
     r = walk(recording, steps)
     tests = self_test(str(recording), steps, r)

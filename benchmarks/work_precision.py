@@ -12,7 +12,7 @@ before the clock starts (build_time_s).
 Grids: n intervals per phase with the base time step scaled by 8 / n, so that every grid can
 reach the same phase durations and only the discretisation changes. Errors, measured the
 same way for both methods:
-* against physics (`gait_planner.verify.simulation.physics_error`): the plan's torques and
+* against physics (`gait_planner.verify.drift.physics_error`): the plan's torques and
   contact schedule through the continuous dynamics (Pinocchio, DOP853, rtol 1e-10), from the
   plan's state at every node ("node": the local error of one interval; RMS and max joint
   angle drift) and at every phase start ("phase": drift over a phase, swing foot in mm);
@@ -42,7 +42,7 @@ from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.pipeline import continuous_certificate
-from gait_planner.verify.simulation import physics_error
+from gait_planner.verify.drift import physics_error
 
 GRIDS = (4, 6, 8, 12, 16)
 GRIDS_WALKER3D = (4, 6, 8, 12)

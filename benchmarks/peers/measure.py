@@ -9,7 +9,7 @@ its parent-joint point, the root's its centre of mass, axes the directors:
 mirror(node 1) + step, interval K holding the mirror image of interval 0's contacts, as
 DMOCC's node N: `gait_planner.result`), joint rates by central differences continued
 periodically as DMOCC's (`ocp.solution.joint_rates`). `measure(...)` then reports
-* `verify.simulation.physics_error` at reset "node" (one interval's drift) and "phase", the
+* `verify.drift.physics_error` at reset "node" (one interval's drift) and "phase", the
   plan's torques applied as what they are: the URDF joints' efforts (conjugate to the
   angles; spherical joints by their pitch/roll/yaw efforts at the simulated configuration),
   held constant over each interval (tau, zero-order hold) or linear between nodes
@@ -25,7 +25,7 @@ periodically as DMOCC's (`ocp.solution.joint_rates`). `measure(...)` then report
   plan's own hold;
 * if asked (`walk_to`), the walk in MuJoCo: the plan recorded by the product's MCAP writer
   and walked `WALK_STEPS` half cycles by the reference controller
-  (`gait_planner.walk.simulate.walk`, config/walk.yaml), as a user walks a DMOCC plan.
+  (`gait_planner.walk.walk_plan.walk`, config/walk.yaml), as a user walks a DMOCC plan.
 DMOCC's own rows (`measure_dmocc`) use its `PlanResult` and `physics_error` unchanged.
 """
 
@@ -52,11 +52,11 @@ from gait_planner.model.scene import Scene
 from gait_planner.ocp.mirror import configuration_mirror, contact_partners
 from gait_planner.ocp.solution import joint_rates, node_kinetic_energy
 from gait_planner.result import PlanResult, SolverStats
-from gait_planner.verify import simulation
+from gait_planner.verify import drift
 from gait_planner.verify.constrained import ConstrainedModel
 from gait_planner.verify.continuous import cardan_efforts, effort_names
 from gait_planner.verify.mechanics import Mechanics, parse_scene
-from gait_planner.walk.simulate import walk
+from gait_planner.walk.walk_plan import walk
 
 HOLDS = ("zero", "linear")
 WALK_STEPS = 10  # half cycles walked in MuJoCo (`gait-planner walk`'s default)
@@ -84,7 +84,7 @@ class EffortModel(ConstrainedModel):
         return out
 
 
-class EffortSimulation(simulation.PlanSimulation):
+class EffortSimulation(drift.PlanSimulation):
     """`PlanSimulation` of efforts (N+1, na) (`effort_names` order) held "zero" (row n over
     interval n) or "linear" between nodes."""
 
@@ -104,9 +104,9 @@ def effort_physics_error(result: PlanResult, efforts: np.ndarray, hold: str, res
     """`physics_error` of `result` driven by `efforts` (module docstring)."""
     if hold not in HOLDS:
         raise ValueError(f"hold must be one of {HOLDS}, got {hold!r}")
-    with mock.patch.object(simulation, "PlanSimulation",
+    with mock.patch.object(drift, "PlanSimulation",
                            lambda r: EffortSimulation(r, efforts, hold)):
-        return simulation.physics_error(result, reset=reset)
+        return drift.physics_error(result, reset=reset)
 
 
 def director_configurations(scene: Scene, model: pin.Model, q: np.ndarray) -> np.ndarray:
@@ -276,7 +276,7 @@ def measure_dmocc(result: PlanResult, problem: dict, walk_to: Path | None = None
     """The same measures of DMOCC's own plan, by its own `physics_error` (node torques
     linear between nodes, as couples), and its walk if `walk_to` names its recording."""
     K = len(result.times) - 2
-    node, phase = (simulation.physics_error(result, reset=r) for r in ("node", "phase"))
+    node, phase = (drift.physics_error(result, reset=r) for r in ("node", "phase"))
     names = list(result.joint_angle_names)
     order = [names.index(n) for n in effort_names(parse_scene(result.scene.source))]
     return {**_physics(node, phase), **held_measures(result, problem, K),

@@ -84,8 +84,9 @@ def _vector(values) -> osim.Vector:
 
 
 def build_study(problem: dict, walker: Walker, intervals: int, start: str,
-                max_iterations: int, output_dir: Path) -> osim.MocoStudy:
-    """The MocoStudy (module docstring), its guess set."""
+                max_iterations: int, output_dir: Path, threads: int = 1) -> osim.MocoStudy:
+    """The MocoStudy (module docstring), its guess set; threads: the solver's parallel
+    jobs (1: none, `set_parallel(0)`; 0: Moco's default, every core)."""
     study = osim.MocoStudy()
     study.setName("gait_half_cycle")
     mp = study.updProblem()
@@ -138,6 +139,8 @@ def build_study(problem: dict, walker: Walker, intervals: int, start: str,
     solver.set_optim_max_iterations(max_iterations)
     solver.set_output_interval(OUTPUT_INTERVAL)
     solver.set_verbosity(2)
+    if threads:  # Moco's property: 0 not parallel, 1 every core, N > 1 N jobs
+        solver.set_parallel(0 if threads == 1 else threads)
     solver.setGuess(make_guess(problem, walker, solver, start))
     os.chdir(output_dir)  # Moco writes its iterates in the working directory
     return study
@@ -169,13 +172,14 @@ def make_guess(problem: dict, walker: Walker, solver, start: str) -> osim.MocoTr
 
 
 def _child(problem_path: str, intervals: int, start: str, max_iterations: int,
-           work: str) -> None:
+           work: str, threads: int) -> None:
     """The forked solve: build.json after the build, solution.sto and solve.json after the
     solve (in `work`)."""
     t0 = time.perf_counter()
     problem = exchange.read_problem(problem_path)
     walker = Walker(problem)
-    study = build_study(problem, walker, intervals, start, max_iterations, Path(work))
+    study = build_study(problem, walker, intervals, start, max_iterations, Path(work),
+                        threads)
     build_time = time.perf_counter() - t0
     Path(work, "build.json").write_text(json.dumps({"build_time": build_time}))
     t1 = time.perf_counter()
@@ -191,7 +195,7 @@ def _child(problem_path: str, intervals: int, start: str, max_iterations: int,
 
 
 def solve(problem_path: Path, intervals: int, start: str, max_iterations: int,
-          time_limit: float, work: Path) -> tuple[osim.MocoTrajectory, dict]:
+          time_limit: float, work: Path, threads: int = 1) -> tuple[osim.MocoTrajectory, dict]:
     """Run the forked solve with the wall-clock limit; (trajectory, info)."""
     work.mkdir(parents=True, exist_ok=True)
     for old in glob.glob(str(work / "*")):
@@ -199,7 +203,8 @@ def solve(problem_path: Path, intervals: int, start: str, max_iterations: int,
             os.unlink(old)
     context = multiprocessing.get_context("fork")
     child = context.Process(target=_child, args=(str(problem_path.resolve()), intervals,
-                                                  start, max_iterations, str(work)))
+                                                  start, max_iterations, str(work),
+                                                  threads))
     t0 = time.perf_counter()
     child.start()
     deadline, limited = None, False
@@ -299,12 +304,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--time-limit", type=float, default=300.0, help="s")
     parser.add_argument("--start", choices=("guess", "dmocc"), default="guess")
     parser.add_argument("--max-iterations", type=int, default=1000)
+    parser.add_argument("--threads", type=int, default=1,
+                        help="the solver's parallel jobs: 1 none (the default), 0 Moco's "
+                             "default (every core; OMP_NUM_THREADS does not change it)")
     args = parser.parse_args(argv)
     plan_path = args.plan.resolve()
     problem = exchange.read_problem(args.problem)
     work = plan_path.with_suffix(".moco")
     trajectory, info = solve(args.problem, args.intervals, args.start, args.max_iterations,
-                             args.time_limit, work)
+                             args.time_limit, work, args.threads)
     walker = Walker(problem)
     if not np.isfinite(info["objective"]):  # a stopped solve: its cost at the last iterate
         info["objective"] = control_integral(walker, trajectory)
@@ -315,6 +323,7 @@ def main(argv: list[str] | None = None) -> int:
                            " dynamics, compliant smooth sphere-half-space contact, mirror"
                            " periodicity",
             "grid": args.intervals, "cost": "squared_torque",
+            "threads": args.threads or f"default ({os.cpu_count()} cores)",
             "start": "kinematic guess" if args.start == "guess" else "DMOCC plan",
             **info, "notes": NOTES}
     plan = to_plan(problem, walker, trajectory, args.intervals, meta)

@@ -33,8 +33,10 @@ default): this process re-executes itself with OMP_NUM_THREADS, OPENBLAS_NUM_THR
 MKL_NUM_THREADS and DRAKE_NUM_THREADS at 1 (IPOPT/MUMPS and BLAS for DMOCC, Drake and
 Moco; DMOCC runs one thread either way: gait_planner sets the first two itself; what the
 main venv sets for DMOCC is not passed to the peers, MAIN_VENV_ENV),
-the peers inherit them, and Crocoddyl's `ShootingProblem.nthreads` (which OMP_NUM_THREADS
-does not change) is set to 1 (`crocoddyl_peer.py --threads 1`). `--threads default` (or
+the peers inherit them, Crocoddyl's `ShootingProblem.nthreads` (which OMP_NUM_THREADS
+does not change) is set to 1 (`crocoddyl_peer.py --threads 1`), and so is Moco's: its
+MocoCasADiSolver evaluates the grid points on every core by default (its `parallel`
+property, nor read from OMP_NUM_THREADS; `opensim_peer.py --threads 1` sets it to 0). `--threads default` (or
 `both`) adds the peers at their libraries' defaults: those variables unset in the peer's
 environment and Crocoddyl's nthreads left at its build's default, methods labelled
 "[default threads]". Every row says its threads (`threads`, `thread_env`).
@@ -107,7 +109,7 @@ THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
 # walker2d at 4 per phase, RK4), the ROS wheels add their libraries' folders
 MAIN_VENV_ENV = ("OPENBLAS_CORETYPE", "LD_LIBRARY_PATH", "_ROS_WHEELS_BOOTSTRAP_COMPLETE")
 # per peer, the arguments that leave its library's own thread count ("default" rows)
-DEFAULT_THREAD_ARGS = {"crocoddyl": ["--threads", "0"]}
+DEFAULT_THREAD_ARGS = {"crocoddyl": ["--threads", "0"], "opensim": ["--threads", "0"]}
 LOAD_THRESHOLD = 0.5  # 1-minute load average on the 2 cores (see the module docstring)
 SETTLE_S = 240.0  # at most this long waited for the load to fall to the threshold
 OTHER_LOAD_MIN_S = 30.0  # shorter solves say nothing reliable of the load beside them

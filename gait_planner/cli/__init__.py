@@ -172,9 +172,9 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
 
 def _walk_plan(mcap: str, steps: int, printed: bool) -> dict:
     """Walk the recorded plan `steps` half cycles in MuJoCo (--walk) and return the walk's
-    summary (`gait_planner.walk.simulate.walk`), `printed` as `gait-planner walk` prints it."""
+    summary (`gait_planner.walk.walk_plan.walk`), `printed` as `gait-planner walk` prints it."""
     from gait_planner.cli.walk import print_progress
-    from gait_planner.walk.simulate import walk
+    from gait_planner.walk.walk_plan import walk
     from gait_planner.walk.summary import format_summary
 
     print(f"walking the plan {steps} half cycles in MuJoCo ...", file=sys.stderr, flush=True)
@@ -312,7 +312,7 @@ def _add_prepare(commands: argparse._SubParsersAction) -> None:
         "level or ramp, a requested speed, stairs up, stairs down), so that the C libraries "
         "are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) and no request "
         "within the scene's ranges compiles, and plan its default request into the plan library "
-        "(gait_planner/ocp/library.py), from which the node's first request re-plans warm. "
+        "(gait_planner/ocp/warm_starts.py), from which the node's first request re-plans warm. "
         "Takes about a minute for walker3d the first time, a few seconds when cached.")
     parser.add_argument("scenes", nargs="+", metavar="NAME|FILE.yaml",
                         help="scenes: names or paths to scene files (see plan --help)")
@@ -327,7 +327,7 @@ def _compile_note(stage: str) -> None:
 
 def _prepare(args: argparse.Namespace) -> int:
     from gait_planner.model.loader import SceneError, find_scene
-    from gait_planner.ocp.library import PlanLibrary
+    from gait_planner.ocp.warm_starts import WarmStartStore
     from gait_planner.ocp.settings import SettingsError, form_requests, settings_for
     from gait_planner.ocp.solve import Planner
 
@@ -336,7 +336,7 @@ def _prepare(args: argparse.Namespace) -> int:
         try:
             scene = find_scene(name)
             settings = settings_for(scene, compiled=True)
-            planner = Planner(library=PlanLibrary(), stage=_compile_note)
+            planner = Planner(library=WarmStartStore(), stage=_compile_note)
             used = planner.prepare(scene, settings)
             result = planner.plan(scene, settings, warm_start=False)
             for shape in form_requests(scene, settings)[1:]:  # the default's is built

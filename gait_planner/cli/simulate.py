@@ -141,7 +141,7 @@ def add_simulate_parser(subparsers: argparse._SubParsersAction) -> argparse.Argu
 
 
 def _simulate_command(args: argparse.Namespace) -> int:
-    from gait_planner.dynamics.simulate import SimulationError
+    from gait_planner.dynamics.forward import SimulationError
 
     try:
         result = simulate(args.scene, args.steps, args.dt, args.gravity, args.torques,

@@ -1,6 +1,6 @@
 """``gait-planner walk RUN.mcap [--steps K] [--self-test] [--json] [--out WALK.mcap]
 [--rrd WALK.rrd]``: walk a recorded plan in MuJoCo with the reference controller
-(`gait_planner.walk.simulate`): a line on stderr at each half cycle's end, the summary
+(`gait_planner.walk.walk_plan`): a line on stderr at each half cycle's end, the summary
 (`gait_planner.walk.summary`) on stdout; --out records the walk
 (`gait_planner.walk.recording`), --rrd draws it over the plan in rerun
 (`gait_planner.viz.rerun_walk`). --self-test walks it again with the plan's torques scaled
@@ -34,7 +34,7 @@ def self_test(path: str, steps: int, full: dict[str, Any],
     """The walks with the plan's torques scaled down (config's self_test_scales; None:
     config/walk.yaml); `worse` = fewer half cycles or more feedback than the full-torque
     walk `full`."""
-    from gait_planner.walk.simulate import load_config, walk
+    from gait_planner.walk.walk_plan import load_config, walk
 
     config = config or load_config()
     rows = []
@@ -95,7 +95,7 @@ def _write(key: str, path: str, result: dict[str, Any]) -> None:
 
 def _walk_command(args: argparse.Namespace) -> int:
     from gait_planner.walk.recording import output_path
-    from gait_planner.walk.simulate import CONFIG, load_config, walk
+    from gait_planner.walk.walk_plan import CONFIG, load_config, walk
 
     outputs = {k: v for k, v in (("out", args.out), ("rrd", args.rrd)) if v is not None}
     try:

@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
-from gait_planner.dynamics.simulate import Simulator, Trajectory
+from gait_planner.dynamics.forward import Simulator, Trajectory
 from gait_planner.model.angles import configuration
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from gait_planner.atomic import atomic_target
-from gait_planner.ocp.library import StoredPlan
+from gait_planner.ocp.warm_starts import StoredPlan
 
 MANIFEST = "library.json"
 INDEX = "index.sqlite"

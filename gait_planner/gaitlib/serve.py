@@ -22,7 +22,7 @@ from gait_planner.gaitlib.index import (LibraryIndex, Manifest, load_start, read
                                         start_path)
 from gait_planner.gaitlib.worker import point_request
 from gait_planner.model.loader import find_scene
-from gait_planner.ocp.library import StoredPlan
+from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solve import Planner
 from gait_planner.pipeline import SceneLookup, request_settings

@@ -435,7 +435,7 @@ def plan_response_fields(result: PlanResult, mcap_path: str | None,
 def walk_response_fields(steps: int, walked: Mapping[str, Any] | None,
                          error: str = "") -> dict[str, Any]:
     """The walk fields of PlanGait's response for a walk of `steps` half cycles: `walked` is
-    the summary of `gait_planner.walk.simulate.walk`, None when the walk could not run
+    the summary of `gait_planner.walk.walk_plan.walk`, None when the walk could not run
     (`error` says why: walk_stopped "not walked: ERROR", feedback share NaN)."""
     if walked is None:
         return {"walk_steps": int(steps), "walk_half_cycles": 0,

@@ -6,7 +6,7 @@ slides along z = 0 at zero force (a scuff, which a real foot would catch on). De
 full margin already at the first node after a release and at the last node before a strike
 made the foot whip: walker3d's heel had to rise 10 mm within one 15 ms interval before its
 strike, the plan applied 12 deg of one-interval error there against the continuous
-dynamics (`gait_planner.verify.simulation`), and the collocation baseline rang at 560 N m
+dynamics (`gait_planner.verify.drift`), and the collocation baseline rang at 560 N m
 after heel-off. `swing_clearance_ramp` (s) lets the required height grow from the release
 and fall towards the strike over that time, as a foot lifts and lowers, along a quarter
 sine: rising at once, and joining the full height without a corner (with a linear ramp the

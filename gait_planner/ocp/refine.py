@@ -30,7 +30,7 @@ import dataclasses
 import casadi as ca
 import numpy as np
 
-from gait_planner.ocp.library import StoredPlan
+from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.transcription import TORQUE_SCALE, Transcription
 

@@ -5,8 +5,8 @@
 another step length, friction coefficient, slope, stair height or speed is a new value of
 the problem's parameters, never a new build or compilation. A changed step length or
 friction coefficient re-plans from the nearest stored plan on the same ground at the same
-speed (primal and dual warm start), a new ground or speed cold; with a `PlanLibrary` it also
-starts from, and adds to, the plans of earlier processes (`ocp.library`). A cold plan that
+speed (primal and dual warm start), a new ground or speed cold; with a `WarmStartStore` it also
+starts from, and adds to, the plans of earlier processes (`ocp.warm_starts`). A cold plan that
 fails from its guess at a step length other than the scene's, or on a ramp, is continued
 from the scene's step length on level ground (`Planner._continuation`); a cold plan on
 stairs down starts from the plan on stairs at most `STAIR_COLD_MAX` deep
@@ -30,7 +30,7 @@ from gait_planner.ocp.compile import CompileError, compile_sources
 from gait_planner.ocp.derivatives import expand_nlp, nlp_derivatives
 from gait_planner.ocp.guess import GUESSES, initial_multipliers
 from gait_planner.ocp.ipopt import IterationCallback, Progress, Stop, ipopt_options, run_attempt
-from gait_planner.ocp.library import PlanLibrary, StoredPlan
+from gait_planner.ocp.warm_starts import WarmStartStore, StoredPlan
 from gait_planner.ocp.refine import refined_start
 from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.solution import STATUS_WORDS, build_result, failed_result
@@ -158,11 +158,11 @@ class Planner:
     stop: polled every iteration and between phases: once it returns True the plan ends
     within one iteration as a failed result of status `PlanStatus.STOPPED` (message `STOPPED`) (a problem being
     built is finished first and kept for later plans); library: the plans of earlier
-    processes (`ocp.library`), read when a problem is built and written after every
+    processes (`ocp.warm_starts`), read when a problem is built and written after every
     successful plan (None: this process's plans only)."""
 
     def __init__(self, *, progress: Progress | None = None, stage: Stage | None = None,
-                 stop: Stop | None = None, library: PlanLibrary | None = None):
+                 stop: Stop | None = None, library: WarmStartStore | None = None):
         self.progress, self.stage, self.stop = progress, stage or (lambda name: None), stop
         self.library = library
         self._built: dict = {}

@@ -50,7 +50,7 @@ from gait_planner.atomic import remove_stale_temporaries
 from gait_planner.viz.rrd_recorder import RrdRecorder
 from gait_planner.model.loader import SceneError, load_scene, scene_dirs
 from gait_planner.model.urdf_errors import UrdfError
-from gait_planner.ocp.library import PlanLibrary
+from gait_planner.ocp.warm_starts import WarmStartStore
 from gait_planner.ocp.solve import STOPPED, Planner
 from gait_planner.result import PlanStatus
 from gait_planner.pipeline import plan_and_record, prepare
@@ -59,7 +59,7 @@ from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
 from gait_planner.ros.robot_description import RobotScenes
 from gait_planner.ros.worker import Closed, Lapsed, PlanWorker, Stopped
-from gait_planner.walk.simulate import walk
+from gait_planner.walk.walk_plan import walk
 from gait_planner.walk.summary import format_summary, half_cycles_done
 from gait_planner_msgs.msg import ContactForces, MultibodyState
 from gait_planner_msgs.srv import PlanGait
@@ -104,7 +104,7 @@ class GaitPlannerNode(Node):
         for path in remove_stale_temporaries(self._param("output_dir")):
             self.get_logger().info(f"removed the stale temporary file {path}")
         self._recorder = RrdRecorder()  # its helper imports rerun while the problem is built
-        library = PlanLibrary() if self._param("plan_library") else None
+        library = WarmStartStore() if self._param("plan_library") else None
         self._planner = planner or Planner(progress=self._progress, stage=self._worker.enter,
                                            stop=self._worker.stopped, library=library)
         if self._param("prepare_on_start"):

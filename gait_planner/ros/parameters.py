@@ -81,7 +81,7 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
     "plan_library": (True, _descriptor(
         ParameterType.PARAMETER_BOOL,
         "Warm-start from the plans of earlier processes (the plan library in the cache "
-        "folder, gait_planner/ocp/library.py; `make setup` plans the shipped scenes' default "
+        "folder, gait_planner/ocp/warm_starts.py; `make setup` plans the shipped scenes' default "
         "requests into it) and add this node's plans to it; a request with cold_start "
         "ignores it", read_only=True)),
     "gait_library": ("", _descriptor(

@@ -1,5 +1,5 @@
 """Continuous constrained dynamics of a scene with ground contacts, in Pinocchio: the model
-that `gait_planner.verify.simulation` integrates. Nothing here comes from
+that `gait_planner.verify.drift` integrates. Nothing here comes from
 gait_planner.model, .dynamics or .ocp (the scene is `verify.mechanics.parse_scene`'s data,
 the tree `verify.continuous.build_model`'s).
 

@@ -1,5 +1,5 @@
 """A walk in words: the summary `gait-planner walk`, `plan --walk` and the node print or log,
-and the progress note of a half cycle's end (`simulate.walk`'s `progress`).
+and the progress note of a half cycle's end (`walk_plan.walk`'s `progress`).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ def half_cycles_done(walked: int, steps: int) -> str:
 
 
 def format_summary(r: dict[str, Any]) -> str:
-    """The summary `r` of `simulate.walk` (with the command's "out", "rrd" and "self_test"
+    """The summary `r` of `walk_plan.walk` (with the command's "out", "rrd" and "self_test"
     when present) as lines: angles in deg, torques in N m, distances in m."""
     lines = [f"{r['scene']} ({r['recording']}): walked {r['half_cycles_walked']} of "
              f"{r['steps']} half cycles in {r['time_walked_s']:.3f} s: {r['stopped']}",

@@ -23,7 +23,7 @@ from gait_planner.dynamics.free_motion import (
     random_velocity,
     run_free_motion,
 )
-from gait_planner.dynamics.simulate import Simulator
+from gait_planner.dynamics.forward import Simulator
 from gait_planner.model.angles import configuration
 
 ROUND_OFF = 1e-10  # momentum errors relative to linear/angular_momentum_scale

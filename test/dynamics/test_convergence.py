@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from gait_planner.dynamics.free_motion import pinned_velocity, random_torques, random_velocity
-from gait_planner.dynamics.simulate import Simulator
+from gait_planner.dynamics.forward import Simulator
 from gait_planner.model.angles import configuration
 
 HORIZON, H0 = 0.2, 0.02

@@ -18,7 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gait_planner.dynamics.free_motion import random_torques, random_velocity
-from gait_planner.dynamics.simulate import SimulationError, Simulator
+from gait_planner.dynamics.forward import SimulationError, Simulator
 from gait_planner.model.angles import configuration
 
 SCENES = ("compass", "walker2d", "walker3d")

@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.dynamics.free_motion import energies, momenta, random_velocity, run_free_motion
-from gait_planner.dynamics.simulate import SimulationError, Simulator
+from gait_planner.dynamics.forward import SimulationError, Simulator
 from gait_planner.model.angles import configuration, joint_angles, spherical_rotation
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import InitialPose

@@ -18,7 +18,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from gait_planner.dynamics.free_motion import pinned_velocity, random_velocity
-from gait_planner.dynamics.simulate import Simulator
+from gait_planner.dynamics.forward import Simulator
 from gait_planner.model.angles import configuration
 
 HORIZON = 0.3  # s

@@ -10,7 +10,7 @@ import pytest
 from gait_planner.gaitlib.index import (LibraryError, LibraryIndex, Manifest, PlanRow,
                                         load_start, read_manifest, save_start, start_path,
                                         write_manifest)
-from gait_planner.ocp.library import StoredPlan
+from gait_planner.ocp.warm_starts import StoredPlan
 
 MANIFEST = Manifest(scene="walker2d", gait="", grid="step_length=0.5/0.6", request={})
 

@@ -524,7 +524,7 @@ def test_scenes_named_alike_never_share_a_problem_or_a_library_entry(tmp_path):
     """The planner's problems and the plan library are keyed by the scene's text, so a copy
     named like a shipped scene but changed gets its own (the compiled cache is keyed by the
     Functions themselves, `ocp.compile`)."""
-    from gait_planner.ocp.library import PlanLibrary
+    from gait_planner.ocp.warm_starts import WarmStartStore
     from gait_planner.ocp.settings import settings_for
     from gait_planner.ocp.solve import _key
 
@@ -535,7 +535,7 @@ def test_scenes_named_alike_never_share_a_problem_or_a_library_entry(tmp_path):
     assert copy_.name == shipped.name
     settings = settings_for(shipped)
     assert _key(copy_, settings) != _key(shipped, settings)
-    assert PlanLibrary.key(copy_.source, settings, 1, 1) != PlanLibrary.key(
+    assert WarmStartStore.key(copy_.source, settings, 1, 1) != WarmStartStore.key(
         shipped.source, settings, 1, 1)
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from gait_planner.dynamics.simulate import Simulator
+from gait_planner.dynamics.forward import Simulator
 from gait_planner.model.angles import configuration
 from gait_planner.model.scene import InitialPose
 from gait_planner.ocp.settings import settings_for

@@ -13,7 +13,7 @@ import pytest
 
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp import solve
-from gait_planner.ocp.library import PlanLibrary
+from gait_planner.ocp.warm_starts import WarmStartStore
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.verify import verify_result
@@ -46,8 +46,8 @@ def test_cold_and_warm_plans_pass_the_checker(walker2d, compiled):
 
 def test_a_warm_start_from_the_plan_library_passes_the_checker(walker2d, tmp_path):
     settings = settings_for(walker2d, compiled=True)
-    assert Planner(library=PlanLibrary(tmp_path)).plan(walker2d, settings).success
-    fresh = Planner(library=PlanLibrary(tmp_path)).plan(
+    assert Planner(library=WarmStartStore(tmp_path)).plan(walker2d, settings).success
+    fresh = Planner(library=WarmStartStore(tmp_path)).plan(
         walker2d, settings_for(walker2d, compiled=True, friction_coefficient=0.6))
     assert "(the plan library" in fresh.settings["initial_guess"]
     _passes(fresh)

@@ -25,7 +25,7 @@ from gait_planner_msgs.srv import PlanGait
 
 pytestmark = pytest.mark.timeout(300)
 
-NO_FEET = "has no foot with two contact points"  # gait_planner.walk.simulate's reason
+NO_FEET = "has no foot with two contact points"  # gait_planner.walk.walk_plan's reason
 
 
 # ---------------------------------------------------------------------- the parameter

@@ -1,7 +1,7 @@
 """The continuous-dynamics certificate (gait_planner.verify.continuous) against the planner's
 own variational integrator.
 
-A motion simulated in director coordinates (gait_planner.dynamics.simulate) with gravity and
+A motion simulated in director coordinates (gait_planner.dynamics.forward) with gravity and
 smooth joint torques, its node torques published as efforts with the planner's conjugate
 torques, must be a physical motion of the Pinocchio model built from the same scene file:
 torque error and base residual small and shrinking like h^2 (a wrong mass, inertia, joint
@@ -21,7 +21,7 @@ import pinocchio as pin
 import pytest
 
 from gait_planner.dynamics.free_motion import pinned_velocity, random_torques, random_velocity
-from gait_planner.dynamics.simulate import Simulator
+from gait_planner.dynamics.forward import Simulator
 from gait_planner.model.angles import (configuration, conjugate_torques, joint_angles,
                                        spherical_rotation)
 from gait_planner.verify.continuous import (LIMITS, build_model, cardan_efforts, certificate,

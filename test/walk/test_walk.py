@@ -32,7 +32,7 @@ def walker2d_plan(tmp_path_factory) -> Path:
 
 def _walks_ten_and_the_self_test_does_worse(plan: Path, share: float):
     from gait_planner.cli.walk import self_test
-    from gait_planner.walk.simulate import walk
+    from gait_planner.walk.walk_plan import walk
 
     full = walk(plan, 10)
     assert full["half_cycles_walked"] == 10 and full["stopped"] == "completed", full["stopped"]
@@ -107,7 +107,7 @@ def test_a_scene_without_feet_is_refused(tmp_path, capsys):
 
 
 def test_a_bad_controller_config_names_the_key(tmp_path):
-    from gait_planner.walk.simulate import CONFIG, load_config
+    from gait_planner.walk.walk_plan import CONFIG, load_config
 
     assert load_config()["joints"]["kp"] > 0
     bad = tmp_path / "walk.yaml"
@@ -123,7 +123,7 @@ def test_a_recording_of_ten_half_cycles_is_walked_as_recorded(tmp_path):
 
     from gait_planner.io.mcap_reader import read_plan_mcap
     from gait_planner.walk.reference import Reference
-    from gait_planner.walk.simulate import walk
+    from gait_planner.walk.walk_plan import walk
 
     out = tmp_path / "w2x10.mcap"
     exe = Path(sys.executable).with_name("gait-planner")
@@ -144,7 +144,7 @@ def test_a_recording_of_ten_half_cycles_is_walked_as_recorded(tmp_path):
 
 
 def test_walk_takes_a_controller_file_and_names_what_is_wrong(walker2d_plan, tmp_path, capsys):
-    from gait_planner.walk.simulate import CONFIG
+    from gait_planner.walk.walk_plan import CONFIG
 
     mine = tmp_path / "mine.yaml"
     mine.write_text(CONFIG.read_text().replace("tilt: 35.0", "tilt: 0.5"))

@@ -32,7 +32,7 @@ from gait_planner.request import PlanRequest
 mujoco = pytest.importorskip("mujoco")
 
 from gait_planner.walk.robot_urdf import RobotUrdf  # noqa: E402
-from gait_planner.walk.simulate import walk  # noqa: E402
+from gait_planner.walk.walk_plan import walk  # noqa: E402
 
 pytestmark = pytest.mark.slow
 

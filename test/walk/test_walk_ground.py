@@ -32,7 +32,7 @@ def _plan(folder: Path, *options: str) -> Path:
 @pytest.mark.slow
 @pytest.mark.parametrize("options", [("--slope", "-10"), ("--step-height", "0.155")])
 def test_the_first_half_cycle_on_the_planned_ground_follows_the_plan(tmp_path, options):
-    from gait_planner.walk.simulate import walk
+    from gait_planner.walk.walk_plan import walk
 
     summary = walk(_plan(tmp_path, *options), 2)
     assert summary["half_cycles_walked"] >= 1, summary["stopped"]

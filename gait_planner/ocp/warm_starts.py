@@ -1,7 +1,7 @@
 """Solved plans kept on disk, so that a fresh process re-plans warm instead of cold.
 
 `Planner` keeps the optimum of every plan (primal and dual) to warm-start the next request of
-the same problem. `PlanLibrary` keeps them beyond the process: in
+the same problem. `WarmStartStore` keeps them beyond the process: in
 `<cache folder>/plans/<key>.npz` (`gait_planner.ocp.compile.cache_folder`), one file per
 problem, the key the SHA-256 of what the stored vectors mean: the scene file, the settings
 that shape the problem (`ocp.transcription.shape_of`: the request's step length, friction,
@@ -77,7 +77,7 @@ def _code_digest() -> str:
     return digest.hexdigest()
 
 
-class PlanLibrary:
+class WarmStartStore:
     """The plans of earlier processes, by problem (module docstring)."""
 
     def __init__(self, folder: Path | None = None):

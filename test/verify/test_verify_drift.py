@@ -1,4 +1,4 @@
-"""The plan against physics (gait_planner.verify.simulation): a plan's torques and contact
+"""The plan against physics (gait_planner.verify.drift): a plan's torques and contact
 schedule on the continuous equations of motion (Pinocchio, DOP853).
 
 A motion the continuous simulation itself produced is reproduced to integration tolerance;
@@ -23,7 +23,7 @@ from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.verify.constrained import ConstrainedModel
 from gait_planner.verify.mechanics import parse_scene
-from gait_planner.verify.simulation import PlanSimulation, physics_error
+from gait_planner.verify.drift import PlanSimulation, physics_error
 
 
 @functools.cache

@@ -1,4 +1,4 @@
-"""The plan library (`gait_planner.ocp.library`): a fresh planner re-plans warm from the plans
+"""The plan library (`gait_planner.ocp.warm_starts`): a fresh planner re-plans warm from the plans
 an earlier one kept on disk, to the same optimum; a damaged or foreign file is ignored."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from gait_planner.model.loader import load_scene
-from gait_planner.ocp.library import PlanLibrary, StoredPlan
+from gait_planner.ocp.warm_starts import WarmStartStore, StoredPlan
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
 
@@ -19,12 +19,12 @@ def walker2d():
 @pytest.mark.slow
 def test_a_fresh_planner_replans_warm_from_the_library_to_the_same_optimum(walker2d, tmp_path):
     settings = settings_for(walker2d)
-    cold = Planner(library=PlanLibrary(tmp_path)).plan(walker2d, settings, warm_start=False)
+    cold = Planner(library=WarmStartStore(tmp_path)).plan(walker2d, settings, warm_start=False)
     assert cold.success, cold.message
     files = list((tmp_path / "plans").glob("*.npz"))
     assert len(files) == 1
 
-    fresh = Planner(library=PlanLibrary(tmp_path))
+    fresh = Planner(library=WarmStartStore(tmp_path))
     warm = fresh.plan(walker2d, settings)
     assert warm.success, warm.message
     assert "(the plan library" in warm.settings["initial_guess"]
@@ -37,8 +37,8 @@ def test_a_fresh_planner_replans_warm_from_the_library_to_the_same_optimum(walke
 
 @pytest.mark.slow
 def test_a_request_with_other_settings_does_not_read_the_file(walker2d, tmp_path):
-    Planner(library=PlanLibrary(tmp_path)).plan(walker2d, settings_for(walker2d), warm_start=False)
-    other = Planner(library=PlanLibrary(tmp_path)).plan(
+    Planner(library=WarmStartStore(tmp_path)).plan(walker2d, settings_for(walker2d), warm_start=False)
+    other = Planner(library=WarmStartStore(tmp_path)).plan(
         walker2d, settings_for(walker2d, friction_coefficient=0.6, intervals_per_phase=6))
     assert other.settings["initial_guess"].startswith("kinematic guess")
     assert len(list((tmp_path / "plans").glob("*.npz"))) == 2
@@ -46,7 +46,7 @@ def test_a_request_with_other_settings_does_not_read_the_file(walker2d, tmp_path
 
 @pytest.mark.slow
 def test_a_damaged_file_is_ignored(walker2d, tmp_path):
-    library = PlanLibrary(tmp_path)
+    library = WarmStartStore(tmp_path)
     Planner(library=library).plan(walker2d, settings_for(walker2d), warm_start=False)
     (path,) = (tmp_path / "plans").glob("*.npz")
     path.write_bytes(path.read_bytes()[:200])
@@ -58,9 +58,9 @@ def test_a_damaged_file_is_ignored(walker2d, tmp_path):
 def test_the_newest_plan_of_a_request_replaces_the_older_and_at_most_max_plans_are_kept(tmp_path):
     import numpy as np
 
-    from gait_planner.ocp.library import MAX_PLANS
+    from gait_planner.ocp.warm_starts import MAX_PLANS
 
-    library = PlanLibrary(tmp_path)
+    library = WarmStartStore(tmp_path)
     plans = [StoredPlan(0.1 * (i % (MAX_PLANS + 4)), 0.8, np.full(3, float(i)), np.zeros(3),
                         np.zeros(2), np.zeros((2, 4))) for i in range(MAX_PLANS + 8)]
     library.save("k", plans)

@@ -39,7 +39,7 @@ reset=...)` is the API.
   matrix, overflow, a step size underflow or more than `MAX_RHS` evaluations) ends its
   segment with a reason in `failure`; nodes after it are not measured (NaN).
 
-Measured (test/verify/test_simulation.py, reset="phase"): where a plan's motion is smooth
+Measured (test/verify/test_verify_drift.py, reset="phase"): where a plan's motion is smooth
 the drift falls faster than h^2 (walker2d's and walker3d's first phase, on the right foot:
 7.0 -> 1.1 deg and 9.0 -> 1.4 deg from 4 to 8 intervals per phase at equal durations).
 Right after a heel or forefoot release the first interval drifts ~2 deg at every grid
