@@ -40,7 +40,7 @@ from gait_planner.gaitlib.index import PLANS, LibraryIndex, Manifest
 from gait_planner.gaitlib.serve import library_start
 from gait_planner.model.loader import find_scene
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import request_settings
+from gait_planner.problem import resolve
 from gait_planner.request import plan_request
 from gait_planner.verify import verify_recording
 from results_io import figure_path, write_results
@@ -98,19 +98,20 @@ def serve_rows(folder: Path, grid_text: str) -> list[dict]:
     centres = [{f: 0.5 * (axis[i] + axis[i + 1]) for (f, axis), i in zip(grid.axes, index)}
                for index in itertools.product(*(range(n - 1) for n in grid.shape))]
     planner = Planner()
-    first = plan_request(scene="walker3d", compiled=True, **grid.values(grid.indices()[0]))
-    scene, s = request_settings(first, find_scene)
+    first = resolve(plan_request(scene="walker3d", compiled=True,
+                                 **grid.values(grid.indices()[0])), find_scene)
+    scene, s = first.scene, first.settings
     planner.plan(scene, s, warm_start=False)  # built, one plan stored: the node after a request
     base = planner.stored_plans(scene, s)
     out = []
     for values in centres:
-        request = plan_request(scene="walker3d", compiled=True, **values)
-        scene, s = request_settings(request, find_scene)
+        problem = resolve(plan_request(scene="walker3d", compiled=True, **values), find_scene)
+        scene, s = problem.scene, problem.settings
         row = {"kind": "serve", "scene": "walker3d", "serve_grid": grid_text, **values}
         for how in ("library", "nearest", "cold"):
             planner._build(scene, s).stored[:] = list(base)  # as the node after one request
             start = time.perf_counter()
-            note = library_start(planner, folder, request) if how == "library" else ""
+            note = library_start(planner, folder, problem) if how == "library" else ""
             started = time.perf_counter()
             result = planner.plan(scene, s, warm_start=how != "cold")
             row[f"{how}_s"] = time.perf_counter() - start

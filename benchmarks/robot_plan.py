@@ -113,7 +113,8 @@ def main() -> None:
 
     from gait_planner.model.loader import find_scene, load_scene
     from gait_planner.ocp.solve import Planner
-    from gait_planner.pipeline import plan_and_record, request_settings
+    from gait_planner.pipeline import plan_and_record
+    from gait_planner.problem import resolve
     from gait_planner.request import PlanRequest
 
     row: dict = {"name": args.name, "compiled": args.compiled}
@@ -151,14 +152,15 @@ def main() -> None:
                           max_solve_time=args.time_limit)
     stages: list[str] = []
     planner = Planner(stage=stages.append)
-    scene, settings = request_settings(request, lookup)
+    problem = resolve(request, lookup)
+    scene, settings = problem.scene, problem.settings
     start = time.perf_counter()
     row["derivatives"] = planner.prepare(scene, settings)
     row["build_s"] = time.perf_counter() - start
     row["ready_s"] = time.perf_counter() - START
     row.update(planner.problem_size(scene, settings))
     start = time.perf_counter()
-    outcome = plan_and_record(planner, request, args.out, rrd=False, scenes=lookup)
+    outcome = plan_and_record(planner, problem, args.out, rrd=False)
     row["plan_s"] = time.perf_counter() - start
     result = outcome.result
     row["compiling"] = [s for s in stages if "compiling" in s]

@@ -22,7 +22,8 @@ from pathlib import Path
 
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import SceneLookup, plan_request, summary
+from gait_planner.pipeline import plan_problem, summary
+from gait_planner.problem import SceneLookup, resolve
 from gait_planner.request import PlanRequest, RequestError
 from gait_planner.result import PlanResult
 
@@ -46,7 +47,7 @@ def plan(request: PlanRequest | str, planner: Planner | None = None,
         _planner = planner = _planner or Planner()
     if isinstance(request, str):
         request = PlanRequest(request, compiled=True)
-    return plan_request(planner, request, scenes)
+    return plan_problem(planner, resolve(request, scenes))
 
 
 def check(result: PlanResult):

@@ -1,14 +1,14 @@
-"""One plan request from start to files: validate, plan, record (MCAP + rerun .rrd).
+"""One problem from plan to files: plan, certify, refine, record (MCAP + rerun .rrd).
 
-Shared by the command line and the ROS node; knows nothing of ROS. A request that cannot
-be planned raises `RequestError` with a sentence naming what is wrong; a plan that does not
+Shared by the command line, the ROS node, the gait libraries and the Python API; knows
+nothing of ROS. Every function takes a `Problem`: the request resolved once and checked
+(`gait_planner.problem.resolve`, which refuses with `RequestError`); a plan that does not
 converge is a `PlanResult` with success False (nothing is recorded for it).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import re
 import math
 import time
 from dataclasses import dataclass
@@ -17,18 +17,14 @@ from typing import Callable
 
 import numpy as np
 
-from gait_planner.model.loader import SceneError, available_scenes, load_scene, with_gait
-from gait_planner.ocp.refine import refined_settings
-from gait_planner.ocp.request_ranges import RangeError, check_request
 from gait_planner.model.scene import Scene
-from gait_planner.ocp.settings import GaitSettings, SettingsError, free_step_range, settings_for
+from gait_planner.ocp.refine import refined_settings
+from gait_planner.ocp.settings import GaitSettings, free_step_range
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.walk_on import walk_on
-from gait_planner.request import PlanRequest, RequestError, checked
+from gait_planner.problem import Problem
+from gait_planner.request import PlanRequest
 from gait_planner.result import PlanResult
-
-SceneLookup = Callable[[str], Scene]  # a request's scene field -> the scene
-_OUTPUT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,127}")
 
 
 @dataclass(frozen=True)
@@ -39,16 +35,11 @@ class Outcome:
 
 
 def output_stem(request: PlanRequest, scene_name: str) -> str:
-    """The file stem for a request: its output_name, checked to be a bare file name
-    (no folders: files stay in the output folder), or scene + time (`plan_and_record`
-    adds _2, _3, ... if that name is taken: `unused_stem`)."""
+    """The file stem for a checked request: its output_name (a bare file name,
+    `request.checked`), or scene + time (`plan_and_record` adds _2, _3, ... if that name is
+    taken: `unused_stem`)."""
     if request.output_name:
-        name = request.output_name.removesuffix(".mcap")
-        if not _OUTPUT_NAME.fullmatch(name) or ".." in name:
-            raise RequestError(
-                f"output_name must be a bare file name of letters, digits, '_', '-', '.' "
-                f"(no folders), got {request.output_name!r}")
-        return name
+        return request.output_name.removesuffix(".mcap")
     return f"{scene_name}_{time.strftime('%Y%m%d-%H%M%S')}"
 
 
@@ -62,49 +53,13 @@ def unused_stem(folder: Path, stem: str) -> str:
     return candidate
 
 
-def request_settings(request: PlanRequest, scenes: SceneLookup = load_scene,
-                     ) -> tuple[Scene, GaitSettings]:
-    """The scene and settings of `request`; RequestError says what cannot be planned (the
-    rule of every field: `gait_planner.request.checked`; the scene's ranges:
-    `gait_planner.ocp.request_ranges`). scenes: finds the scene of request.scene
-    (`load_scene`: bare names only; the command line's `find_scene` also takes paths, the
-    node's looks in its scene_dirs too)."""
-    request = checked(request)
-    try:
-        try:
-            scene = with_gait(scenes(request.scene), request.gait)
-        except OSError as err:  # a name the file system refuses, e.g. one too long
-            raise SceneError(f"scene {request.scene!r} cannot be looked up ({err.strerror}); "
-                             f"available scenes: {', '.join(available_scenes())}") from None
-        check_request(scene, step_length=request.step_length,
-                      friction_coefficient=request.friction_coefficient,
-                      intervals_per_phase=request.intervals_per_phase,
-                      max_solve_time=request.max_solve_time)
-        settings = settings_for(
-            scene, step_length=request.step_length, cost=request.cost or None,
-            friction_coefficient=request.friction_coefficient,
-            intervals_per_phase=request.intervals_per_phase,
-            max_solve_time=request.max_solve_time,
-            **({"compiled": True} if request.compiled else {}),
-            **({"posture": request.posture} if request.posture else {}),
-            **({"speed": request.speed} if request.speed else {}),
-            **({"step_length_free": True} if request.speed and not request.step_length else {}),
-            **({"slope": request.slope} if request.slope else {}),
-            **({"step_height": request.step_height} if request.step_height else {}))
-    except (SceneError, SettingsError, RangeError) as err:
-        raise RequestError(str(err)) from None
-    return scene, settings
-
-
-def prepare(planner: Planner, request: PlanRequest, rrd: bool = True,
-            scenes: SceneLookup = load_scene) -> str:
-    """Build the problem of `request` in `planner` now (`Planner.prepare`), so that a
-    request like it pays no build, and load what certifies and records a plan, which
-    `plan_and_record` would load on first use (scenes: as in `request_settings`):
-    Pinocchio, the MCAP writer and its message
+def prepare(planner: Planner, problem: Problem, rrd: bool = True) -> str:
+    """Build `problem` in `planner` now (`Planner.prepare`), so that a request like it pays
+    no build, and load what certifies and records a plan, which `plan_and_record` would
+    load on first use: Pinocchio, the MCAP writer and its message
     encoder (~0.4 s) and, with rrd, rerun (~0.45 s; the node leaves it to its .rrd helper,
     `viz.rrd_recorder`). Returns how the problem's derivatives are evaluated."""
-    how = planner.prepare(*request_settings(request, scenes))
+    how = planner.prepare(problem.scene, problem.settings)
     from gait_planner.io.mcap_writer import recording_encoder
 
     recording_encoder()
@@ -115,14 +70,10 @@ def prepare(planner: Planner, request: PlanRequest, rrd: bool = True,
     return how
 
 
-def plan_request(planner: Planner, request: PlanRequest,
-                 scenes: SceneLookup = load_scene) -> PlanResult:
-    """The plan of `request`, nothing written (`request_settings`, then `plan_joined`);
-    scenes: as in `request_settings`."""
-    request = checked(request)
-    scene, settings = request_settings(request, scenes)
-    return plan_joined(planner, scene, settings, steps=request.steps,
-                       warm_start=not request.cold_start)
+def plan_problem(planner: Planner, problem: Problem) -> PlanResult:
+    """The plan of `problem`, nothing written (`plan_joined` with its steps and start)."""
+    return plan_joined(planner, problem.scene, problem.settings, steps=problem.steps,
+                       warm_start=problem.warm_start)
 
 
 def plan_joined(planner: Planner, scene: Scene, settings: GaitSettings, *, steps: int = 1,
@@ -143,21 +94,17 @@ def plan_joined(planner: Planner, scene: Scene, settings: GaitSettings, *, steps
                                                  **certificate_metadata(cert)})
 
 
-def plan_and_record(planner: Planner, request: PlanRequest, output_dir: str | Path, *,
-                    rrd: bool = True, stage: Callable[[str], None] | None = None,
-                    scenes: SceneLookup = load_scene) -> Outcome:
-    """Plan `request` (`plan_request`); on success write <output_dir>/<stem>.mcap (and .rrd).
+def plan_and_record(planner: Planner, problem: Problem, output_dir: str | Path, *,
+                    rrd: bool = True, stage: Callable[[str], None] | None = None) -> Outcome:
+    """Plan `problem` (`plan_problem`); on success write <output_dir>/<stem>.mcap (and .rrd).
 
     stage: called with "recording" once the plan is found, before anything is written (an
-    exception it raises ends the request with nothing recorded); scenes: as in
-    `request_settings`."""
-    request = checked(request)  # 0 = the default, as for the node's requests
-    scene, settings = request_settings(request, scenes)
-    stem = output_stem(request, scene.name)
+    exception it raises ends the request with nothing recorded)."""
+    request = problem.request
+    stem = output_stem(request, problem.scene.name)
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    result = plan_joined(planner, scene, settings, steps=request.steps,
-                         warm_start=not request.cold_start)
+    result = plan_problem(planner, problem)
     if not result.success:
         return Outcome(result, None, None)
     if stage is not None:

@@ -5,7 +5,8 @@ The fields are those of ``msg_defs/srv/PlanGait.srv``. 0 or an empty string mean
 default: the scene's (step_length, cost, friction_coefficient, intervals_per_phase,
 posture), the node's (scene, max_solve_time; ``plan``: GaitSettings' time limit), 1
 (steps), free phase durations (speed) or level ground (slope, step_height, which may be
-negative: downhill, stairs down). Otherwise a negative, NaN or infinite number is refused
+negative: downhill, stairs down); output_name is a bare file name. Otherwise a negative,
+NaN or infinite number is refused
 with `RequestError` naming the field, its value and what is allowed, e.g. "step_length
 must be > 0 m, or 0 for the scene's default, got -0.5". Numbers that pass this rule still
 meet the scene's ranges (`gait_planner.ocp.request_ranges`; a speed: the half-cycle
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from dataclasses import dataclass
 from numbers import Integral, Real
 from typing import Any
@@ -28,6 +30,7 @@ FIELDS = ("scene", "step_length", "cost", "friction_coefficient", "intervals_per
           "max_solve_time", "output_name", "cold_start", "steps", "posture", "speed", "slope",
           "step_height", "gait")
 # numeric field -> (unit, what 0 stands for)
+_OUTPUT_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,127}")  # a bare file name
 _NUMBERS = {
     "step_length": (" m", "the scene's default"),
     "friction_coefficient": ("", "the scene's default"),
@@ -105,6 +108,11 @@ def checked(request: PlanRequest) -> PlanRequest:
                       f"a whole number of half cycles from 1 to {MAX_STEPS}, or 0 for 1")
     if not isinstance(request.gait, str):
         raise _refuse("gait", request.gait, "a gait's name, or empty for the scene's walk")
+    name = request.output_name or ""
+    if not isinstance(name, str) or (name and (not _OUTPUT_NAME.fullmatch(
+            name.removesuffix(".mcap")) or ".." in name)):
+        raise RequestError(f"output_name must be a bare file name of letters, digits, '_', "
+                           f"'-', '.' (no folders), got {request.output_name!r}")
     return dataclasses.replace(request, **numbers, steps=steps, cost=request.cost or None)
 
 
@@ -114,7 +122,8 @@ def plan_request(fields: Any = None, *, default_scene: str = "",
     """The checked `PlanRequest` of a request's fields (`FIELDS`), read as attributes of
     `fields` (a PlanGait request, an action goal, parsed options named after the fields) or
     given as keywords; missing, 0 and empty fields take the defaults (`default_scene` and
-    `default_max_solve_time`: the node's)."""
+    `default_max_solve_time`: the node's). The rule of the fields alone (a client checks a
+    request before it sends it); `gait_planner.problem.resolve` checks it with the scene."""
     given = {name: getattr(fields, name) for name in FIELDS if hasattr(fields, name)}
     given.update(values)
     unknown = sorted(set(given) - set(FIELDS))

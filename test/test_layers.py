@@ -17,7 +17,8 @@ RANK = {
     "result": 2,  # the plain result every adapter converts
     "dynamics": 3,  # the variational integrator
     "ocp": 4,  # the transcription and the planner
-    "io": 5, "collocation": 5,  # formats and messages; the benchmarks' baseline method
+    "io": 5, "collocation": 5, "problem": 5,  # formats and messages; the benchmarks'
+    # baseline method; a request resolved once
     "verify": 6,  # the independent verifier
     "walk": 7,  # MuJoCo
     "viz": 8,  # pictures: rerun, figures

@@ -13,12 +13,14 @@ import pytest
 CHILD = """
 import sys
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import PlanRequest, prepare
+from gait_planner.pipeline import prepare
+from gait_planner.problem import resolve
+from gait_planner.request import PlanRequest
 recording = ["gait_planner.io.mcap_writer", "gait_planner.viz.rerun_view", "pinocchio",
              "gait_planner.verify.continuous", "gait_planner.io.messages"]
 before = [m for m in recording if m in sys.modules]
 planner = Planner()
-prepare(planner, PlanRequest(scene="compass", compiled=False), rrd={rrd})
+prepare(planner, resolve(PlanRequest(scene="compass", compiled=False)), rrd={rrd})
 print(before, [m for m in recording if m not in sys.modules], len(planner._built))
 """
 

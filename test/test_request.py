@@ -13,8 +13,9 @@ import pytest
 from gait_planner.cli.ros_commands import SPEED_HELP
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for, speed_range
-from gait_planner.pipeline import plan_and_record, request_settings
+from gait_planner.pipeline import plan_and_record
 from gait_planner.request import FIELDS, MAX_STEPS, PlanRequest, RequestError, plan_request
+from gait_planner.problem import resolve
 
 SCENE_DEFAULT = "the scene's default"
 REFUSED = [
@@ -51,7 +52,7 @@ def test_a_bad_number_is_refused_the_same_way_everywhere(name, value, message):
         plan_request(scene="compass", **{name: value})
     assert str(from_fields.value) == message
     with pytest.raises(RequestError) as from_pipeline:  # the path of `gait-planner plan`
-        request_settings(PlanRequest(scene="compass", **{name: value}))
+        resolve(PlanRequest(scene="compass", **{name: value}))
     assert str(from_pipeline.value) == message
 
 
@@ -65,11 +66,13 @@ def test_zero_and_empty_fields_are_the_defaults():
                            compiled=True)
     assert request == PlanRequest(scene="walker2d", max_solve_time=60.0, compiled=True)
     # `plan` (no node): 0 is the scene's value and GaitSettings' time limit
-    scene, settings = request_settings(PlanRequest(scene="compass", step_length=0.0,
+    problem = resolve(PlanRequest(scene="compass", step_length=0.0,
                                                    friction_coefficient=0,
                                                    intervals_per_phase=0, max_solve_time=0.0,
                                                    steps=0))
-    default_scene, default = request_settings(PlanRequest(scene="compass"))
+    scene, settings = problem.scene, problem.settings
+    problem = resolve(PlanRequest(scene="compass"))
+    default_scene, default = problem.scene, problem.settings
     assert settings == default and scene == default_scene
 
 
@@ -89,7 +92,7 @@ def test_given_values_pass_unchanged_and_unknown_fields_are_named():
 
 def test_the_scene_ranges_still_apply_after_the_sign_rule():
     with pytest.raises(RequestError, match=r"step_length = 3.0 is outside the range"):
-        request_settings(plan_request(scene="compass", step_length=3.0))
+        resolve(plan_request(scene="compass", step_length=3.0))
 
 
 class _NoPlanner:
@@ -110,13 +113,13 @@ def test_an_unreachable_speed_is_refused_with_its_range_before_anything_is_built
         speed, tmp_path):
     """walker2d's 0.6338 m step over a half cycle of 0.39 s times sigma in [0.5, 1.5]."""
     with pytest.raises(RequestError) as refused:
-        plan_and_record(_NoPlanner(), plan_request(scene="walker2d", speed=speed,
-                                                   step_length=0.6338), tmp_path)
+        plan_and_record(_NoPlanner(), resolve(plan_request(scene="walker2d", speed=speed,
+                                                           step_length=0.6338)), tmp_path)
     assert str(refused.value) == (f"speed = {speed} m/s is outside the range scene 'walker2d' "
                                   f"allows at step_length 0.6338 m: {WALKER2D_SPEEDS}")
     assert not any(tmp_path.iterdir())
     # the range moves with the step length: 1.0 m/s is a 0.5 m step in 0.5 s
-    _, settings = request_settings(plan_request(scene="walker2d", step_length=0.5, speed=1.0))
+    settings = resolve(plan_request(scene="walker2d", step_length=0.5, speed=1.0)).settings
     assert settings.speed == 1.0 and speed_range(settings) == pytest.approx((0.5 / 0.585,
                                                                              0.5 / 0.195))
 
@@ -127,7 +130,8 @@ def test_a_speed_alone_no_step_in_the_bounds_reaches_is_refused(speed, tmp_path)
     [0.4, 0.9] m over the half cycles sigma allows (0.684 to 4.615 m/s), no faster than
     the walk's speed_max (walker2d: 3.5 m/s)."""
     with pytest.raises(RequestError) as refused:
-        plan_and_record(_NoPlanner(), plan_request(scene="walker2d", speed=speed), tmp_path)
+        plan_and_record(_NoPlanner(), resolve(plan_request(scene="walker2d", speed=speed)),
+                        tmp_path)
     assert str(refused.value) == (
         f"speed = {speed} m/s is outside the range scene 'walker2d' allows at step lengths "
         f"within [0.4, 0.9] m (the step free): [0.6838, 3.5000] m/s (a half cycle of 0.195 to "
@@ -142,14 +146,14 @@ def test_a_walk_faster_than_the_scene_ever_planned_is_refused_before_building(tm
     its joint speed rows most violated), below sigma's 3.333 m/s at a 0.9 m step; its run
     declares none, so a run at 3.5 m/s stays a request to plan."""
     with pytest.raises(RequestError) as refused:
-        plan_and_record(_NoPlanner(), plan_request(scene="walker3d", speed=3.2,
-                                                   step_length=0.9), tmp_path)
+        plan_and_record(_NoPlanner(), resolve(plan_request(scene="walker3d", speed=3.2,
+                                                           step_length=0.9)), tmp_path)
     assert "[1.5385, 3.0000] m/s" in str(refused.value)
     assert "speed_max 3 m/s" in str(refused.value)
     assert not any(tmp_path.iterdir())
-    _, walk = request_settings(plan_request(scene="walker3d", speed=3.0, step_length=0.9))
+    walk = resolve(plan_request(scene="walker3d", speed=3.0, step_length=0.9)).settings
     assert walk.speed == 3.0
-    _, run = request_settings(plan_request(scene="walker3d", speed=3.5, gait="run"))
+    run = resolve(plan_request(scene="walker3d", speed=3.5, gait="run")).settings
     assert run.speed == 3.5 and run.speed_max == 0
 
 
@@ -157,9 +161,9 @@ def test_a_speed_reaches_the_settings_and_0_leaves_the_durations_free():
     message = SimpleNamespace(scene="", step_length=0.0, cost="", friction_coefficient=0.0,
                               intervals_per_phase=0, max_solve_time=0.0, output_name="",
                               cold_start=False, steps=0, posture="", speed=1.2)  # as received
-    _, settings = request_settings(plan_request(message, default_scene="walker2d"))
+    settings = resolve(plan_request(message, default_scene="walker2d")).settings
     assert settings.speed == 1.2
-    _, free = request_settings(plan_request(scene="walker2d", speed=0.0))
+    free = resolve(plan_request(scene="walker2d", speed=0.0)).settings
     assert free.speed == 0.0
 
 

@@ -131,7 +131,9 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
 
     from gait_planner.model.loader import find_scene
     from gait_planner.ocp.solve import Planner
-    from gait_planner.pipeline import PlanRequest, RequestError, plan_and_record, summary
+    from gait_planner.pipeline import plan_and_record, summary
+    from gait_planner.problem import resolve
+    from gait_planner.request import PlanRequest, RequestError
 
     target = Path(out)
     if target.suffix != ".mcap":
@@ -153,9 +155,10 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
                           gait=args.gait)
     print(f"planning {args.scene} ...", file=sys.stderr, flush=True)
     try:  # a compile cache miss is announced by the stage "compiling (...)"
-        outcome = plan_and_record(Planner(progress=_progress, stage=_stage), request,
+        outcome = plan_and_record(Planner(progress=_progress, stage=_stage),
+                                  resolve(request, find_scene),
                                   target.parent if str(target.parent) else ".",
-                                  rrd=not args.no_rrd, scenes=find_scene)
+                                  rrd=not args.no_rrd)
     except RequestError as err:
         raise CliError(str(err)) from None
     data = summary(outcome)

@@ -73,7 +73,7 @@ def _build(args: argparse.Namespace) -> int:
     from gait_planner.gaitlib.build import build_library
     from gait_planner.gaitlib.grid import GridError, parse_grid
     from gait_planner.gaitlib.index import LibraryError, Manifest
-    from gait_planner.pipeline import request_settings
+    from gait_planner.problem import resolve
     from gait_planner.request import RequestError
     from gait_planner.gaitlib.worker import point_request
     from gait_planner.model.loader import find_scene
@@ -84,8 +84,8 @@ def _build(args: argparse.Namespace) -> int:
         grid = parse_grid(args.grid)
         manifest = Manifest(scene=args.scene, gait=args.gait, grid=grid.text(), request=fixed)
         for i in (grid.indices()[0], grid.indices()[-1]):  # refused before Ray starts
-            request_settings(point_request(manifest, grid.name(i), grid.values(i), cold=True),
-                             find_scene)
+            resolve(point_request(manifest, grid.name(i), grid.values(i), cold=True),
+                    find_scene)
         summary = build_library(args.out, manifest, workers=args.workers,
                                 address=args.address, seeds=args.seeds,
                                 continuation=not args.independent)

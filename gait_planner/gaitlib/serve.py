@@ -25,8 +25,7 @@ from gait_planner.model.loader import find_scene
 from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import SceneLookup, request_settings
-from gait_planner.request import PlanRequest
+from gait_planner.problem import Problem, SceneLookup, resolve
 
 _FREE = ("max_solve_time", "compiled")  # settings a library's plans need not share
 
@@ -62,19 +61,21 @@ def interpolated_start(folder: Path, corners: list[tuple[str, float]], step: flo
     return StoredPlan(step, mu, source=f"the gait library {folder.name}: {names}", **mix)
 
 
-def library_start(planner: Planner, folder: str | Path, request: PlanRequest,
+def library_start(planner: Planner, folder: str | Path, problem: Problem,
                   scenes: SceneLookup = find_scene) -> str:
-    """If `request` lies inside the library in `folder`, give `planner` the start
+    """If `problem` lies inside the library in `folder`, give `planner` the start
     interpolated from its neighbours (module docstring) for its next warm plan; returns a
     sentence saying what was done, or why the library does not serve the request.
-    LibraryError if `folder` is not a library."""
+    LibraryError if `folder` is not a library. scenes: finds the library's scene (as
+    `problem.resolve`'s)."""
     folder = Path(folder)
     manifest: Manifest = read_manifest(folder)
     grid = parse_grid(manifest.grid)
-    scene, settings = request_settings(request, scenes)
+    scene, settings = problem.scene, problem.settings
     first = grid.indices()[0]
-    own_scene, own = request_settings(point_request(manifest, grid.name(first),
-                                                    grid.values(first), cold=False), scenes)
+    point = resolve(point_request(manifest, grid.name(first), grid.values(first), cold=False),
+                    scenes)
+    own_scene, own = point.scene, point.settings
     values = {field: float(getattr(settings, field)) for field in AXES}
     same = dataclasses.replace(own, **{f: values[f] for f in grid.fields},
                                **{f: getattr(settings, f) for f in _FREE})

@@ -19,7 +19,8 @@ from gait_planner.gaitlib.index import (PLANS, LibraryIndex, Manifest, PlanRow, 
                                         save_start, start_path)
 from gait_planner.model.loader import find_scene
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import plan_and_record, request_settings
+from gait_planner.pipeline import plan_and_record
+from gait_planner.problem import resolve
 from gait_planner.request import plan_request
 
 _PLANNER: Planner | None = None  # this worker process's planner
@@ -47,12 +48,12 @@ def plan_point(folder: str, manifest: Manifest, name: str, values: dict,
     "ok": written to the index with the point's files; "failed": nothing written)."""
     began = time.perf_counter()
     folder_path = Path(folder)
-    request = point_request(manifest, name, values, cold=start_from is None)
-    scene, settings = request_settings(request, find_scene)
+    problem = resolve(point_request(manifest, name, values, cold=start_from is None), find_scene)
+    scene, settings = problem.scene, problem.settings
     work = planner()
     if start_from is not None:
         work.remember(scene, settings, load_start(start_path(folder_path, start_from)))
-    outcome = plan_and_record(work, request, folder_path / PLANS, rrd=False, scenes=find_scene)
+    outcome = plan_and_record(work, problem, folder_path / PLANS, rrd=False)
     result = outcome.result
     row = dict(name=name, request=values, iterations=int(result.stats.iterations),
                solve_time=time.perf_counter() - began, start=start_from or "cold", attempts=attempt)

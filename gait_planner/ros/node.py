@@ -54,6 +54,7 @@ from gait_planner.ocp.warm_starts import WarmStartStore
 from gait_planner.ocp.solve import STOPPED, Planner
 from gait_planner.result import PlanStatus
 from gait_planner.pipeline import plan_and_record, prepare
+from gait_planner.problem import resolve
 from gait_planner.request import PlanRequest, RequestError, plan_request
 from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
@@ -149,7 +150,7 @@ class GaitPlannerNode(Node):
         request = PlanRequest(scene=self._param("default_scene"),
                               compiled=self._param("compile_derivatives"))
         try:
-            how = prepare(self._planner, request, rrd=False, scenes=self._scenes)
+            how = prepare(self._planner, resolve(request, self._scenes), rrd=False)
         except (RequestError, ValueError, RuntimeError) as err:
             self.get_logger().warning(f"could not prepare {request.scene}: {err}")
             return
@@ -208,16 +209,15 @@ class GaitPlannerNode(Node):
         thread."""
         walk_steps = int(self._param("walk_steps"))  # as set when the request arrived
         try:
-            planned = plan_request(  # 0 or empty fields: the node's or the scene's defaults
+            problem = resolve(plan_request(  # 0 or empty fields: the node's or the scene's
                 request, default_scene=self._param("default_scene"),
                 default_max_solve_time=self._param("max_solve_time"),
-                compiled=self._param("compile_derivatives"))
+                compiled=self._param("compile_derivatives")), self._scenes)
             library = self._param("gait_library")
-            note = "" if not library or planned.cold_start else library_start(
-                self._planner, Path(library).expanduser(), planned, self._scenes)
-            outcome = plan_and_record(self._planner, planned, self._param("output_dir"),
-                                      rrd=False, stage=self._worker.enter,
-                                      scenes=self._scenes)
+            note = "" if not library or not problem.warm_start else library_start(
+                self._planner, Path(library).expanduser(), problem, self._scenes)
+            outcome = plan_and_record(self._planner, problem, self._param("output_dir"),
+                                      rrd=False, stage=self._worker.enter)
         except Stopped:
             answer.success, answer.message = False, self._stopped_message()
             self.get_logger().info(f"{answer.message}: nothing recorded")

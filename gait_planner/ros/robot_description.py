@@ -1,6 +1,6 @@
 """The robot on ``/robot_description``: its URDF drafted into a scene the node plans for.
 
-`RobotScenes` is the node's scene lookup (`gait_planner.pipeline.SceneLookup`): the scene
+`RobotScenes` is the node's scene lookup (`gait_planner.problem.SceneLookup`): the scene
 ``robot_description`` — or the name the draft declares — is the scene drafted from the last
 URDF received (`gait_planner.model.urdf_import.draft_scene`), every other name a scene file
 (`gait_planner.model.loader.load_scene` in the node's scene_dirs). The node feeds it the

@@ -18,9 +18,9 @@ from gait_planner.gaitlib.serve import cell, library_start
 from gait_planner.gaitlib.worker import plan_point
 from gait_planner.model.loader import find_scene
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import request_settings
 from gait_planner.request import plan_request
 from gait_planner.verify import verify_result
+from gait_planner.problem import resolve
 
 GRID = "step_length=0.55/0.65,friction_coefficient=0.6/1.0"
 
@@ -64,9 +64,10 @@ def test_a_request_inside_the_library_starts_from_its_neighbours(library):
     planner = Planner()
     request = plan_request(scene="walker2d", step_length=0.6, friction_coefficient=0.7,
                            compiled=True)
-    note = library_start(planner, library, request)
+    note = library_start(planner, library, resolve(request, find_scene))
     assert note.startswith(f"started from the gait library {library.name}: p00-00 x 0.38")
-    scene, s = request_settings(request, find_scene)
+    problem = resolve(request, find_scene)
+    scene, s = problem.scene, problem.settings
     start = planner.stored_plans(scene, s)[-1]
     assert (start.step, start.mu) == (0.6, 0.7)
     result = planner.plan(scene, s)
@@ -88,9 +89,9 @@ def test_a_request_inside_the_library_starts_from_its_neighbours(library):
 def test_a_request_the_library_cannot_serve_is_planned_as_usual(library, fields, words):
     planner = Planner()
     request = plan_request(scene="walker2d", compiled=True, **fields)
-    note = library_start(planner, library, request)
+    note = library_start(planner, library, resolve(request, find_scene))
     assert note.startswith(f"not from the gait library {library.name}") and words in note
-    assert not planner.stored_plans(*request_settings(request, find_scene))
+    assert not planner.stored_plans(*scene_settings(request, find_scene))
 
 
 def test_a_corner_without_a_plan_is_named(library, tmp_path):
@@ -100,7 +101,7 @@ def test_a_corner_without_a_plan_is_named(library, tmp_path):
         db.execute("DELETE FROM plans WHERE name = 'p01-01'")
     request = plan_request(scene="walker2d", step_length=0.6, friction_coefficient=0.7)
     assert "its points p01-01 around the request have no plan" in library_start(
-        Planner(), copy, request)
+        Planner(), copy, resolve(request, find_scene))
 
 
 

@@ -21,9 +21,10 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.ocp.mirror import configuration_mirror
 from gait_planner.ocp.settings import ground_of, leg_length, settings_for
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import plan_certified, request_settings
+from gait_planner.pipeline import plan_certified
 from gait_planner.request import PlanRequest, RequestError
 from gait_planner.verify import verify_result
+from gait_planner.problem import resolve
 
 
 _OPEN = pytest.mark.xfail(reason="walker3d's cold stairs at 0.15 m miss since the ground became "
@@ -56,7 +57,7 @@ def test_a_ground_the_scene_cannot_plan_on_is_refused_with_its_range(fields, wor
     """Refused by `request_settings`, which builds nothing (the node answers such a
     request without a solver)."""
     with pytest.raises(RequestError) as refused:
-        request_settings(PlanRequest(scene="walker3d", **fields))
+        resolve(PlanRequest(scene="walker3d", **fields))
     for word in words:
         assert word in str(refused.value)
 

@@ -10,7 +10,9 @@ import pytest
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.request_ranges import reach
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import PlanRequest, RequestError, plan_and_record
+from gait_planner.pipeline import plan_and_record
+from gait_planner.request import PlanRequest, RequestError
+from gait_planner.problem import resolve
 
 
 def test_reach_is_the_chain_between_the_feet():
@@ -33,7 +35,7 @@ def test_impossible_requests_are_refused_at_once(tmp_path, fields, words):
     planner = Planner()
     start = time.perf_counter()
     with pytest.raises(RequestError) as caught:
-        plan_and_record(planner, PlanRequest(scene="walker3d", **fields), tmp_path)
+        plan_and_record(planner, resolve(PlanRequest(scene="walker3d", **fields)), tmp_path)
     assert time.perf_counter() - start < 5.0  # loading the scene; nothing is built
     assert all(w in str(caught.value) for w in words), str(caught.value)
     assert "walker3d" in str(caught.value)

@@ -39,6 +39,7 @@ from gait_planner.ocp.solve import Planner
 from gait_planner.pipeline import plan_and_record
 from gait_planner.request import PlanRequest
 from gait_planner.verify import verify_recording
+from gait_planner.problem import resolve
 
 
 pytestmark = pytest.mark.slow
@@ -60,9 +61,9 @@ def robot(request, example_robots, tmp_path_factory):
     draft = draft_scene(urdf, package_dirs=[str(example_robots.parents[1])],
                         urdf_file=str(path), **options)
     scene_file = write_draft(draft, folder / f"{name}.yaml")
-    outcome = plan_and_record(Planner(), PlanRequest(scene=str(scene_file), output_name=name,
-                                                     compiled=False),
-                              folder, rrd=True, scenes=find_scene)
+    problem = resolve(PlanRequest(scene=str(scene_file), output_name=name, compiled=False),
+                      find_scene)
+    outcome = plan_and_record(Planner(), problem, folder, rrd=True)
     return urdf, draft, outcome
 
 

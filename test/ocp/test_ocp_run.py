@@ -9,16 +9,18 @@ import functools
 import numpy as np
 import pytest
 
-from gait_planner.pipeline import plan_certified, request_settings
+from gait_planner.pipeline import plan_certified
 from gait_planner.ocp.solve import Planner
 from gait_planner.request import PlanRequest, RequestError
 from gait_planner.verify import verify_result
+from gait_planner.problem import resolve
 
 
 @functools.cache
 def _run(scene: str, speed: float):
-    scene, settings = request_settings(PlanRequest(scene=scene, gait="run", speed=speed,
+    problem = resolve(PlanRequest(scene=scene, gait="run", speed=speed,
                                                    compiled=True))
+    scene, settings = problem.scene, problem.settings
     return plan_certified(Planner(), scene, settings, warm_start=False)
 
 
@@ -46,4 +48,4 @@ def test_walker3d_runs_at_3_m_s_with_a_flight_phase():
 
 def test_a_gait_the_scene_does_not_declare_is_refused_before_anything_is_built():
     with pytest.raises(RequestError, match="scene 'compass' has no gait 'run'; its gaits: walk"):
-        request_settings(PlanRequest(scene="compass", gait="run"))
+        resolve(PlanRequest(scene="compass", gait="run"))

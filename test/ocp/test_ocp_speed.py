@@ -23,6 +23,7 @@ from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.transcription import relaxed_lower_bounds, speed_row
 from gait_planner.pipeline import plan_certified
 from gait_planner.verify import verify_result
+from gait_planner.problem import resolve
 
 
 @functools.cache
@@ -92,10 +93,11 @@ def test_a_speed_alone_takes_the_step_of_least_cost_per_metre():
     planning 2 cm shorter or longer costs more per metre (the golden-section search's
     5 mm tolerance is inside that)."""
     from gait_planner.ocp.settings import free_step_range
-    from gait_planner.pipeline import plan_free_step, request_settings
+    from gait_planner.pipeline import plan_free_step
     from gait_planner.request import PlanRequest
 
-    scene, settings = request_settings(PlanRequest(scene="walker2d", speed=1.2, compiled=True))
+    problem = resolve(PlanRequest(scene="walker2d", speed=1.2, compiled=True))
+    scene, settings = problem.scene, problem.settings
     assert settings.step_length_free and settings.step_length_bounds == (0.4, 0.9)
     planner = Planner()
     result, cert = plan_free_step(planner, scene, settings, warm_start=False)
@@ -114,16 +116,15 @@ def test_a_speed_alone_reaches_what_any_step_within_the_bounds_reaches():
     """0.8 m/s is refused at the default step (1.083 m/s is the slowest there) but planned
     alone (a 0.4 m step reaches 0.684 m/s, up to the walk's speed_max); below that it is
     refused naming the bounds."""
-    from gait_planner.pipeline import request_settings
     from gait_planner.request import PlanRequest, RequestError
 
     with pytest.raises(RequestError, match="at step_length 0.6338 m"):
-        request_settings(PlanRequest(scene="walker2d", speed=0.8, step_length=0.6338))
-    _, settings = request_settings(PlanRequest(scene="walker2d", speed=0.8))
+        resolve(PlanRequest(scene="walker2d", speed=0.8, step_length=0.6338))
+    settings = resolve(PlanRequest(scene="walker2d", speed=0.8)).settings
     # sigma's bounds reach 0.9 / 0.195 = 4.6 m/s; the walk's speed_max ends the range
     assert speed_range(settings) == pytest.approx((0.4 / 0.585, settings.speed_max), rel=1e-12)
     assert settings.speed_max == 3.5
     unlimited = dataclasses.replace(settings, speed_max=0.0)
     assert speed_range(unlimited) == pytest.approx((0.4 / 0.585, 0.9 / 0.195), rel=1e-12)
     with pytest.raises(RequestError, match=r"step lengths within \[0.4, 0.9\] m \(the step free\)"):
-        request_settings(PlanRequest(scene="walker2d", speed=0.5))
+        resolve(PlanRequest(scene="walker2d", speed=0.5))

@@ -81,10 +81,11 @@ from rclpy.signals import SignalHandlerOptions
 
 from gait_planner.io.mcap_reader import read_plan_mcap
 from gait_planner.ocp.solve import STOPPED, _key
-from gait_planner.pipeline import output_stem, request_settings
+from gait_planner.pipeline import output_stem
 from gait_planner.request import MAX_STEPS, RequestError, plan_request
 from gait_planner.ros.action_server import ACTION
 from gait_planner.ros.node import BUSY, SERVICE
+from gait_planner.problem import resolve
 from gait_planner_msgs.action import PlanGait as PlanGaitAction
 from gait_planner_msgs.srv import PlanGait
 
@@ -152,7 +153,7 @@ def predicted_refusal(request) -> str | None:
     order `plan_and_record` makes them), or None if the node will plan it."""
     try:
         plan = node_request(request)
-        scene, _ = request_settings(plan)
+        scene = resolve(plan).scene
         output_stem(plan, scene.name)
     except RequestError as err:
         return str(err)
@@ -161,7 +162,7 @@ def predicted_refusal(request) -> str | None:
 
 def problem_key(request):
     """The node's cache key of the problem a plannable request builds."""
-    return _key(*request_settings(node_request(request)))
+    return _key(*scene_settings(node_request(request)))
 
 
 def solve_limit(request) -> float:

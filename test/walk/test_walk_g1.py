@@ -33,6 +33,7 @@ mujoco = pytest.importorskip("mujoco")
 
 from gait_planner.walk.robot_urdf import RobotUrdf  # noqa: E402
 from gait_planner.walk.walk_plan import walk  # noqa: E402
+from gait_planner.problem import resolve
 
 pytestmark = pytest.mark.slow
 
@@ -56,9 +57,9 @@ def g1_walk(example_robots, tmp_path_factory):
                                for name, limits in WALKING.items()}
     path = folder / "g1.yaml"
     path.write_text(yaml.safe_dump(scene, sort_keys=False))
-    outcome = plan_and_record(Planner(), PlanRequest(scene=str(path), output_name="g1",
-                                                     compiled=True),
-                              folder, rrd=False, scenes=find_scene)
+    problem = resolve(PlanRequest(scene=str(path), output_name="g1", compiled=True),
+                      find_scene)
+    outcome = plan_and_record(Planner(), problem, folder, rrd=False)
     assert outcome.result.success, outcome.result.message
     return walk(outcome.mcap_path, 10, robot=RobotUrdf(text, dirs, draft.locked))
 
