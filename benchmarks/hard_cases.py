@@ -1,6 +1,6 @@
 """Hard requests, each a row: does the plan converge (and pass every check), or fail with a
 clear reason; iterations, time, largest violations. DMOCC on walker3d, and DMOCC and the
-direct collocation baseline (`gait_planner.collocation`) on walker2d.
+direct collocation baseline (`benchmarks.collocation`) on walker2d.
 
     .venv/bin/python benchmarks/hard_cases.py            # walker3d, walker2d (~12 min on 2 cores)
     .venv/bin/python benchmarks/hard_cases.py --quick    # four walker2d DMOCC rows (~20 s)
@@ -90,7 +90,7 @@ def dmocc(scene, settings: GaitSettings, guess: str):
 def methods() -> dict[str, Callable]:
     out = {"dmocc": dmocc}
     try:
-        from gait_planner.collocation import plan_collocation
+        from benchmarks.collocation import plan_collocation
     except ImportError:
         return out
 

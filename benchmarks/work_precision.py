@@ -1,5 +1,5 @@
 """Speed against error: DMOCC (the product) and Hermite-Simpson direct collocation on
-minimal coordinates (`gait_planner.collocation`), the same gait problem at several grids,
+minimal coordinates (`benchmarks.collocation`), the same gait problem at several grids,
 both solved cold from the same kinematic guess with the same IPOPT options, in one process.
 The collocation runs twice: "collocation" with its per-point derivative elements compiled
 to C as DMOCC's are (the baseline), "collocation_interpreted" with CasADi's derivatives of
@@ -36,7 +36,7 @@ import time
 
 import numpy as np
 
-from gait_planner.collocation import plan_collocation
+from benchmarks.collocation import plan_collocation
 from gait_planner.ocp import ipopt
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for

@@ -17,8 +17,7 @@ RANK = {
     "result": 2,  # the plain result every adapter converts
     "dynamics": 3,  # the variational integrator
     "ocp": 4,  # the transcription and the planner
-    "io": 5, "collocation": 5, "problem": 5,  # formats and messages; the benchmarks'
-    # baseline method; a request resolved once
+    "io": 5, "problem": 5,  # formats and messages; a request resolved once
     "verify": 6,  # the independent verifier
     "walk": 7,  # MuJoCo
     "viz": 8,  # pictures: rerun, figures
@@ -106,7 +105,7 @@ def test_the_check_finds_what_it_looks_for():
     """A cycle and an arrow against the layers, made up, are found."""
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": set()}) == [["a", "b", "c"]]
     assert _against({"gait_planner.model.scene": {"gait_planner.ocp.solve"},
-                     "gait_planner.io.urdf": {"gait_planner.collocation.rnea"},
+                     "gait_planner.io.urdf": {"gait_planner.problem"},
                      "gait_planner.ocp.solve": {"gait_planner.model.scene"}}) == [
-        "gait_planner.io.urdf imports gait_planner.collocation.rnea",
+        "gait_planner.io.urdf imports gait_planner.problem",
         "gait_planner.model.scene imports gait_planner.ocp.solve"]

@@ -54,7 +54,7 @@ cleared every corner, and with midpoint rows walker2d's 0.15 m stairs up found n
 120 s (it converges in 14 s without; 2026-11-27).
 
 Used by both transcriptions (`gait_planner.ocp.transcription`,
-`gait_planner.collocation.transcription`), so the two solve the same problem.
+`benchmarks.collocation.transcription`), so the two solve the same problem.
 """
 
 from __future__ import annotations

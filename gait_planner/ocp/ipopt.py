@@ -1,5 +1,5 @@
 """IPOPT calls shared by the DMOCC planner (`ocp.solve`) and the collocation baseline
-(`gait_planner.collocation`): the per-iteration callback (progress, deadline, stop), the
+(`benchmarks.collocation`): the per-iteration callback (progress, deadline, stop), the
 common options, one IPOPT call and an attempt's stages."""
 
 from __future__ import annotations

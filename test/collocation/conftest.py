@@ -6,8 +6,8 @@ from typing import Callable
 
 import pytest
 
-from gait_planner.collocation.minimal import MinimalModel
-from gait_planner.collocation.rnea import SpatialModel
+from benchmarks.collocation.minimal import MinimalModel
+from benchmarks.collocation.rnea import SpatialModel
 
 
 def _cached(model, cls) -> Callable[[str], MinimalModel]:

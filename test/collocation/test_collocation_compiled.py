@@ -18,12 +18,12 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gait_planner.collocation import plan_collocation
-from gait_planner.collocation.elements import mirror_map
-from gait_planner.collocation.guess import initial_guess
-from gait_planner.collocation.mesh import mesh_of
-from gait_planner.collocation.solve import collocation_nlp
-from gait_planner.collocation.transcription import CollocationTranscription
+from benchmarks.collocation import plan_collocation
+from benchmarks.collocation.elements import mirror_map
+from benchmarks.collocation.guess import initial_guess
+from benchmarks.collocation.mesh import mesh_of
+from benchmarks.collocation.solve import collocation_nlp
+from benchmarks.collocation.transcription import CollocationTranscription
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.derivatives import expand_nlp, nlp_derivatives
 from gait_planner.ocp.settings import settings_for

@@ -1,4 +1,4 @@
-"""The minimal-coordinate model of `gait_planner.collocation.minimal`.
+"""The minimal-coordinate model of `benchmarks.collocation.minimal`.
 
 * q(theta) is the product's configuration from angles (`model.angles.configuration`) for
   random root poses and joint angles (|middle angle| < 80 deg), satisfies every constraint,
@@ -19,7 +19,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gait_planner.collocation.minimal import MinimalModel
+from benchmarks.collocation.minimal import MinimalModel
 from gait_planner.model.angles import configuration, joint_angles
 from gait_planner.model.scene import InitialPose, JointType
 from gait_planner.ocp.contacts import body_contacts, stacked_rows

@@ -1,4 +1,4 @@
-"""Plans of `gait_planner.collocation.plan_collocation` (the baseline of issue #10).
+"""Plans of `benchmarks.collocation.plan_collocation` (the baseline of issue #10).
 
 compass and walker2d at the scenes' requests, on the DMOCC nodes (intervals_per_phase None):
 
@@ -28,7 +28,7 @@ import functools
 import numpy as np
 import pytest
 
-from gait_planner.collocation import plan_collocation
+from benchmarks.collocation import plan_collocation
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.verify import verify_result

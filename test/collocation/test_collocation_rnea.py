@@ -1,4 +1,4 @@
-"""`gait_planner.collocation.rnea.SpatialModel`: the recursive Newton-Euler equations of
+"""`benchmarks.collocation.rnea.SpatialModel`: the recursive Newton-Euler equations of
 motion in minimal coordinates.
 
 * every Function (dynamics, impact, project, velocity, acceleration, kinetic_energy)
@@ -17,8 +17,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gait_planner.collocation.minimal import MinimalModel
-from gait_planner.collocation.rnea import SpatialModel, _Kinematics
+from benchmarks.collocation.minimal import MinimalModel
+from benchmarks.collocation.rnea import SpatialModel, _Kinematics
 from gait_planner.model.scene import JointType
 from gait_planner.verify.continuous import build_model, pin_configuration
 from gait_planner.verify.mechanics import parse_scene

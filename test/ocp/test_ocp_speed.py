@@ -16,7 +16,7 @@ import functools
 import numpy as np
 import pytest
 
-from gait_planner.collocation import plan_collocation
+from benchmarks.collocation import plan_collocation
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import duration_range, settings_for, speed_range
 from gait_planner.ocp.solve import Planner

@@ -120,7 +120,7 @@ FIELDS = ("scene", "step_length", "cost", "friction_coefficient", "intervals_per
           "max_solve_time", "output_name", "steps", "posture", "speed", "slope",
           "step_height", "gait")
 # Folders other people change while this test runs (not the node's doing), and caches.
-SHARED = ("benchmarks", "gait_planner/collocation", "test/collocation")
+SHARED = ("benchmarks", "benchmarks/collocation", "test/collocation")
 SKIPPED_DIRS = {".git", ".venv", "__pycache__", ".pytest_cache", ".hypothesis", "build",
                 "install", "log"}
 

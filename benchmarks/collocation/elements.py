@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from gait_planner.collocation.minimal import MinimalModel
+from benchmarks.collocation.minimal import MinimalModel
 from gait_planner.ocp.contacts import BodyContact
 from gait_planner.ocp.elements import ElementGroup
 

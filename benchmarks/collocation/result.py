@@ -34,7 +34,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from gait_planner.collocation.transcription import CollocationTranscription
+from benchmarks.collocation.transcription import CollocationTranscription
 from gait_planner.model.angles import angle_names
 from gait_planner.ocp.solution import (CONSTRAINT_LIMIT, SOLVED, STATUS_WORDS, _mirror_forces,
                                        violations)
@@ -154,7 +154,7 @@ def build_result(tr: CollocationTranscription, x: np.ndarray, p: np.ndarray, g: 
             most_violated=worst),
         settings={
             "method": "Hermite-Simpson direct collocation, minimal coordinates "
-                      "(gait_planner.collocation)",
+                      "(benchmarks.collocation)",
             "periodicity": "nodes K, K+1 mirror knots 0, 1 (paper eqs. 7-9); node K+1 is "
                            "the image of knot 1",
             "initial_guess": origin,

@@ -27,7 +27,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from gait_planner.collocation.minimal import E_X, E_Y, E_Z, MinimalModel
+from benchmarks.collocation.minimal import E_X, E_Y, E_Z, MinimalModel
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.rotations import axis_rotation
 from gait_planner.model.scene import JointType, RootType

@@ -10,10 +10,10 @@ through the product's `ocp.derivatives` and `ocp.compile`), otherwise from CasAD
 differentiation of the whole expanded graph (`collocation.solve`).
 """
 
-from gait_planner.collocation.minimal import MinimalModel
-from gait_planner.collocation.rnea import SpatialModel
-from gait_planner.collocation.solve import plan_collocation, problem_size
-from gait_planner.collocation.transcription import CollocationTranscription
+from benchmarks.collocation.minimal import MinimalModel
+from benchmarks.collocation.rnea import SpatialModel
+from benchmarks.collocation.solve import plan_collocation, problem_size
+from benchmarks.collocation.transcription import CollocationTranscription
 
 __all__ = ["MinimalModel", "SpatialModel", "CollocationTranscription", "plan_collocation",
            "problem_size"]

@@ -59,14 +59,14 @@ import math
 import casadi as ca
 import numpy as np
 
-from gait_planner.collocation.elements import (ElementSet, ImageLayout, acceleration_element,
+from benchmarks.collocation.elements import (ElementSet, ImageLayout, acceleration_element,
                                                cone_rows, contact_element, contact_force,
                                                cost_element, dynamics_element, heights_element,
                                                impact_element, interval_element, knot_element,
                                                knot_pair_element, mirror_map, signed_permutation,
                                                velocity_element)
-from gait_planner.collocation.mesh import Mesh
-from gait_planner.collocation.minimal import MinimalModel
+from benchmarks.collocation.mesh import Mesh
+from benchmarks.collocation.minimal import MinimalModel
 from gait_planner.ocp.clearance import (clearance_rows, clearance_schedule, ground_heights,
                                         schedule_heights, strike_rows, strike_schedule)
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, stacked_rows

@@ -86,11 +86,11 @@ import time
 import casadi as ca
 import numpy as np
 
-from gait_planner.collocation.guess import initial_guess
-from gait_planner.collocation.mesh import mesh_of
-from gait_planner.collocation.result import build_result
-from gait_planner.collocation.rnea import SpatialModel
-from gait_planner.collocation.transcription import CollocationTranscription
+from benchmarks.collocation.guess import initial_guess
+from benchmarks.collocation.mesh import mesh_of
+from benchmarks.collocation.result import build_result
+from benchmarks.collocation.rnea import SpatialModel
+from benchmarks.collocation.transcription import CollocationTranscription
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.compile import CompileError, compile_sources
@@ -155,7 +155,7 @@ def collocation_nlp(tr: CollocationTranscription, compiled: bool
 def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phase: int | None = None,
                      progress: Progress | None = None) -> PlanResult:
     """Plan the half cycle of (scene, settings) by Hermite-Simpson collocation in minimal
-    coordinates (`gait_planner.collocation.transcription`); intervals_per_phase sets the
+    coordinates (`benchmarks.collocation.transcription`); intervals_per_phase sets the
     collocation mesh (None: the DMOCC nodes), the problem itself is that of `settings`
     (`collocation.mesh`); settings.compiled: derivatives compiled from the elements
     (`collocation_nlp`). Returns a `PlanResult` as the product's (`collocation.result`),

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from gait_planner.collocation.transcription import ACCELERATION_SCALE, CollocationTranscription
+from benchmarks.collocation.transcription import ACCELERATION_SCALE, CollocationTranscription
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.ocp.contacts import BodyContact, body_contacts
