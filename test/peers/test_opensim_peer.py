@@ -97,3 +97,34 @@ def test_configurations_through_opensim(scene_name, tmp_path):
         M = pin.crba(model, data, exchange.to_pinocchio(q, nqs))
         M = np.triu(M) + np.triu(M, 1).T
         np.testing.assert_allclose(mass_matrix, M[np.ix_(joint_v, joint_v)], atol=1e-9)
+
+
+# Runs in the opensim env: the study's solver parallelism for --threads 1 and 0
+PARALLEL = """
+import sys
+from pathlib import Path
+import opensim as osim
+from benchmarks.peers import exchange
+from benchmarks.peers.opensim_peer import build_study
+from benchmarks.peers.opensim_walker import Walker
+problem = exchange.read_problem(sys.argv[1])
+for threads in (1, 0):
+    study = build_study(problem, Walker(problem), 4, "dmocc", 2, Path(sys.argv[2]), threads)
+    solver = osim.MocoCasADiSolver.safeDownCast(study.updSolver())
+    optional = solver.getPropertyByName("parallel")  # an optional property: empty if unset
+    print("PARALLEL", threads, solver.get_parallel() if optional.size() else "unset")
+"""
+
+
+@pytest.mark.skipif(not OPENSIM_PYTHON.exists(),
+                    reason=f"the opensim env {OPENSIM_PYTHON.parent.parent} is not set up "
+                           "(benchmarks/peers/setup_env.sh opensim)")
+def test_moco_runs_on_one_thread_unless_told_otherwise(walker2d_dmocc, tmp_path):
+    """Moco's CasADi solver evaluates on every core by default (its `parallel` property 1,
+    which OMP_NUM_THREADS does not change): --threads 1 (the peer's default) sets it to 0,
+    --threads 0 leaves Moco's default (the property unset)."""
+    _, _, path = walker2d_dmocc
+    run = subprocess.run([str(OPENSIM_PYTHON), "-c", PARALLEL, str(path), str(tmp_path)],
+                         cwd=ROOT, capture_output=True, text=True, timeout=300, check=True)
+    seen = [line.split()[1:] for line in run.stdout.splitlines() if line.startswith("PARALLEL")]
+    assert seen == [["1", "0"], ["0", "unset"]]
