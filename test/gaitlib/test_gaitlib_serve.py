@@ -91,7 +91,8 @@ def test_a_request_the_library_cannot_serve_is_planned_as_usual(library, fields,
     request = plan_request(scene="walker2d", compiled=True, **fields)
     note = library_start(planner, library, resolve(request, find_scene))
     assert note.startswith(f"not from the gait library {library.name}") and words in note
-    assert not planner.stored_plans(*scene_settings(request, find_scene))
+    problem = resolve(request, find_scene)
+    assert not planner.stored_plans(problem.scene, problem.settings)
 
 
 def test_a_corner_without_a_plan_is_named(library, tmp_path):

@@ -162,7 +162,8 @@ def predicted_refusal(request) -> str | None:
 
 def problem_key(request):
     """The node's cache key of the problem a plannable request builds."""
-    return _key(*scene_settings(node_request(request)))
+    problem = resolve(node_request(request))
+    return _key(problem.scene, problem.settings)
 
 
 def solve_limit(request) -> float:
