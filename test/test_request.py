@@ -1,7 +1,7 @@
 """The one rule of a plan request's fields (`gait_planner.request`): 0 or empty is the
 default, a negative, NaN or infinite number is refused with the field, the value and what
 is allowed; the same message from `plan_request` (node, action, `call`) and from
-`pipeline.request_settings` (`plan`)."""
+`problem.resolve` (`plan`)."""
 
 from __future__ import annotations
 

@@ -54,7 +54,7 @@ def _points(result, name: str) -> np.ndarray:
     ({"slope": 60.0, "friction_coefficient": 2.0}, ["slope must lie within (-45, 45)"]),
 ])
 def test_a_ground_the_scene_cannot_plan_on_is_refused_with_its_range(fields, words):
-    """Refused by `request_settings`, which builds nothing (the node answers such a
+    """Refused by `resolve`, which builds nothing (the node answers such a
     request without a solver)."""
     with pytest.raises(RequestError) as refused:
         resolve(PlanRequest(scene="walker3d", **fields))
