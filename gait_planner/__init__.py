@@ -32,10 +32,6 @@ _API = ("PlanRequest", "PlanResult", "Planner", "RequestError", "check", "plan",
         "summary")
 __all__ = list(_API)
 
+from gait_planner.lazy import lazy_exports  # noqa: E402  (after the environment above)
 
-def __getattr__(name: str):
-    if name in _API:
-        import importlib
-
-        return getattr(importlib.import_module("gait_planner.api"), name)
-    raise AttributeError(f"module 'gait_planner' has no attribute {name!r}")
+__getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(_API, "api"))

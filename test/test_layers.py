@@ -12,7 +12,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "gait_planner"
 
 # low to high: a room may import the rooms of lower rank (and its own)
 RANK = {
-    "gait_planner": 0, "atomic": 0, "buffered": 0,  # environment, file writing, buffering
+    "atomic": 0, "buffered": 0, "lazy": 0,  # file writing, buffers, lazily loaded names
+    "gait_planner": 1,  # the package's own __init__: the environment, the API's names
     "model": 1, "request": 1,  # scenes, URDFs, grounds; a request's fields
     "result": 2,  # the plain result every adapter converts
     "dynamics": 3,  # the variational integrator

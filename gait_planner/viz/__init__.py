@@ -16,8 +16,7 @@ matplotlib.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from gait_planner.lazy import lazy_exports
 
 _EXPORTS = {
     "log_plan": "rerun_view",
@@ -28,13 +27,4 @@ _EXPORTS = {
 }
 
 __all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str) -> Any:
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(list(globals()) + __all__)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
