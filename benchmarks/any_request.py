@@ -3,7 +3,7 @@
 +-0.15 m (or level ground), a speed within 0.8-1.6 m/s or free durations, a friction
 coefficient within 0.4-1.2, a step length within 0.4-0.9 m — each planned cold (no warm
 start: a new ground or speed has no neighbour in the process) and certified as the node
-certifies it (`pipeline.plan_certified`: refinement after a failed certificate included).
+certifies it (`strategies.plan_certified`: refinement after a failed certificate included).
 
     .venv/bin/python benchmarks/any_request.py                  # walker3d, 30 requests
     .venv/bin/python benchmarks/any_request.py --scene walker2d --requests 10
@@ -26,7 +26,7 @@ import numpy as np
 from gait_planner.model.loader import load_scene  # first: it pins numpy's BLAS kernels
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import plan_certified
+from gait_planner.strategies import plan_certified
 from results_io import write_results
 
 SEED = 39

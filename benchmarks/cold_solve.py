@@ -31,6 +31,7 @@ start = time.perf_counter()
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp import solve
 from gait_planner.ocp.settings import settings_for
+from gait_planner.strategies import plan_once
 timers = os.path.join(tempfile.mkdtemp(), "ipopt.out")
 for options in solve.VARIANTS.values() if {timers} else ():  # IPOPT's summary and timers
     options.update({{"ipopt.output_file": timers, "ipopt.file_print_level": 3,
@@ -40,12 +41,13 @@ settings = settings_for(scene, compiled=True)
 planner = solve.Planner()
 planner.prepare(scene, settings)
 ready = time.perf_counter() - start
-cold = planner.plan(scene, settings, warm_start=False)
+cold = plan_once(planner, scene, settings, warm_start=False)
 text = open(timers).read() if {timers} else ""
 split = {{key: sum(float(v) for v in re.findall(name + r"\\.*:.*?wall:\\s*([0-9.]+)\\)", text))
          for key, name in (("ipopt", "OverallAlgorithm"), ("kkt", "PDSystemSolverTotal"),
                            ("evaluation", "Function Evaluations"))}}
-warm = planner.plan(scene, dataclasses.replace(settings, step_length=1.02 * settings.step_length))
+warm = plan_once(planner, scene,
+                 dataclasses.replace(settings, step_length=1.02 * settings.step_length))
 print(json.dumps({{"ready_s": ready,
     "cold_s": cold.stats.solve_time, "cold_iterations": cold.stats.iterations,
     "cold_evaluation_s": cold.stats.evaluation_time, "cold_success": cold.success,

@@ -40,6 +40,7 @@ from gait_planner.gaitlib.index import PLANS, LibraryIndex, Manifest
 from gait_planner.gaitlib.serve import library_start
 from gait_planner.model.loader import find_scene
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.problem import resolve
 from gait_planner.request import plan_request
 from gait_planner.verify import verify_recording
@@ -101,7 +102,8 @@ def serve_rows(folder: Path, grid_text: str) -> list[dict]:
     first = resolve(plan_request(scene="walker3d", compiled=True,
                                  **grid.values(grid.indices()[0])), find_scene)
     scene, s = first.scene, first.settings
-    planner.plan(scene, s, warm_start=False)  # built, one plan stored: the node after a request
+    plan_once(planner, scene, s, warm_start=False)  # built, one plan stored: as the node after
+    # a request
     base = planner.stored_plans(scene, s)
     out = []
     for values in centres:
@@ -111,9 +113,10 @@ def serve_rows(folder: Path, grid_text: str) -> list[dict]:
         for how in ("library", "nearest", "cold"):
             planner._build(scene, s).stored[:] = list(base)  # as the node after one request
             start = time.perf_counter()
-            note = library_start(planner, folder, problem) if how == "library" else ""
+            seed, note = (library_start(planner, folder, problem) if how == "library"
+                          else (None, ""))
             started = time.perf_counter()
-            result = planner.plan(scene, s, warm_start=how != "cold")
+            result = plan_once(planner, scene, s, warm_start=how != "cold", seed=seed)
             row[f"{how}_s"] = time.perf_counter() - start
             if how == "library":
                 row["library_start_s"] = started - start

@@ -4,7 +4,7 @@ the trends of human walking (issue #26).
     .venv/bin/python benchmarks/gait_trends.py            # walker2d and walker3d (~10 min)
     .venv/bin/python benchmarks/gait_trends.py --quick    # walker2d, three slopes (~1 min)
 
-Each row is one certified plan (`gait_planner.pipeline.plan_certified`, compiled
+Each row is one certified plan (`gait_planner.strategies.plan_certified`, compiled
 derivatives, cold): a slope of -10, -5, 0, 5, 10 deg at the scene's step and free
 durations, or a speed (m/s, `GaitSettings.speed`) on level ground at the scene's step
 (1.1 to 2.5 m/s: what sigma's bounds reach at 0.6338 m) and 0.8 m/s at a 0.45 m step.
@@ -41,7 +41,7 @@ from gait_planner.model.angles import conjugate_torques
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import plan_certified
+from gait_planner.strategies import plan_certified
 from results_io import figure_path, write_results
 
 SLOPES = (-10.0, -5.0, 0.0, 5.0, 10.0)  # deg

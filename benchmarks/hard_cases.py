@@ -31,7 +31,7 @@ from typing import Callable
 from gait_planner.model.loader import load_scene, with_gait
 from gait_planner.ocp.settings import GaitSettings, settings_for
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import plan_certified, plan_free_step
+from gait_planner.strategies import plan_certified, plan_free_step
 from gait_planner.verify import verify_result
 
 TIME_LIMIT = 120.0  # s per plan: a failure ends here with IPOPT's reason
@@ -80,7 +80,7 @@ def settings_of(scene, case: Case, time_limit: float) -> GaitSettings:
 
 def dmocc(scene, settings: GaitSettings, guess: str):
     """The product's path: a plan that misses the continuous-dynamics certificate is
-    refined (`gait_planner.pipeline.plan_certified`, settings.refinements); a speed with
+    refined (`gait_planner.strategies.plan_certified`, settings.refinements); a speed with
     the step free searches the step (`plan_free_step`)."""
     if settings.step_length_free:
         return plan_free_step(Planner(), scene, settings, warm_start=False)[0]

@@ -33,6 +33,7 @@ from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from results_io import write_results
 
 SCENES = ("compass", "walker2d", "walker3d")
@@ -48,7 +49,7 @@ def measure(name: str, compiled: bool = False) -> dict:
     used = planner.prepare(scene, settings)
     build = time.perf_counter() - start
     size = planner.problem_size(scene, settings)  # the problem prepare() built
-    result = planner.plan(scene, settings, warm_start=False)
+    result = plan_once(planner, scene, settings, warm_start=False)
     return {
         "scene": name, "derivatives": used, "bodies": mb.nb, "k": mb.k, "dof": mb.ndof,
         "torques": mb.nt, **size,

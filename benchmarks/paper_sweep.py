@@ -28,6 +28,7 @@ import time
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 
 
 def main() -> None:
@@ -58,7 +59,7 @@ def main() -> None:
             s = dataclasses.replace(
                 settings_for(scene, intervals_per_phase=n, compiled=args.compile, **overrides),
                 base_time_step=dt)
-            r = Planner().plan(scene, s)
+            r = plan_once(Planner(), scene, s)
             rows.append((n, dt, r))
             print(f"# done: {n} intervals, dt {dt:.5g}: {r.message}", flush=True)
     finest = max(rows, key=lambda row: row[0])[2].cost_value

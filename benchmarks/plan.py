@@ -29,6 +29,7 @@ import time
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 
 
 def bench(name: str, mode: str, spread: list[float]) -> dict:
@@ -42,10 +43,10 @@ def bench(name: str, mode: str, spread: list[float]) -> dict:
     for factor in spread:
         s = settings_for(scene, step_length=nominal.step_length * factor,
                          compiled=nominal.compiled)
-        cold[factor] = planner.plan(scene, s, warm_start=False)
-    paper = cold.get(1.0) or planner.plan(scene, nominal, warm_start=False)
-    warm = planner.plan(scene, settings_for(scene, step_length=nominal.step_length * 1.02,
-                                            compiled=nominal.compiled))
+        cold[factor] = plan_once(planner, scene, s, warm_start=False)
+    paper = cold.get(1.0) or plan_once(planner, scene, nominal, warm_start=False)
+    warm = plan_once(planner, scene, settings_for(scene, step_length=nominal.step_length * 1.02,
+                                                  compiled=nominal.compiled))
     times = [r.stats.solve_time for r in cold.values()]
     its = [r.stats.iterations for r in cold.values()]
     return {

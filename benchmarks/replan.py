@@ -18,6 +18,7 @@ import time
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 
 REQUESTS = [("step_length", 0.45), ("step_length", 0.85), ("friction_coefficient", 0.5),
             ("friction_coefficient", 1.2)]
@@ -35,7 +36,7 @@ def main() -> None:
           f"{time.strftime('%Y-%m-%d %H:%M')}, {args.scene}")
     scene = load_scene(args.scene)
     planner = Planner()
-    base = planner.plan(scene, settings_for(scene, compiled=args.compile))
+    base = plan_once(planner, scene, settings_for(scene, compiled=args.compile))
     print(f"default plan: success {base.success}, {base.stats.iterations} iterations, "
           f"J {base.cost_value:.4f}")
     built = next(iter(planner._built.values()))
@@ -47,7 +48,7 @@ def main() -> None:
         s = settings_for(scene, compiled=args.compile, **{name: value})
         for warm in (True, False):
             built.stored[:] = stored
-            r = planner.plan(scene, s, warm_start=warm)
+            r = plan_once(planner, scene, s, warm_start=warm)
             print(f"| {name} {value} | {'warm' if warm else 'cold'} | {r.success} | "
                   f"{r.stats.iterations} | {r.stats.solve_time:.2f} | {r.cost_value:.4f} | "
                   f"{r.settings.get('initial_guess', r.message)} |", flush=True)

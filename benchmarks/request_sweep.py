@@ -21,6 +21,7 @@ import time
 from gait_planner.model.loader import load_scene  # first: it pins numpy's BLAS kernels
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from results_io import write_results
 
 STEPS = (0.45, 0.55, 0.6, 0.7, 0.8)  # m; walker3d's scene step is 0.6338 m
@@ -38,7 +39,7 @@ def sweep(name: str) -> list[dict]:
             s = settings_for(scene, step_length=step, friction_coefficient=mu,
                              max_solve_time=TIME_LIMIT, compiled=True)
             start = time.perf_counter()
-            result = planner.plan(scene, s, warm_start=False)
+            result = plan_once(planner, scene, s, warm_start=False)
             rows.append({"scene": name, "step_length": step, "friction_coefficient": mu,
                          "success": result.success, "iterations": result.stats.iterations,
                          "solve_s": time.perf_counter() - start,

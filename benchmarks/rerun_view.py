@@ -31,9 +31,10 @@ def _plan_rrd(folder: Path) -> Path:
     from gait_planner.model.loader import load_scene
     from gait_planner.ocp.settings import settings_for
     from gait_planner.ocp.solve import Planner
+    from gait_planner.strategies import plan_once
 
     scene = load_scene("walker3d")
-    result = Planner().plan(scene, settings_for(scene, compiled=True))
+    result = plan_once(Planner(), scene, settings_for(scene, compiled=True))
     if not result.success:
         raise SystemExit(f"walker3d did not plan: {result.message}")
     return save_rrd(result, folder / "walker3d.rrd")

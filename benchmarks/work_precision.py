@@ -41,7 +41,8 @@ from gait_planner.ocp import ipopt
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import continuous_certificate
+from gait_planner.strategies import plan_once
+from gait_planner.verify.certify import continuous_certificate
 from gait_planner.verify.drift import physics_error
 
 GRIDS = (4, 6, 8, 12, 16)
@@ -128,7 +129,7 @@ def solve(method: str, scene, n: int, time_limit: float):
         planner = Planner()
         planner.prepare(scene, s)
         build = time.perf_counter() - start
-        result = planner.plan(scene, s, warm_start=False)
+        result = plan_once(planner, scene, s, warm_start=False)
         size = planner.problem_size(scene, s)
     else:
         s = dataclasses.replace(s, max_solve_time=COLLOCATION_TIME_LIMIT[scene.name],

@@ -20,12 +20,13 @@ RANK = {
     "ocp": 4,  # the transcription and the planner
     "io": 5, "problem": 5,  # formats and messages; a request resolved once
     "verify": 6,  # the independent verifier
-    "walk": 7,  # MuJoCo
-    "viz": 8,  # pictures: rerun, figures
-    "pipeline": 9,  # plan, check, record: what the adapters call
-    "gaitlib": 10, "api": 10,  # gait libraries on Ray; the Python API
-    "ros": 11,  # the node
-    "cli": 12,  # the commands (`gait-planner node` and the service clients run the node's code)
+    "strategies": 7,  # how a request is planned: start, continuation, restarts, refinement
+    "walk": 8,  # MuJoCo
+    "viz": 9,  # pictures: rerun, figures
+    "pipeline": 10,  # plan, join, record: what the adapters call
+    "gaitlib": 11, "api": 11,  # gait libraries on Ray; the Python API
+    "ros": 12,  # the node
+    "cli": 13,  # the commands (`gait-planner node` and the service clients run the node's code)
 }
 
 

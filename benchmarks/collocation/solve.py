@@ -98,7 +98,8 @@ from gait_planner.ocp.derivatives import expand_nlp, nlp_derivatives
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
 from gait_planner.ocp.ipopt import IterationCallback, Progress, ipopt_options, run_attempt
-from gait_planner.ocp.solve import COLD_ATTEMPTS, INERTIA_FREE, VARIANTS
+from gait_planner.ocp.solve import INERTIA_FREE, VARIANTS
+from gait_planner.strategies import COLD_ATTEMPTS
 from gait_planner.result import PlanResult
 
 # Solver variants: the product's, except that the first attempt keeps 150 iterations per

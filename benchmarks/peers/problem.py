@@ -36,6 +36,7 @@ from gait_planner.ocp.guess import kinematic_guess
 from gait_planner.ocp.mirror import contact_partners
 from gait_planner.ocp.settings import GaitSettings, settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.ocp.transcription import Transcription
 from gait_planner.result import PlanResult
 from gait_planner.verify.joined import angle_mirror
@@ -160,7 +161,7 @@ def export(scene_name: str, intervals_per_phase: int, out_dir: Path, *,
     path. Raises RuntimeError if DMOCC fails."""
     scene = load_scene(scene_name)
     settings = dmocc_settings(scene, intervals_per_phase, time_limit)
-    result = (planner or Planner()).plan(scene, settings, warm_start=False)
+    result = plan_once(planner or Planner(), scene, settings, warm_start=False)
     if not result.success:
         raise RuntimeError(f"DMOCC did not plan {scene_name} at {intervals_per_phase}: "
                            f"{result.message}")

@@ -333,6 +333,7 @@ def _prepare(args: argparse.Namespace) -> int:
     from gait_planner.ocp.warm_starts import WarmStartStore
     from gait_planner.ocp.settings import SettingsError, form_requests, settings_for
     from gait_planner.ocp.solve import Planner
+    from gait_planner.strategies import plan_once
 
     for name in args.scenes:
         start = time.perf_counter()
@@ -341,7 +342,7 @@ def _prepare(args: argparse.Namespace) -> int:
             settings = settings_for(scene, compiled=True)
             planner = Planner(library=WarmStartStore(), stage=_compile_note)
             used = planner.prepare(scene, settings)
-            result = planner.plan(scene, settings, warm_start=False)
+            result = plan_once(planner, scene, settings, warm_start=False)
             for shape in form_requests(scene, settings)[1:]:  # the default's is built
                 planner.prepare(scene, shape)
         except (SceneError, SettingsError) as error:

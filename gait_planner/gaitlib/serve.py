@@ -4,9 +4,9 @@ A request of the library's scene, gait and fixed settings whose grid fields lie 
 grid's hull starts from the multilinear interpolation of the optima of the grid cell's
 corners (`interpolated_start`: primal x, multipliers and reference configurations, each
 weighted like the request's position in the cell; an axis the request sits on exactly
-takes one value). That start is solved to the full tolerance and checked as any plan
-(`Planner.remember`, then a warm plan). Outside the hull, or where a corner failed, the
-request is planned as any other, and `library_start` says why.
+takes one value). That start is the seed of a warm plan (`strategies.plan_once`), solved
+to the full tolerance and checked as any plan. Outside the hull, or where a corner failed,
+the request is planned as any other, and `library_start` says why.
 """
 
 from __future__ import annotations
@@ -62,12 +62,13 @@ def interpolated_start(folder: Path, corners: list[tuple[str, float]], step: flo
 
 
 def library_start(planner: Planner, folder: str | Path, problem: Problem,
-                  scenes: SceneLookup = find_scene) -> str:
-    """If `problem` lies inside the library in `folder`, give `planner` the start
-    interpolated from its neighbours (module docstring) for its next warm plan; returns a
-    sentence saying what was done, or why the library does not serve the request.
-    LibraryError if `folder` is not a library. scenes: finds the library's scene (as
-    `problem.resolve`'s)."""
+                  scenes: SceneLookup = find_scene) -> tuple[StoredPlan | None, str]:
+    """(the start interpolated from its neighbours (module docstring), a sentence saying
+    where it came from) if `problem` lies inside the library in `folder`, else (None, why
+    the library does not serve the request). The start is a seed for `planner`'s plan of
+    `problem` (`pipeline.plan_and_record(..., seed=)`); ValueError if its sizes are not
+    that problem's (`Planner.fits`), LibraryError if `folder` is not a library. scenes:
+    finds the library's scene (as `problem.resolve`'s)."""
     folder = Path(folder)
     manifest: Manifest = read_manifest(folder)
     grid = parse_grid(manifest.grid)
@@ -82,11 +83,11 @@ def library_start(planner: Planner, folder: str | Path, problem: Problem,
     if (scene.name, scene.source) != (own_scene.name, own_scene.source) or same != settings:
         differ = [f.name for f in dataclasses.fields(GaitSettings)
                   if getattr(same, f.name) != getattr(settings, f.name)]
-        return (f"not from the gait library {folder.name}: the request differs from it in "
-                + (", ".join(differ) if differ else "its scene"))
+        return None, (f"not from the gait library {folder.name}: the request differs from it "
+                      "in " + (", ".join(differ) if differ else "its scene"))
     corners = cell(grid, values)
     if isinstance(corners, str):
-        return f"not from the gait library {folder.name}: {corners}"
+        return None, f"not from the gait library {folder.name}: {corners}"
     index = LibraryIndex(folder)
     try:
         rows = {row.name: row for row in index.rows()}
@@ -95,10 +96,10 @@ def library_start(planner: Planner, folder: str | Path, problem: Problem,
     named = [(grid.name(i), w) for i, w in corners]
     missing = [name for name, _ in named if rows.get(name) is None or rows[name].status != "ok"]
     if missing:
-        return (f"not from the gait library {folder.name}: its points {', '.join(missing)} "
-                f"around the request have no plan")
+        return None, (f"not from the gait library {folder.name}: its points "
+                      f"{', '.join(missing)} around the request have no plan")
     start = interpolated_start(folder, named, settings.step_length,
                                settings.friction_coefficient)
-    planner.remember(scene, settings, start)
-    return f"started from {start.source}"
+    planner.fits(scene, settings, start)
+    return start, f"started from {start.source}"
 

@@ -2,7 +2,7 @@
 
 `plan_point` plans the point's request (`gait_planner.pipeline.plan_and_record`: the
 certificate, refinements and the recording as for any plan) cold, or warm from the optimum
-of a finished neighbour (`Planner.remember`), verifies the recording
+of a finished neighbour (its seed), verifies the recording
 (`gait_planner.verify`), and on success writes the point's files and then its index row
 (`gaitlib.index`). A failed attempt writes nothing: the driver decides whether to try
 again from elsewhere and records the failure itself. Each worker process keeps one
@@ -51,9 +51,11 @@ def plan_point(folder: str, manifest: Manifest, name: str, values: dict,
     problem = resolve(point_request(manifest, name, values, cold=start_from is None), find_scene)
     scene, settings = problem.scene, problem.settings
     work = planner()
+    seed = None
     if start_from is not None:
-        work.remember(scene, settings, load_start(start_path(folder_path, start_from)))
-    outcome = plan_and_record(work, problem, folder_path / PLANS, rrd=False)
+        seed = load_start(start_path(folder_path, start_from))
+        work.fits(scene, settings, seed)
+    outcome = plan_and_record(work, problem, folder_path / PLANS, rrd=False, seed=seed)
     result = outcome.result
     row = dict(name=name, request=values, iterations=int(result.stats.iterations),
                solve_time=time.perf_counter() - began, start=start_from or "cold", attempts=attempt)

@@ -58,7 +58,7 @@ class GaitSettings:
     found no plan, the joint speed rows or the cones most violated; no bound computable
     before building is near it: benchmarks/HISTORY.md): `speed_range` ends there;
     step_length_free: with a speed, the step length
-    is the one of least cost per metre within `step_range` (`gait_planner.pipeline.
+    is the one of least cost per metre within `step_range` (`gait_planner.strategies.
     plan_free_step`; step_length is where the search starts); step_length_bounds m (lower,
     upper): the scene's range of step lengths for such a search (empty: 0.5 to 1.5 times
     the scene's step); slope deg (uphill positive) and step_height m
@@ -80,7 +80,7 @@ class GaitSettings:
     costs differ in size by ~60 on walker3d; a cost it does not name gets 0);
     refinements: how many times a converged plan that misses the continuous-dynamics
     certificate is planned again on a grid twice as fine, from itself
-    (`gait_planner.pipeline.plan_certified`, `gait_planner.ocp.refine`; 0 = never);
+    (`gait_planner.strategies.plan_certified`, `gait_planner.ocp.refine`; 0 = never);
     max_iterations, max_solve_time s (IPOPT; with refinements, the time of all plans); tolerance (IPOPT tol);
     constraint_tolerance (IPOPT constr_viol_tol); compiled: build the per-node derivative
     elements as C (`gait_planner.ocp.compile`; a one-time cost per machine, cached; off
@@ -340,7 +340,7 @@ def form_requests(scene: Scene, s: GaitSettings) -> list[GaitSettings]:
     """One request of each problem shape that requests like `s` on `scene` may take
     (`ocp.transcription.shape_of`): level ground with free durations, at a speed (the
     middle of `speed_range`), on stairs up, on stairs down, and the stairs-down start with
-    the edge margin instead of the segment rows (`ocp.solve.Planner._stair_start`); the
+    the edge margin instead of the segment rows (`gait_planner.strategies.stair_start`); the
     shapes `scene` refuses (`check_ground`, `check_speed`) left out. Building these
     compiles everything any request of the scene within its ranges needs
     (`gait-planner prepare`)."""

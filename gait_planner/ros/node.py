@@ -214,10 +214,10 @@ class GaitPlannerNode(Node):
                 default_max_solve_time=self._param("max_solve_time"),
                 compiled=self._param("compile_derivatives")), self._scenes)
             library = self._param("gait_library")
-            note = "" if not library or not problem.warm_start else library_start(
+            seed, note = (None, "") if not library or not problem.warm_start else library_start(
                 self._planner, Path(library).expanduser(), problem, self._scenes)
             outcome = plan_and_record(self._planner, problem, self._param("output_dir"),
-                                      rrd=False, stage=self._worker.enter)
+                                      rrd=False, stage=self._worker.enter, seed=seed)
         except Stopped:
             answer.success, answer.message = False, self._stopped_message()
             self.get_logger().info(f"{answer.message}: nothing recorded")

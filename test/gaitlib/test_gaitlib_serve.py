@@ -18,6 +18,7 @@ from gait_planner.gaitlib.serve import cell, library_start
 from gait_planner.gaitlib.worker import plan_point
 from gait_planner.model.loader import find_scene
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.request import plan_request
 from gait_planner.verify import verify_result
 from gait_planner.problem import resolve
@@ -64,16 +65,16 @@ def test_a_request_inside_the_library_starts_from_its_neighbours(library):
     planner = Planner()
     request = plan_request(scene="walker2d", step_length=0.6, friction_coefficient=0.7,
                            compiled=True)
-    note = library_start(planner, library, resolve(request, find_scene))
-    assert note.startswith(f"started from the gait library {library.name}: p00-00 x 0.38")
     problem = resolve(request, find_scene)
+    start, note = library_start(planner, library, problem)
+    assert note.startswith(f"started from the gait library {library.name}: p00-00 x 0.38")
     scene, s = problem.scene, problem.settings
-    start = planner.stored_plans(scene, s)[-1]
     assert (start.step, start.mu) == (0.6, 0.7)
-    result = planner.plan(scene, s)
+    assert not planner.stored_plans(scene, s)  # a seed, not a stored plan
+    result = plan_once(planner, scene, s, seed=start)
     assert result.success, result.message
     assert "the gait library" in result.settings["initial_guess"]
-    cold = Planner().plan(scene, s, warm_start=False)
+    cold = plan_once(Planner(), scene, s, warm_start=False)
     assert result.stats.iterations < cold.stats.iterations
     assert result.cost_value == pytest.approx(cold.cost_value, rel=1e-4)
     report = verify_result(result)
@@ -89,7 +90,8 @@ def test_a_request_inside_the_library_starts_from_its_neighbours(library):
 def test_a_request_the_library_cannot_serve_is_planned_as_usual(library, fields, words):
     planner = Planner()
     request = plan_request(scene="walker2d", compiled=True, **fields)
-    note = library_start(planner, library, resolve(request, find_scene))
+    seed, note = library_start(planner, library, resolve(request, find_scene))
+    assert seed is None
     assert note.startswith(f"not from the gait library {library.name}") and words in note
     problem = resolve(request, find_scene)
     assert not planner.stored_plans(problem.scene, problem.settings)
@@ -102,7 +104,7 @@ def test_a_corner_without_a_plan_is_named(library, tmp_path):
         db.execute("DELETE FROM plans WHERE name = 'p01-01'")
     request = plan_request(scene="walker2d", step_length=0.6, friction_coefficient=0.7)
     assert "its points p01-01 around the request have no plan" in library_start(
-        Planner(), copy, resolve(request, find_scene))
+        Planner(), copy, resolve(request, find_scene))[1]
 
 
 

@@ -33,8 +33,9 @@ from gait_planner.io.mcap_writer import write_plan_mcap
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 scene = load_scene("compass")
-result = Planner().plan(scene, settings_for(scene))
+result = plan_once(Planner(), scene, settings_for(scene))
 assert result.success, result.message
 print("READY", result.n_nodes, file=ready, flush=True)
 for i in itertools.count():

@@ -25,6 +25,7 @@ from gait_planner.model.loader import load_scene
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.settings import GaitSettings, settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.result import PlanResult
 from gait_planner.verify import VerificationReport, verify_recording
 
@@ -61,7 +62,7 @@ def solved(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Solved]:
             settings = settings_for(scene)
             planner = Planner()
             start = time.perf_counter()
-            result = planner.plan(scene, settings)
+            result = plan_once(planner, scene, settings)
             seconds = time.perf_counter() - start
             if result.times.size == 0:
                 pytest.fail(f"{name}: no plan: {result.message}")

@@ -23,6 +23,7 @@ from gait_planner.ocp.derivatives import _entries, _sum, nlp_derivatives
 from gait_planner.ocp.guess import kinematic_guess
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.ocp.transcription import Transcription
 
 
@@ -192,8 +193,8 @@ def test_a_cached_library_needs_no_compiler_and_only_a_build_is_announced(tmp_pa
 def test_compiled_plan_matches_uncompiled(tmp_path, monkeypatch):
     monkeypatch.setenv("GAIT_PLANNER_CACHE", str(tmp_path))
     scene = load_scene("compass")
-    plain = Planner().plan(scene, settings_for(scene))
-    compiled = Planner().plan(scene, settings_for(scene, compiled=True))
+    plain = plan_once(Planner(), scene, settings_for(scene))
+    compiled = plan_once(Planner(), scene, settings_for(scene, compiled=True))
     assert plain.success and compiled.success
     assert compiled.settings["derivatives"] == "per-node elements compiled to C"
     assert abs(compiled.cost_value - plain.cost_value) <= 1e-6 * plain.cost_value
@@ -204,7 +205,7 @@ def test_compile_failure_falls_back_and_says_so(tmp_path, monkeypatch):
     monkeypatch.setenv("GAIT_PLANNER_CACHE", str(tmp_path))
     monkeypatch.setenv("CC", "no-such-compiler")
     scene = load_scene("compass")
-    result = Planner().plan(scene, settings_for(scene, compiled=True))
+    result = plan_once(Planner(), scene, settings_for(scene, compiled=True))
     assert result.success
     assert "not compiled: no C compiler" in result.settings["derivatives"]
 

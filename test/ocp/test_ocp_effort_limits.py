@@ -17,6 +17,7 @@ from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.ocp.transcription import Transcription
 
 
@@ -37,10 +38,10 @@ def test_node_torques_at_the_bounds_are_the_effort_limits():
 
 def test_a_limit_below_the_free_peak_bounds_every_node_torque():
     scene = load_scene("compass")
-    free = Planner().plan(scene, settings_for(scene))
+    free = plan_once(Planner(), scene, settings_for(scene))
     assert free.success
     limit = 0.5 * float(np.abs(free.tau).max())
-    bounded = Planner().plan(scene, settings_for(scene, effort_limits={"hip": limit}))
+    bounded = plan_once(Planner(), scene, settings_for(scene, effort_limits={"hip": limit}))
     assert bounded.success, bounded.message
     peak = float(np.abs(bounded.tau).max())
     assert limit * (1 - 1e-6) <= peak <= limit * (1 + 1e-6)  # the bound is active

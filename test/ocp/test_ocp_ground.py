@@ -21,7 +21,7 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.ocp.mirror import configuration_mirror
 from gait_planner.ocp.settings import ground_of, leg_length, settings_for
 from gait_planner.ocp.solve import Planner
-from gait_planner.pipeline import plan_certified
+from gait_planner.strategies import plan_certified, plan_once
 from gait_planner.request import PlanRequest, RequestError
 from gait_planner.verify import verify_result
 from gait_planner.problem import resolve
@@ -179,18 +179,18 @@ def test_a_stair_down_continues_from_a_plan_with_the_edge_margin():
     most STAIR_COLD_MAX deep with the edge margin instead of the segment rows, which the
     planner keeps: its origin says so and its iterations include that plan's; a second
     request, of the shallower stair, starts from the kept plan warm."""
-    from gait_planner.ocp.solve import STAIR_COLD_MAX
+    from gait_planner.strategies import STAIR_COLD_MAX
 
     scene = load_scene("walker2d")
     planner = Planner()
     deep = settings_for(scene, step_height=-0.15, compiled=True)
-    result = planner.plan(scene, deep, warm_start=False)
+    result = plan_once(planner, scene, deep, warm_start=False)
     assert result.success, result.message
     origin = result.settings["initial_guess"]
     assert f"stairs of {-STAIR_COLD_MAX:g} m with the edge margin (kinematic guess" in origin
     assert "continued to -0.15 m with the segment rows" in origin
-    shallow = planner.plan(scene, settings_for(scene, step_height=-STAIR_COLD_MAX,
-                                               compiled=True), warm_start=False)
+    shallow = plan_once(planner, scene, settings_for(scene, step_height=-STAIR_COLD_MAX,
+                                                     compiled=True), warm_start=False)
     assert shallow.success, shallow.message
     assert "with the edge margin (warm start from the plan" in shallow.settings["initial_guess"]
     assert shallow.stats.iterations < result.stats.iterations

@@ -12,6 +12,7 @@ from gait_planner.model.loader import load_scene
 from gait_planner.ocp.request_ranges import RangeError, check_request
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.verify import verify_result
 
 
@@ -31,7 +32,7 @@ def test_a_hard_request_converges_to_a_plan_that_passes_every_check(walker2d, ov
                                                                      replace, guess):
     settings = dataclasses.replace(settings_for(walker2d, max_solve_time=120.0, **overrides),
                                    **replace)
-    result = Planner().plan(walker2d, settings, warm_start=False, guess=guess)
+    result = plan_once(Planner(), walker2d, settings, warm_start=False, guess=guess)
     assert result.success, result.message
     lo, hi = settings.scaling_bounds
     assert all(lo - 1e-6 <= s <= hi + 1e-6 for s in result.phase_scaling)
@@ -56,7 +57,7 @@ def test_a_long_step_the_guess_cannot_reach_is_planned_by_continuation(monkeypat
     monkeypatch.setitem(solve.VARIANTS["cold"], "ipopt.max_iter", 100)
     walker3d = load_scene("walker3d")
     settings = settings_for(walker3d, step_length=1.1, max_solve_time=200.0, compiled=True)
-    result = Planner().plan(walker3d, settings, warm_start=False)
+    result = plan_once(Planner(), walker3d, settings, warm_start=False)
     assert result.success, result.message
     assert ("continued from step length 0.6338 m on level ground (cold) to step length "
             "1.1000 m on level ground (warm)") in result.settings["initial_guess"]
@@ -76,7 +77,7 @@ def test_intervals_per_phase_refines_the_grid_of_the_same_half_cycle(walker2d):
     for n in (6, 12):
         settings = settings_for(walker2d, intervals_per_phase=n)
         assert settings.base_time_step * n == pytest.approx(walker2d.gait.base_time_step * 8)
-        result = Planner().plan(walker2d, settings, warm_start=False)
+        result = plan_once(Planner(), walker2d, settings, warm_start=False)
         assert result.success, result.message
         costs[n] = result.cost_value
     assert costs[6] == pytest.approx(costs[12], rel=0.03)
@@ -95,4 +96,4 @@ def test_an_impossible_request_is_refused_naming_the_field(walker2d, field, valu
 
 def test_an_unknown_guess_is_refused(walker2d):
     with pytest.raises(ValueError, match="unknown guess 'bad'"):
-        Planner().plan(walker2d, settings_for(walker2d), guess="bad")
+        plan_once(Planner(), walker2d, settings_for(walker2d), guess="bad")

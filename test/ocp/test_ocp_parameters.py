@@ -15,6 +15,7 @@ from gait_planner.model.loader import load_scene
 from gait_planner.ocp import compile as compile_module
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.ocp.transcription import shape_of
 
 SCENE = load_scene("walker2d")
@@ -57,7 +58,7 @@ def test_a_request_never_asked_before_plans_without_the_compiler(monkeypatch):
 
     monkeypatch.setattr(compile_module, "_build_all", refuse)
     for options in ({"slope": 3.7}, {"step_height": 0.037}, {"speed": 1.234, "slope": -2.1}):
-        result = Planner().plan(SCENE, _settings(**options), warm_start=False)
+        result = plan_once(Planner(), SCENE, _settings(**options), warm_start=False)
         assert result.success, (options, result.message)
         assert result.settings["derivatives"] == "per-node elements compiled to C"
 
@@ -66,8 +67,8 @@ def test_a_planner_answers_another_ground_with_the_problem_it_built():
     """One Planner builds one problem for a level and a ramp request: the second costs no
     build, and its plan stands on its own ground (the result names it)."""
     planner = Planner()
-    level = planner.plan(SCENE, _settings(), warm_start=False)
-    ramp = planner.plan(SCENE, _settings(slope=4.0), warm_start=False)
+    level = plan_once(planner, SCENE, _settings(), warm_start=False)
+    ramp = plan_once(planner, SCENE, _settings(slope=4.0), warm_start=False)
     assert level.success and ramp.success
     assert len(planner._built) == 1
     assert ramp.ground.slope == 4.0 and level.ground.slope == 0.0
@@ -83,7 +84,7 @@ def test_the_parametrised_problem_plans_what_the_constants_planned():
     solver's tolerance; stairs down: one of the two local minima the constants reached."""
     reference = np.load(CONSTANTS)
     for name, options in REQUESTS:
-        result = Planner().plan(SCENE, _settings(**options), warm_start=False)
+        result = plan_once(Planner(), SCENE, _settings(**options), warm_start=False)
         assert result.success, (name, result.message)
         if name == "stairs_down":
             assert any(result.cost_value == pytest.approx(float(reference[key]), rel=1e-8)

@@ -254,9 +254,10 @@ def test_human_posture_straightens_the_stance_knee(name):
     from gait_planner.model.loader import load_scene
     from gait_planner.ocp.settings import settings_for
     from gait_planner.ocp.solve import Planner
+    from gait_planner.strategies import plan_once
 
     scene = load_scene(name)
-    result = Planner().plan(scene, settings_for(scene, posture="human", compiled=True))
+    result = plan_once(Planner(), scene, settings_for(scene, posture="human", compiled=True))
     assert result.success, result.message
     knee = np.degrees(result.joint_angles[:, list(result.joint_angle_names).index("knee_r")])
     single = [n for n in range(1, result.n_nodes - 1)

@@ -1,4 +1,4 @@
-"""Grid refinement (`gait_planner.ocp.refine`, `gait_planner.pipeline.plan_certified`): a plan
+"""Grid refinement (`gait_planner.ocp.refine`, `gait_planner.strategies.plan_certified`): a plan
 that misses the continuous-dynamics certificate is planned again on a grid twice as fine,
 from itself, and the refined plan passes."""
 
@@ -16,8 +16,10 @@ from gait_planner.ocp.refine import first_interval, refined_settings, refined_st
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solution import violations
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.ocp.transcription import Transcription
-from gait_planner.pipeline import continuous_certificate, plan_certified
+from gait_planner.strategies import plan_certified
+from gait_planner.verify.certify import continuous_certificate
 from gait_planner.verify import verify_result
 
 
@@ -29,7 +31,7 @@ def coarse_walker2d():
     scene = load_scene("walker2d")
     settings = settings_for(scene, intervals_per_phase=3, refinements=0)
     planner = Planner()
-    result = planner.plan(scene, settings, warm_start=False)
+    result = plan_once(planner, scene, settings, warm_start=False)
     assert result.success, result.message
     return scene, settings, planner, result
 
@@ -122,7 +124,7 @@ def test_a_failed_refinement_is_not_restarted_and_the_coarse_plan_stands(coarse_
                                                                          monkeypatch):
     """With the inertia-free attempt capped at 3 iterations, the coarse plan converges only
     through the restart with the inertia test, and its refinement fails: that one is not
-    restarted (`solve.REFINE_ATTEMPTS`; walker3d's 1.0 m step spent 590 s in such a
+    restarted (`strategies.REFINE_ATTEMPTS`; walker3d's 1.0 m step spent 590 s in such a
     restart), and the coarse plan is returned with the reason."""
     scene, settings, _, _ = coarse_walker2d
     monkeypatch.setitem(solve.VARIANTS, "cold", {**solve.VARIANTS["cold"], "ipopt.max_iter": 3})

@@ -12,6 +12,7 @@ import pytest
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.verify import verify_result
 
 # every status IPOPT can end a failed solve with, in the words of the planner's message
@@ -41,7 +42,8 @@ def _assert_explained_failure(result, limit: float, elapsed: float):
 def test_warm_start_replans_a_longer_step_quickly(solved):
     s = solved("walker2d")
     cold = s.result.stats.iterations
-    warm = s.planner.plan(s.scene, settings_for(s.scene, step_length=1.05 * s.settings.step_length))
+    warm = plan_once(s.planner, s.scene,
+                     settings_for(s.scene, step_length=1.05 * s.settings.step_length))
     assert warm.success, warm.message
     # speed itself is measured in benchmarks/plan.py; here: far fewer iterations
     assert warm.stats.iterations < cold / 2, (warm.stats.iterations, cold)
@@ -60,7 +62,7 @@ def compass_planner():
     """A compass Planner of its own (the shared one keeps only good plans to start from)."""
     scene = load_scene("compass")
     planner = Planner()
-    assert planner.plan(scene, settings_for(scene)).success
+    assert plan_once(planner, scene, settings_for(scene)).success
     return scene, planner
 
 
@@ -72,8 +74,8 @@ def test_impossible_request_fails_with_reasons(compass_planner, change):
     scene, planner = compass_planner
     limit = 5.0
     start = time.perf_counter()
-    result = planner.plan(scene, settings_for(scene, max_solve_time=limit, **change),
-                          warm_start=False)
+    result = plan_once(planner, scene, settings_for(scene, max_solve_time=limit, **change),
+                       warm_start=False)
     _assert_explained_failure(result, limit, time.perf_counter() - start)
 
 
@@ -82,8 +84,8 @@ def test_impossible_request_fails_from_a_warm_start_within_the_time_limit(solved
     s = solved("walker2d")
     limit = 4.0
     start = time.perf_counter()
-    result = s.planner.plan(s.scene, settings_for(s.scene, step_length=3.0,
-                                                  max_solve_time=limit))
+    result = plan_once(s.planner, s.scene, settings_for(s.scene, step_length=3.0,
+                                                        max_solve_time=limit))
     _assert_explained_failure(result, limit, time.perf_counter() - start)
 
 
@@ -91,7 +93,7 @@ def test_time_limit_stops_the_solve(compass_planner):
     scene, planner = compass_planner
     limit = 0.005  # a cold compass plan takes about 12 iterations, 0.04 s
     start = time.perf_counter()
-    result = planner.plan(scene, settings_for(scene, max_solve_time=limit), warm_start=False)
+    result = plan_once(planner, scene, settings_for(scene, max_solve_time=limit), warm_start=False)
     _assert_explained_failure(result, limit, time.perf_counter() - start)
     assert "time limit reached" in result.message
 
@@ -103,13 +105,13 @@ def test_scaling_bounds_that_cannot_fit(compass_planner):
     settings = dataclasses.replace(settings_for(scene, max_solve_time=limit),
                                    scaling_bounds=(0.05, 0.05))
     start = time.perf_counter()
-    result = planner.plan(scene, settings, warm_start=False)
+    result = plan_once(planner, scene, settings, warm_start=False)
     _assert_explained_failure(result, limit, time.perf_counter() - start)
 
 
 def test_unbuildable_problem_is_a_result_not_a_traceback(compass_planner):
     scene, planner = compass_planner
-    result = planner.plan(scene, settings_for(scene, intervals_per_phase=1))
+    result = plan_once(planner, scene, settings_for(scene, intervals_per_phase=1))
     assert result.success is False
     assert "could not build the problem" in result.message and "intervals" in result.message
     assert math.isnan(result.cost_value) and result.times.size == 0
@@ -143,7 +145,7 @@ def test_failed_inertia_free_attempt_restarts_with_the_inertia_test(monkeypatch)
 
     monkeypatch.setitem(solve.VARIANTS, "cold", {**solve.VARIANTS["cold"], "ipopt.max_iter": 3})
     scene = load_scene("compass")
-    result = Planner().plan(scene, settings_for(scene))
+    result = plan_once(Planner(), scene, settings_for(scene))
     assert result.success, result.message
     assert "inertia-free attempt stopped (iteration limit reached) after 3 iterations" in \
         result.settings["initial_guess"]

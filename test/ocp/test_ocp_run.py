@@ -9,7 +9,7 @@ import functools
 import numpy as np
 import pytest
 
-from gait_planner.pipeline import plan_certified
+from gait_planner.strategies import plan_certified
 from gait_planner.ocp.solve import Planner
 from gait_planner.request import PlanRequest, RequestError
 from gait_planner.verify import verify_result

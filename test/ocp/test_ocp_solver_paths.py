@@ -16,6 +16,7 @@ from gait_planner.ocp import solve
 from gait_planner.ocp.warm_starts import WarmStartStore
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.verify import verify_result
 
 
@@ -34,21 +35,21 @@ def _passes(result) -> None:
                          ids=["casadi_derivatives", "compiled"])
 def test_cold_and_warm_plans_pass_the_checker(walker2d, compiled):
     planner, settings = Planner(), settings_for(walker2d, compiled=compiled)
-    cold = planner.plan(walker2d, settings, warm_start=False)
+    cold = plan_once(planner, walker2d, settings, warm_start=False)
     assert cold.settings["initial_guess"].startswith("kinematic guess")
     assert ("compiled" in cold.settings["derivatives"]) is compiled
     _passes(cold)
-    warm = planner.plan(walker2d, settings_for(walker2d, compiled=compiled,
-                                               step_length=1.03 * settings.step_length))
+    warm = plan_once(planner, walker2d, settings_for(walker2d, compiled=compiled,
+                                                     step_length=1.03 * settings.step_length))
     assert warm.settings["initial_guess"].startswith("warm start")
     _passes(warm)
 
 
 def test_a_warm_start_from_the_plan_library_passes_the_checker(walker2d, tmp_path):
     settings = settings_for(walker2d, compiled=True)
-    assert Planner(library=WarmStartStore(tmp_path)).plan(walker2d, settings).success
-    fresh = Planner(library=WarmStartStore(tmp_path)).plan(
-        walker2d, settings_for(walker2d, compiled=True, friction_coefficient=0.6))
+    assert plan_once(Planner(library=WarmStartStore(tmp_path)), walker2d, settings).success
+    fresh = plan_once(Planner(library=WarmStartStore(tmp_path)), walker2d,
+                      settings_for(walker2d, compiled=True, friction_coefficient=0.6))
     assert "(the plan library" in fresh.settings["initial_guess"]
     _passes(fresh)
 
@@ -56,6 +57,7 @@ def test_a_warm_start_from_the_plan_library_passes_the_checker(walker2d, tmp_pat
 @pytest.mark.slow
 def test_the_inertia_test_restart_passes_the_checker(walker2d, monkeypatch):
     monkeypatch.setitem(solve.VARIANTS, "cold", {**solve.VARIANTS["cold"], "ipopt.max_iter": 3})
-    result = Planner().plan(walker2d, settings_for(walker2d, compiled=True), warm_start=False)
+    result = plan_once(Planner(), walker2d, settings_for(walker2d, compiled=True),
+                       warm_start=False)
     assert "restarted with IPOPT's inertia test" in result.settings["initial_guess"]
     _passes(result)

@@ -20,8 +20,9 @@ from benchmarks.collocation import plan_collocation
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import duration_range, settings_for, speed_range
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.ocp.transcription import relaxed_lower_bounds, speed_row
-from gait_planner.pipeline import plan_certified
+from gait_planner.strategies import plan_certified
 from gait_planner.verify import verify_result
 from gait_planner.problem import resolve
 
@@ -93,7 +94,7 @@ def test_a_speed_alone_takes_the_step_of_least_cost_per_metre():
     planning 2 cm shorter or longer costs more per metre (the golden-section search's
     5 mm tolerance is inside that)."""
     from gait_planner.ocp.settings import free_step_range
-    from gait_planner.pipeline import plan_free_step
+    from gait_planner.strategies import plan_free_step
     from gait_planner.request import PlanRequest
 
     problem = resolve(PlanRequest(scene="walker2d", speed=1.2, compiled=True))
@@ -108,7 +109,7 @@ def test_a_speed_alone_takes_the_step_of_least_cost_per_metre():
     assert "least J per metre" in result.settings["step_length_search"]
     best = result.cost_value / result.step_length
     for other in (result.step_length - 0.02, result.step_length + 0.02):
-        near = planner.plan(scene, dataclasses.replace(settings, step_length=other))
+        near = plan_once(planner, scene, dataclasses.replace(settings, step_length=other))
         assert near.success and near.cost_value / other > best
 
 

@@ -9,6 +9,7 @@ import dataclasses
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import STOPPED, Planner
+from gait_planner.strategies import plan_once
 from gait_planner.pipeline import plan_joined
 from gait_planner.result import PlanStatus
 
@@ -16,12 +17,12 @@ from gait_planner.result import PlanStatus
 def test_converged_failed_and_stopped():
     scene = load_scene("compass")
     settings = settings_for(scene)
-    converged = Planner().plan(scene, settings, warm_start=False)
+    converged = plan_once(Planner(), scene, settings, warm_start=False)
     assert converged.success and converged.status is PlanStatus.CONVERGED
-    capped = Planner().plan(scene, dataclasses.replace(settings, max_iterations=2),
-                            warm_start=False)
+    capped = plan_once(Planner(), scene, dataclasses.replace(settings, max_iterations=2),
+                       warm_start=False)
     assert not capped.success and capped.status is PlanStatus.FAILED
-    stopped = Planner(stop=lambda: True).plan(scene, settings, warm_start=False)
+    stopped = plan_once(Planner(stop=lambda: True), scene, settings, warm_start=False)
     assert stopped.status is PlanStatus.STOPPED and stopped.message == STOPPED
 
 
@@ -32,14 +33,14 @@ def test_the_certificate_makes_a_new_result():
     scene = load_scene("compass")
     planner = Planner()
     returned = []
-    plan = planner.plan
+    make_result = planner.result
 
-    def recording_plan(*args, **kwargs):
-        result = plan(*args, **kwargs)
+    def recording_result(*args, **kwargs):
+        result = make_result(*args, **kwargs)
         returned.append((result, dict(result.settings)))
         return result
 
-    planner.plan = recording_plan
+    planner.result = recording_result
     joined = plan_joined(planner, scene, settings_for(scene))
     assert "continuous_dynamics" in joined.settings
     assert returned and all(result.settings == before and "continuous_dynamics" not in before

@@ -35,6 +35,7 @@ from gait_planner.model.loader import load_scene, scene_from_text
 from gait_planner.model.urdf_import import draft_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 
 pytestmark = pytest.mark.slow
 
@@ -71,7 +72,7 @@ def planned(walker3d):
         if variant not in cache:
             scene = scene_from_text(yaml.safe_dump(variants[variant], sort_keys=False),
                                     f"walker3d ({variant})")
-            cache[variant] = Planner().plan(scene, settings_for(scene))
+            cache[variant] = plan_once(Planner(), scene, settings_for(scene))
             assert cache[variant].success, f"{variant}: {cache[variant].message}"
         return cache[variant]
 

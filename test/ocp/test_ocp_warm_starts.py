@@ -9,6 +9,7 @@ from gait_planner.model.loader import load_scene
 from gait_planner.ocp.warm_starts import WarmStartStore, StoredPlan
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 
 
 @pytest.fixture(scope="module")
@@ -19,27 +20,29 @@ def walker2d():
 @pytest.mark.slow
 def test_a_fresh_planner_replans_warm_from_the_library_to_the_same_optimum(walker2d, tmp_path):
     settings = settings_for(walker2d)
-    cold = Planner(library=WarmStartStore(tmp_path)).plan(walker2d, settings, warm_start=False)
+    cold = plan_once(Planner(library=WarmStartStore(tmp_path)), walker2d, settings,
+                     warm_start=False)
     assert cold.success, cold.message
     files = list((tmp_path / "plans").glob("*.npz"))
     assert len(files) == 1
 
     fresh = Planner(library=WarmStartStore(tmp_path))
-    warm = fresh.plan(walker2d, settings)
+    warm = plan_once(fresh, walker2d, settings)
     assert warm.success, warm.message
     assert "(the plan library" in warm.settings["initial_guess"]
     assert warm.stats.iterations < cold.stats.iterations / 4
     assert warm.cost_value == pytest.approx(cold.cost_value, rel=1e-8)
 
-    again = fresh.plan(walker2d, settings, warm_start=False)  # cold_start ignores it
+    again = plan_once(fresh, walker2d, settings, warm_start=False)  # cold_start ignores it
     assert again.settings["initial_guess"].startswith("kinematic guess")
 
 
 @pytest.mark.slow
 def test_a_request_with_other_settings_does_not_read_the_file(walker2d, tmp_path):
-    Planner(library=WarmStartStore(tmp_path)).plan(walker2d, settings_for(walker2d), warm_start=False)
-    other = Planner(library=WarmStartStore(tmp_path)).plan(
-        walker2d, settings_for(walker2d, friction_coefficient=0.6, intervals_per_phase=6))
+    plan_once(Planner(library=WarmStartStore(tmp_path)), walker2d, settings_for(walker2d),
+              warm_start=False)
+    other = plan_once(Planner(library=WarmStartStore(tmp_path)), walker2d,
+                      settings_for(walker2d, friction_coefficient=0.6, intervals_per_phase=6))
     assert other.settings["initial_guess"].startswith("kinematic guess")
     assert len(list((tmp_path / "plans").glob("*.npz"))) == 2
 
@@ -47,10 +50,10 @@ def test_a_request_with_other_settings_does_not_read_the_file(walker2d, tmp_path
 @pytest.mark.slow
 def test_a_damaged_file_is_ignored(walker2d, tmp_path):
     library = WarmStartStore(tmp_path)
-    Planner(library=library).plan(walker2d, settings_for(walker2d), warm_start=False)
+    plan_once(Planner(library=library), walker2d, settings_for(walker2d), warm_start=False)
     (path,) = (tmp_path / "plans").glob("*.npz")
     path.write_bytes(path.read_bytes()[:200])
-    result = Planner(library=library).plan(walker2d, settings_for(walker2d))
+    result = plan_once(Planner(library=library), walker2d, settings_for(walker2d))
     assert result.success, result.message
     assert result.settings["initial_guess"].startswith("kinematic guess")
 

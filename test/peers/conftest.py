@@ -13,6 +13,7 @@ from gait_planner.io.urdf import scene_to_urdf
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 
 
 @pytest.fixture(scope="session")
@@ -21,7 +22,7 @@ def walker2d_dmocc(tmp_path_factory):
     folder = tmp_path_factory.mktemp("peers")
     scene = load_scene("walker2d")
     settings = settings_for(scene, intervals_per_phase=4)
-    result = Planner().plan(scene, settings)
+    result = plan_once(Planner(), scene, settings)
     assert result.success, result.message
     urdf = folder / "walker2d.urdf"
     urdf.write_text(scene_to_urdf(scene))

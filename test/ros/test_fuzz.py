@@ -14,7 +14,7 @@ Asserted for every request:
 * the node process is alive after every example;
 * every answer arrives within its limit: 1 s (`GRACE`) + the time limit of the solve (the
   request's max_solve_time, or the node's 3.0 s when 0) + what the node does outside the
-  solve, for which the limit does not stand (`gait_planner.ocp.solve.Planner.plan`):
+  solve, for which the limit does not stand (`gait_planner.strategies.plan_once`):
   building a problem not built before (`BUILD_ALLOWANCE`, once per problem), and recording
   the found plan (`RECORD_ALLOWANCE` + `RECORD_PER_STEP` per half cycle: the certificate,
   MCAP and .rrd of up to 100 joined half cycles), plus `FIRST_ALLOWANCE` for the first plan
@@ -100,7 +100,7 @@ NODE_MAX_SOLVE_TIME = 3.0  # s, the node's default limit (-p max_solve_time), fo
 MAX_PLAN_TIME = 3.0  # s, the largest limit a request that will be planned gets (strategy)
 GRACE = 1.0  # s, on top of every limit (the issue's "+ 1 s")
 FAST = 1.0  # s, a busy answer, a goal rejection, a refusal (checks take microseconds)
-# Allowances for what the time limit does not cover (Planner.plan: "building a problem the
+# Allowances for what the time limit does not cover (strategies.plan_once: "building a problem the
 # planner has not seen before comes on top"; recording comes after the solve). Measured on
 # this 2-core machine under a load of 4-6 (other jobs): compass builds at most 0.17 s in
 # `make fuzz` (compiled derivative elements from the cache); recording 0.3 s + about 0.05 s

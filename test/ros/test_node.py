@@ -110,24 +110,25 @@ def test_bad_requests_are_refused_and_the_node_keeps_serving(setup, spin_until, 
     assert again.success, again.message
 
 
-class _FailingOnce:
-    """A Planner that raises an unexpected error on its first plan (a bug, not bad input)."""
+def _failing_once():
+    """A Planner that raises an unexpected error in its first attempt (a bug, not bad input)."""
+    from gait_planner.ocp.solve import Planner
 
-    def __init__(self):
-        from gait_planner.ocp.solve import Planner
+    class FailingOnce(Planner):
+        calls = 0
 
-        self.real, self.calls = Planner(), 0
+        def attempt(self, *args, **kwargs):
+            self.calls += 1
+            if self.calls == 1:
+                raise RuntimeError("simulated fault inside the planner")
+            return super().attempt(*args, **kwargs)
 
-    def plan(self, *args, **kwargs):
-        self.calls += 1
-        if self.calls == 1:
-            raise RuntimeError("simulated fault inside the planner")
-        return self.real.plan(*args, **kwargs)
+    return FailingOnce()
 
 
 def test_an_unexpected_error_is_answered_and_the_node_keeps_serving(
         ros_context, make_node, executor, tmp_path, spin_until):
-    server = GaitPlannerNode(context=ros_context, planner=_FailingOnce(), parameter_overrides=[
+    server = GaitPlannerNode(context=ros_context, planner=_failing_once(), parameter_overrides=[
         Parameter("output_dir", value=str(tmp_path)),
         Parameter("allowed_output_dirs", value=[str(tmp_path)]),
         Parameter("default_scene", value="compass"),

@@ -19,6 +19,7 @@ from gait_planner.io.mcap_writer import write_plan_mcap
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.ocp.walk_on import walk_on
 
 JOINED_STEPS = 3
@@ -32,7 +33,7 @@ class LevelWalk(NamedTuple):
 def _recorded(name: str, folder, steps: int = 1) -> list[RecordedPlan]:
     """Scene `name`'s default plan, recorded as one half cycle (and joined, steps > 1)."""
     scene = load_scene(name)
-    result = Planner().plan(scene, settings_for(scene))
+    result = plan_once(Planner(), scene, settings_for(scene))
     if not result.success:
         pytest.fail(f"{name}: no level plan: {result.message}")
     paths = [write_plan_mcap(result, folder / f"{name}.mcap")]

@@ -296,10 +296,12 @@ def test_report_prints_the_certificate_of_a_compass_plan(tmp_path, capsys):
     from gait_planner.model.loader import load_scene
     from gait_planner.ocp.settings import settings_for
     from gait_planner.ocp.solve import Planner
+    from gait_planner.strategies import plan_once
     from gait_planner.verify.recorded import certificate_of_recording
 
     scene = load_scene("compass")
-    path = write_plan_mcap(Planner().plan(scene, settings_for(scene)), tmp_path / "compass.mcap")
+    path = write_plan_mcap(plan_once(Planner(), scene, settings_for(scene)),
+                           tmp_path / "compass.mcap")
     rec = read_plan_mcap(path)
     cert = certificate_of_recording(rec)
     has_wrenches = any(len(b) for b in getattr(rec, "wrench_bodies", ()))

@@ -21,6 +21,7 @@ import pytest
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.strategies import plan_once
 from gait_planner.verify.constrained import ConstrainedModel
 from gait_planner.verify.mechanics import parse_scene
 from gait_planner.verify.drift import PlanSimulation, physics_error
@@ -35,7 +36,7 @@ def plan(name: str, intervals_per_phase: int | None = None, base_time_step: floa
     settings = settings_for(scene, intervals_per_phase=intervals_per_phase, compiled=compiled)
     if base_time_step is not None:
         settings = dataclasses.replace(settings, base_time_step=base_time_step)
-    result = Planner().plan(scene, settings)
+    result = plan_once(Planner(), scene, settings)
     assert result.success, result.message
     return result
 
