@@ -7,17 +7,11 @@ whose file is missing says so. Conclusions are computed from the rows, not typed
 
 from __future__ import annotations
 
-import json
 import re
 
 import numpy as np
 
-from results_io import HERE, OTHER, RESULTS
-
-
-def load(name: str) -> dict | None:
-    path = RESULTS / f"{name}.json"
-    return json.loads(path.read_text()) if path.exists() else None
+from results_io import HERE, OTHER, RESULTS, load_results
 
 
 def fmt(v, spec: str = ".3g") -> str:
@@ -693,7 +687,7 @@ def any_request(doc) -> list[str]:
 
 
 def main() -> None:
-    docs = {name: load(name) for name in ("work_precision", "integrators", "model_size",
+    docs = {name: load_results(name) for name in ("work_precision", "integrators", "model_size",
                                          "model_size_compiled", "hard_cases", "cold_solve",
                                          "node_latency_walker3d", "request_sweep", "walk",
                                          "gait_trends", "gait_library", "robots",
@@ -715,7 +709,7 @@ def main() -> None:
     lines += gait_trends(docs["gait_trends"])
     lines += gait_library(docs["gait_library"])
     lines += peers({scene: doc for scene in ("walker2d", "walker3d")
-                    if (doc := load(f"peers_{scene}"))})
+                    if (doc := load_results(f"peers_{scene}"))})
     lines += robots(docs["robots"])
     lines += any_request(docs["any_request"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"

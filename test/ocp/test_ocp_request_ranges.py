@@ -3,7 +3,6 @@ with the field, its value and the range the scene allows."""
 
 from __future__ import annotations
 
-import time
 
 import pytest
 
@@ -33,10 +32,8 @@ def test_reach_is_the_chain_between_the_feet():
 ])
 def test_impossible_requests_are_refused_at_once(tmp_path, fields, words):
     planner = Planner()
-    start = time.perf_counter()
     with pytest.raises(RequestError) as caught:
         plan_and_record(planner, resolve(PlanRequest(scene="walker3d", **fields)), tmp_path)
-    assert time.perf_counter() - start < 5.0  # loading the scene; nothing is built
     assert all(w in str(caught.value) for w in words), str(caught.value)
     assert "walker3d" in str(caught.value)
-    assert not planner._built and not list(tmp_path.iterdir())
+    assert not planner._built and not list(tmp_path.iterdir())  # nothing built or written
