@@ -18,6 +18,7 @@ import numpy as np
 import yaml
 
 from gait_planner.walk.controller import Gains, ReferenceController
+from gait_planner.walk.model_error import DelayedTorque, ModelError
 from gait_planner.walk.robot_urdf import RobotUrdf
 
 __all__ = ["CONFIG", "ground_forces", "load_config", "walk"]
@@ -78,14 +79,17 @@ def _rms(x) -> float:
 def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
          config: dict[str, Any] | None = None, series: bool = False,
          progress: Callable[[int, int], None] | None = None,
-         robot: RobotUrdf | None = None) -> dict[str, Any]:
+         robot: RobotUrdf | None = None,
+         model_error: ModelError | None = None) -> dict[str, Any]:
     """The walk of the module docstring; scale multiplies the plan's efforts (the
     self-test); series adds the per-step trace (key "series"); progress(walked, steps) is
     called at every half cycle's end; robot: the robot's own URDF a drafted plan walks on
     (`walk.mujoco_model`); default: for a scene drafted from a URDF (its ``robot:``
     section), the recording's /robot_description, which is that URDF, with the section's
     locked joints, its package folders and the URDF's own folder and parents (for the foot
-    meshes only)."""
+    meshes only); model_error: how the simulated walker differs from the plan's model
+    (`walk.model_error`: masses, friction, contact stiffness, a torque delay; the summary's
+    "model_error" says what, with the mass factors drawn)."""
     import mujoco
 
     from gait_planner.walk.mujoco_model import build_model, plan_qpos, plan_root_qvel
@@ -106,7 +110,10 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     sim = cfg["simulation"]
     wm = build_model(rec, scene, half_width, sim["foot_sphere_radius"], sim["time_step"],
                      sim["contact_time_constant"], cfg["joints"]["kd"], robot)
+    factors = model_error.apply(wm.model) if model_error is not None else {}
     model, data = wm.model, mujoco.MjData(wm.model)
+    delayed = (DelayedTorque(round(model_error.torque_delay / model.opt.timestep))
+               if model_error is not None and model_error.torque_delay else None)
     place = cfg["placement"]
     gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], cfg["torso"]["kp"], cfg["torso"]["kd"],
                   place["kp"], place["kd"])
@@ -136,7 +143,11 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         ff, fb, plan_effort, plan_angles = control(data)
         data.qfrc_applied[:] = 0.0
         # -kd v is MuJoCo's (implicit) joint damping (walk.mujoco_model)
-        data.qfrc_applied[wm.dof] = ff + fb + gains.kd * data.qvel[wm.dof]
+        torque = ff + fb + gains.kd * data.qvel[wm.dof]
+        if delayed is not None:  # the command late, the joint's own kp q now
+            kp_q = gains.kp * data.qpos[wm.qpos]
+            torque = delayed(torque + kp_q, kp_q)
+        data.qfrc_applied[wm.dof] = torque
         errs.append(plan_angles - data.qpos[wm.qpos])
         ffs.append(ff)
         fbs.append(fb)
@@ -193,6 +204,8 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         "torso_drift_m": drift, "foot_placement_error_m": placement,
         "controller": {"joints": cfg["joints"], "torso": cfg["torso"], "placement": place,
                        "simulation": sim, "foot_half_width": half_width},
+        **({"model_error": {"differences": model_error.describe(), "mass_factors": factors}}
+           if model_error is not None else {}),
         **({"series": extra} if series else {}),
     }
 

@@ -1,0 +1,85 @@
+"""A walker that is not the plan's model (`gait_planner.walk.model_error`): no difference
+walks as the plain walk does, masses and inertias change by their drawn factors (the
+robot's total mass within the spread), friction and contact stiffness reach every
+contact, and a delayed command arrives the given number of steps late."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from gait_planner.walk.model_error import DelayedTorque, ModelError
+
+pytest.importorskip("mujoco")
+
+
+@pytest.fixture(scope="module")
+def walker2d_plan(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("model_error") / "w2.mcap"
+    exe = Path(sys.executable).with_name("gait-planner")
+    subprocess.run([str(exe), "plan", "--scene", "walker2d", "--out", str(out), "--no-rrd"],
+                   check=True, capture_output=True)
+    return out
+
+
+def _model(recording: Path):
+    from gait_planner.io.mcap_reader import read_plan_mcap
+    from gait_planner.walk.mujoco_model import build_model
+    from gait_planner.walk.reference import planned_joints, scene_of
+
+    rec = planned_joints(read_plan_mcap(recording))
+    return build_model(rec, scene_of(rec), 0.04575, 0.005, 0.0005, 0.005, 20.0).model
+
+
+def test_no_difference_walks_as_the_plain_walk(walker2d_plan):
+    from gait_planner.walk.walk_plan import walk
+
+    plain = walk(walker2d_plan, 1)
+    same = walk(walker2d_plan, 1, model_error=ModelError())
+    assert same["model_error"] == {"differences": "none", "mass_factors": {}}
+    for key in ("half_cycles_walked", "joint_rms_deg", "feedback_share", "torso_drift_m"):
+        assert same[key] == plain[key]
+
+
+def test_masses_friction_and_stiffness_reach_the_model(walker2d_plan):
+    base = _model(walker2d_plan)
+    changed = _model(walker2d_plan)
+    error = ModelError(seed=3, mass_spread=0.1, friction=0.5, contact_time_constant=0.002)
+    factors = error.apply(changed)
+    assert len(factors) == base.nbody - 1 and all(0.9 <= f <= 1.1 for f in factors.values())
+    for name, f in factors.items():
+        b = base.body(name).id
+        assert changed.body_mass[b] == pytest.approx(f * base.body_mass[b], rel=1e-12)
+        assert np.allclose(changed.body_inertia[b], f * base.body_inertia[b], rtol=1e-12)
+    total = changed.body_subtreemass[0] / base.body_subtreemass[0]  # by mj_setConst
+    assert 0.9 <= total <= 1.1 and total != 1.0
+    assert np.all(changed.geom_friction[:, 0] == 0.5)
+    assert np.all(changed.geom_solref[:, 0] == 0.002)
+    assert _model(walker2d_plan).body_mass.tolist() == base.body_mass.tolist()
+    assert error.apply(_model(walker2d_plan)) == factors  # the seed decides
+
+
+@given(steps=st.integers(0, 20), n=st.integers(1, 40))
+def test_a_delayed_command_arrives_steps_late(steps, n):
+    delayed = DelayedTorque(steps)
+    commands = [np.array([float(k), -float(k)]) for k in range(n)]
+    kp_q = np.array([0.25, 0.5])
+    out = [delayed(c, kp_q) for c in commands]
+    for k, torque in enumerate(out):
+        assert np.array_equal(torque, commands[max(k - steps, 0)] - kp_q)
+
+
+@pytest.mark.parametrize("fields, words", [
+    ({"mass_spread": 1.0}, "mass_spread"), ({"friction": 0.0}, "friction"),
+    ({"contact_time_constant": -1.0}, "contact_time_constant"),
+    ({"torque_delay": float("nan")}, "torque_delay"),
+])
+def test_an_impossible_difference_is_refused(fields, words):
+    with pytest.raises(ValueError, match=words):
+        ModelError(**fields)
