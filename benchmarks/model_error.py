@@ -23,6 +23,7 @@ The walks run in a process pool (`--workers`, default 2): success is measured, n
 from __future__ import annotations
 
 import argparse
+import re
 import statistics
 import sys
 import tempfile
@@ -76,7 +77,7 @@ def summarised(label: str, walks: list[dict], steps: int) -> dict:
             "half_cycles_median": statistics.median(done),
             "feedback_share_median": statistics.median(shares),
             "feedback_share_max": max(shares),
-            "stopped": sorted({w["stopped"].split(" at t =")[0] for w in walks
+            "stopped": sorted({re.split(r" [-+]?\d", w["stopped"])[0] for w in walks
                                if w["stopped"] != "completed"}),
             "each": walks}
 

@@ -322,6 +322,30 @@ def walk(doc) -> list[str]:
         ("self-test: walked (feedback)", "selftest", ""), ("why it stopped", "stopped", "")]) + [""]
 
 
+def model_error(doc) -> list[str]:
+    """Section 7's table of plans walked on a walker that is not the plan's model."""
+    out = ["### A walker that is not the plan's model", ""]
+    if doc is None:
+        return out + ["Not measured (`model_error.py`).", ""]
+    h = doc["header"]
+    out += [provenance(doc), "",
+            f"`model_error.py`: the default plans walked {h.get('steps', '?')} half cycles "
+            "by the same controller on a MuJoCo walker changed as a robot differs from its "
+            "URDF (`gait_planner.walk.model_error`; the command delay delays the feed-forward, "
+            "the torso feedback and the joint targets, each joint's own PD acting on its "
+            "present state). Perturbed walks that completed every half cycle: "
+            f"**{h.get('completed_share', float('nan')):.0%}** (target 90 %).", ""]
+    rows = [dict(r, done=f"{r['completed']} of {r['walks']}",
+                 cycles=f"{r['half_cycles_min']} / {r['half_cycles_median']:g}",
+                 why="; ".join(r["stopped"]) or "–") for r in doc["rows"]]
+    return out + table(rows, [
+        ("scene", "scene", ""), ("perturbation", "perturbation", ""),
+        ("walks completed", "done", ""), ("half cycles min / median", "cycles", ""),
+        ("feedback share median", "feedback_share_median", ".0%"),
+        ("feedback share max", "feedback_share_max", ".0%"),
+        ("what stopped the others", "why", "")]) + [""]
+
+
 def _monotone(values: list[float]) -> str:
     """"rises", "falls" or "not monotone" for a series in order."""
     d = np.diff(values)
@@ -691,7 +715,7 @@ def main() -> None:
                                          "model_size_compiled", "hard_cases", "cold_solve",
                                          "node_latency_walker3d", "request_sweep", "walk",
                                          "gait_trends", "gait_library", "robots",
-                                         "any_request")}
+                                         "any_request", "model_error")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
              "`benchmarks/results/*.json`; every number below is in those files with the "
@@ -706,6 +730,7 @@ def main() -> None:
     lines += speed(docs["cold_solve"], docs["node_latency_walker3d"])
     lines += request_sweep(docs["request_sweep"])
     lines += walk(docs["walk"])
+    lines += model_error(docs["model_error"])
     lines += gait_trends(docs["gait_trends"])
     lines += gait_library(docs["gait_library"])
     lines += peers({scene: doc for scene in ("walker2d", "walker3d")
