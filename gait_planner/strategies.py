@@ -230,7 +230,8 @@ def plan_once(planner: Planner, scene: Scene, settings: GaitSettings, *,
     elif stairs_first:
         start, lower = stair_start(planner, scene, settings, guess)
         if start is None:
-            return lower
+            return (failed_result(scene, settings, STOPPED, PlanStatus.STOPPED)
+                    if planner.stopped() else lower)
         clock.iterations = lower.stats.iterations
         clock.evaluation_time = lower.stats.evaluation_time
     elif warm_start:
