@@ -24,7 +24,6 @@ from gait_planner.problem import Problem
 from gait_planner.request import PlanRequest
 from gait_planner.result import PlanResult
 from gait_planner.strategies import plan_certified, plan_free_step
-from gait_planner.verify.certify import certificate_metadata, certified
 
 
 @dataclass(frozen=True)
@@ -85,6 +84,8 @@ def plan_joined(planner: Planner, scene: Scene, settings: GaitSettings, *, steps
     `strategies.plan_free_step`; seed: a start they may take), then joined to `steps`
     half cycles (`ocp.walk_on`) and certified again; the certificate's maxima in its
     settings (`certificate_metadata`). A plan that does not converge has success False."""
+    from gait_planner.verify.certify import certificate_metadata, certified
+
     plan = plan_free_step if settings.step_length_free else plan_certified
     result, cert = plan(planner, scene, settings, warm_start=warm_start, seed=seed)
     if not result.success:

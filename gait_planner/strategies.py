@@ -34,7 +34,6 @@ from gait_planner.ocp.solution import STATUS_WORDS, failed_result
 from gait_planner.ocp.solve import STOPPED, Clock, Planner, Reached, Start, stored
 from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.result import PlanResult, PlanStatus
-from gait_planner.verify.certify import certified, grid_defects
 
 # Attempts, each a list of stages (variant, sigma fixed, limits relaxed): a cold plan fixes
 # sigma and relaxes the swing clearance and joint speed limits first
@@ -291,6 +290,8 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
     settings.max_solve_time. Returns (result, certificate; None if the plan failed); after
     a refinement the result's stats count every plan's iterations and time, and its
     settings["refinement"] says what was refined and why."""
+    from gait_planner.verify.certify import certified, grid_defects  # Pinocchio: on first use
+
     start = time.perf_counter()
     result = plan_once(planner, scene, settings, warm_start=warm_start, guess=guess, seed=seed)
     if not result.success:
