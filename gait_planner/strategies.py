@@ -175,10 +175,9 @@ def continuation(planner: Planner, scene: Scene, settings: GaitSettings, base: G
                            clock)
     if not cold.success or clock.expired():
         return None
-    planner.keep(scene, base, stored(base, cold))
-    warm = planner.attempt(scene, settings, WARM_ATTEMPTS[0],
-                           Start(cold.x, cold.duals["lam_x0"], cold.duals["lam_g0"], qref, ""),
-                           clock)
+    kept = stored(base, cold)
+    planner.keep(scene, base, kept)
+    warm = planner.attempt(scene, settings, WARM_ATTEMPTS[0], Start.of(kept, ""), clock)
     return warm if warm.success else None
 
 

@@ -32,9 +32,14 @@ def _model(recording: Path):
     from gait_planner.io.mcap_reader import read_plan_mcap
     from gait_planner.walk.mujoco_model import build_model
     from gait_planner.walk.reference import planned_joints, scene_of
+    from gait_planner.walk.walk_plan import load_config
 
     rec = planned_joints(read_plan_mcap(recording))
-    return build_model(rec, scene_of(rec), 0.04575, 0.005, 0.0005, 0.005, 20.0).model
+    cfg = load_config()  # the walker `walk` builds
+    sim = cfg["simulation"]
+    return build_model(rec, scene_of(rec), float(rec.metadata.get("foot_half_width", 0.04575)),
+                       sim["foot_sphere_radius"], sim["time_step"],
+                       sim["contact_time_constant"], cfg["joints"]["kd"]).model
 
 
 def test_no_difference_walks_as_the_plain_walk(walker2d_plan):
