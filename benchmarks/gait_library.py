@@ -14,7 +14,7 @@ Rows of results/gait_library.json:
   all on this machine: the build runs unchanged through an address, as on a real
   cluster; the 4 nodes share 2 cores, so this shows the scheduling and its overhead, not
   a speed-up, which needs more cores.
-* "serve": walker3d's libraries `SERVE_GRIDS` (step length 5 and 2.5 cm apart) built, then
+* "serve": walker3d's libraries `SERVE_GRIDS` (step length 5, 2.5 and 1.25 cm apart) built, then
   requests at the centres of their cells answered in one process as the node answers them
   (problem built, as after the node's first request): from the library
   (`gaitlib.serve.library_start`, then a warm plan), from the nearest single stored plan
@@ -49,7 +49,8 @@ from results_io import figure_path, write_results
 GRID = "step_length=0.40:0.80:0.05,slope=-5/0/5"
 QUICK_GRID = "step_length=0.5/0.6/0.7,friction_coefficient=0.6/1.0"
 SERVE_GRIDS = ("step_length=0.55:0.70:0.05,friction_coefficient=0.8/1.0",
-               "step_length=0.55:0.70:0.025,friction_coefficient=0.8/1.0")
+               "step_length=0.55:0.70:0.025,friction_coefficient=0.8/1.0",
+               "step_length=0.55:0.65:0.0125,friction_coefficient=0.8/1.0")
 
 
 def _rows(folder: Path):
@@ -102,8 +103,8 @@ def serve_rows(folder: Path, grid_text: str) -> list[dict]:
     first = resolve(plan_request(scene="walker3d", compiled=True,
                                  **grid.values(grid.indices()[0])), find_scene)
     scene, s = first.scene, first.settings
-    plan_once(planner, scene, s, warm_start=False)  # built, one plan stored: as the node after
-    # a request
+    planner.prepare(scene, s)  # every solver variant built, as the node does when it starts
+    plan_once(planner, scene, s, warm_start=False)  # one plan stored: as the node after a request
     base = planner.stored_plans(scene, s)
     out = []
     for values in centres:

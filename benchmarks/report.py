@@ -449,9 +449,11 @@ def gait_library(doc) -> list[str]:
     out += ["", "Recordings failing the verifier: " + ("; ".join(bad) if bad else "none") + "."]
     if serve:
         out += ["", "In-hull answers (walker3d libraries over step length and friction, "
-                "requests at the cells' centres, problem built as after the node's first "
-                "request): from the library's interpolation, from the nearest single stored "
-                "plan (the node without a library), and cold.", ""]
+                "requests at the cells' centres, in one process as a node answers them after "
+                "its first request: every IPOPT instance built and called once, one plan "
+                "stored): from the library's interpolation (IPOPT's barrier fixed at 1e-9), "
+                "from the nearest single stored plan (the node without a library), and "
+                "cold. Times include reading the library.", ""]
         out += table(serve, [
             ("library grid", "serve_grid", ""),
             ("step m", "step_length", ".4f"), ("mu", "friction_coefficient", ".2f"),

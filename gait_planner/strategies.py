@@ -27,7 +27,7 @@ import time
 import numpy as np
 
 from gait_planner.model.scene import Scene
-from gait_planner.ocp.guess import GUESSES, initial_multipliers
+from gait_planner.ocp.guess import GUESSES, guess_x
 from gait_planner.ocp.refine import refined_settings, refined_start
 from gait_planner.ocp.settings import GaitSettings, free_step_range, ground_of
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
@@ -47,6 +47,9 @@ from gait_planner.result import PlanResult, PlanStatus
 COLD_ATTEMPTS = ([("cold", True, True), ("cold", False, False)],
                  [("cold_inertia", True, True), ("cold_inertia", False, False)])
 WARM_ATTEMPTS = ([("warm", False, False)],)
+# A gait library's seed: the barrier fixed near zero (`ocp.solve.FIXED_BARRIER`), and if
+# that attempt fails, a warm one from the same start with IPOPT's adaptive barrier.
+SEEDED_ATTEMPTS = ([("seeded", False, False)], WARM_ATTEMPTS[0])
 # A refinement (a plan started from a coarser plan of the same request) gets no restart with
 # the inertia test: the coarse plan stands if the refined grid fails. Measured 2026-11-26
 # (walker3d, 1.0 m step, 600 s limit): the 40-interval plan missed the certificate (0.27 %),
@@ -102,8 +105,7 @@ def guess_start(planner: Planner, scene: Scene, settings: GaitSettings, guess: s
     # numpy's Haswell, Zen, SkylakeX, Prescott kernels (compiled) and CasADi
     # derivatives: J 20.7683, 20.7683, 20.7801, 20.7801, 20.7801 (0.06 % apart);
     # from sigma = 1: 20.7801, 20.7801, 20.8470, 20.8936, 20.7644 (0.6 %)
-    x = np.concatenate([np.zeros(tr.U.numel() + tr.T.numel()), initial_multipliers(tr),
-                        np.full(int(tr.S.shape[0]), settings.scaling_bounds[1])])
+    x = guess_x(tr, settings.scaling_bounds[1])
     return Start(x, np.zeros(x.size), np.zeros(int(tr.g.shape[0])), qref, origin)
 
 
@@ -192,7 +194,8 @@ def plan_once(planner: Planner, scene: Scene, settings: GaitSettings, *,
     warm_start: start from the nearest optimum the planner keeps of this problem on the
     request's ground at its speed (`StoredPlan.on`), or from `seed` (a gait library's
     interpolated start, `gaitlib.serve.library_start`, which checks its sizes), whichever
-    is nearer in step length and friction coefficient.
+    is nearer in step length and friction coefficient; from the seed with the barrier
+    fixed (`SEEDED_ATTEMPTS`).
     refine_from: settings whose grid `settings` refines (`ocp.refine`); without a
     stored plan of its own to warm-start from, the plan then starts from the planner's
     plan of the same request on that coarser grid (ValueError if there is none), and a
@@ -212,7 +215,10 @@ def plan_once(planner: Planner, scene: Scene, settings: GaitSettings, *,
         warm_start = warm_start and bool(candidates)
         stairs_first = (not warm_start and refine_from is None
                         and settings.step_height < 0 and settings.stair_segment_rows)
-        attempts = (WARM_ATTEMPTS if warm_start or stairs_first
+        nearest = (min(candidates, key=lambda r: abs(r.step - settings.step_length)
+                       + abs(r.mu - settings.friction_coefficient)) if warm_start else None)
+        attempts = (SEEDED_ATTEMPTS if warm_start and nearest is seed
+                    else WARM_ATTEMPTS if warm_start or stairs_first
                     else REFINE_ATTEMPTS if refine_from is not None else COLD_ATTEMPTS)
         # every solver the plan may use, its fallbacks' and a continuation's (warm)
         # included, before the clock starts
@@ -233,8 +239,6 @@ def plan_once(planner: Planner, scene: Scene, settings: GaitSettings, *,
         clock.iterations = lower.stats.iterations
         clock.evaluation_time = lower.stats.evaluation_time
     elif warm_start:
-        step, mu = settings.step_length, settings.friction_coefficient
-        nearest = min(candidates, key=lambda r: abs(r.step - step) + abs(r.mu - mu))
         start = Start.of(nearest, f"warm start from the plan for step length "
                                   f"{nearest.step:.4f} m, mu {nearest.mu:.3g} ({nearest.source})")
     else:
@@ -254,15 +258,19 @@ def _attempts(planner: Planner, scene: Scene, settings: GaitSettings, attempts, 
     is tried before the restart with the inertia test. Returns what was reached last and
     the start's origin with what happened, in words."""
     origin = start.origin
+    seeded = attempts is SEEDED_ATTEMPTS
     for number, attempt in enumerate(attempts):
         reached = planner.attempt(scene, settings, attempt, start, clock,
-                                  inertia_test=number > 0)
+                                  inertia_test=number > 0 and not seeded)
         if reached.success or planner.stopped() or clock.expired() \
                 or number + 1 == len(attempts):
             break
-        origin += (f"; the inertia-free attempt stopped "
+        origin += (f"; the {'fixed-barrier' if seeded else 'inertia-free'} attempt stopped "
                    f"({STATUS_WORDS.get(reached.status, reached.status)}) after "
                    f"{clock.iterations} iterations")
+        if seeded:
+            origin += ", restarted with IPOPT's adaptive barrier"
+            continue
         base = continuation_base(scene, settings)
         if number == 0 and base is not None:
             found = continuation(planner, scene, settings, base, start, guess, clock)

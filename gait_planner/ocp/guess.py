@@ -214,3 +214,11 @@ def initial_multipliers(tr: Transcription) -> np.ndarray:
             lam[z_rows] = share / len(z_rows)
             out.append(lam)
     return np.concatenate(out) if out else np.zeros(0)
+
+
+def guess_x(tr: Transcription, scaling_upper: float) -> np.ndarray:
+    """The NLP's x (nx,) of a cold start: zero torques and node multipliers, the scaled
+    contact multipliers (`initial_multipliers`) and sigma, the phases' time scalings
+    (dimensionless), at `scaling_upper`."""
+    return np.concatenate([np.zeros(tr.U.numel() + tr.T.numel()), initial_multipliers(tr),
+                           np.full(int(tr.S.shape[0]), scaling_upper)])

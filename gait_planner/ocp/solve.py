@@ -28,9 +28,10 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.compile import CompileError, compile_sources
 from gait_planner.ocp.derivatives import expand_nlp, nlp_derivatives
+from gait_planner.ocp.guess import GUESSES, guess_x
 from gait_planner.ocp.ipopt import IterationCallback, Progress, Stop, ipopt_options, run_attempt
 from gait_planner.ocp.warm_starts import WarmStartStore, StoredPlan
-from gait_planner.ocp.settings import GaitSettings
+from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.solution import build_result
 from gait_planner.ocp.transcription import Transcription, shape_of
 from gait_planner.result import PlanResult
@@ -64,14 +65,25 @@ FIRST_ATTEMPT_ITERATIONS = 400
 # torque-squared plan then missed the continuous-dynamics certificate after both
 # refinements (0.278 %; 2026-11-25, benchmarks/HISTORY.md).
 NEAR_OPTIMUM = {f"ipopt.mumps_{option}": 0 for option in ("permuting_scaling", "scaling")}
+# A gait library's seed (`gaitlib.serve.library_start`: its neighbours' optima mixed) is
+# near the request's optimum, so the barrier starts where it ends: fixed (monotone) at
+# 1e-9 instead of IPOPT's adaptive choice, whose probing costs solves of the primal-dual
+# system every iteration. walker3d in-library answers (libraries 5 cm apart, the cells'
+# centres; 2026-11-29): 5 / 7 / 12 iterations in 152 / 204 / 301 ms adaptive, 5 / 7 / 8 in
+# 117 / 164 / 216 ms with the barrier fixed, the same J to 1e-8 (benchmarks/HISTORY.md).
+# Not for other warm starts, which may start far from the optimum.
+FIXED_BARRIER = {"ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-9}
+WARM = {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
+                           for push in ("bound_push", "mult_bound_push", "slack_bound_push")},
+        **NEAR_OPTIMUM}
 # IPOPT options of the solver variants beyond the common ones (`ipopt_options`)
 VARIANTS = {
     "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
     "cold_inertia": {},
-    "warm": {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
-                                for push in ("bound_push", "mult_bound_push", "slack_bound_push")},
-             **NEAR_OPTIMUM},
+    "warm": WARM,
+    "seeded": {**WARM, **FIXED_BARRIER},
 }
+COLD_VARIANTS = ("cold", "cold_inertia")  # the rest start near an optimum
 
 
 @dataclasses.dataclass(frozen=True)
@@ -147,6 +159,21 @@ class _Built:
     solvers: dict = dataclasses.field(default_factory=dict)  # variant -> IPOPT instance
     stored: list[StoredPlan] = dataclasses.field(default_factory=list)
     library_key: str | None = None  # its file in the plan library, if the planner has one
+
+
+def _first_call(built: _Built, solver: ca.Function, s: GaitSettings) -> None:
+    """Call a new IPOPT instance once, stopped at iteration 0 (its callback's deadline
+    passed) from the kinematic guess of `s`, so that no plan pays its first call: an
+    in-library answer of walker3d (5 iterations) took 206 ms as the instance's first call
+    and 101-124 ms after, 106-109 ms as the first call after this one (which took 74 ms;
+    2026-11-29). The instance keeps no state between calls: the plans after it are the
+    same, bit for bit."""
+    tr, (lbx, ubx, lbg, ubg) = built.tr, built.bounds
+    qref = GUESSES["kinematic"](tr, s.step_length, ground_of(tr.mb.scene, s))[: tr.N - 1]
+    cb = built.callback
+    cb.deadline, cb.report, cb.stop = -np.inf, None, None
+    solver(x0=np.clip(guess_x(tr, s.scaling_bounds[1]), lbx, ubx),
+           p=tr.parameters(qref, s), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
 
 
 def _key(scene: Scene, s: GaitSettings):
@@ -292,6 +319,8 @@ class Planner:
           previous optimum's active set: walker2d re-plans in 4 instead of 9 iterations (a
           cold start with it needs 126 instead of 77; measured with IPOPT's inertia test,
           before the inertia-free variants).
+        * "seeded" is "warm" with the barrier fixed at 1e-9 (`FIXED_BARRIER`), for a gait
+          library's seed.
         (A loose first stage, tol 1e-4 with σ fixed, was tried with the inertia test:
         walker3d then needed 249 iterations in all instead of 168.)
         """
@@ -301,7 +330,9 @@ class Planner:
             opts.update(VARIANTS[variant])
             opts["ipopt.max_iter"] = min(opts["ipopt.max_iter"], s.max_iterations)
             opts.update(built.derivatives)
-            built.solvers[variant] = ca.nlpsol(f"gait_{variant}", "ipopt", built.nlp, opts)
+            solver = ca.nlpsol(f"gait_{variant}", "ipopt", built.nlp, opts)
+            _first_call(built, solver, s)
+            built.solvers[variant] = solver
             built.build_time += time.perf_counter() - start
         return built.solvers[variant]
 
@@ -318,7 +349,7 @@ class Planner:
         cb.report, cb.stop = self.progress, self.stopped
 
         def enter(k: int, variant: str) -> None:
-            self.stage("warm" if variant == "warm" else
+            self.stage("warm" if variant not in COLD_VARIANTS else
                        f"cold stage {k + 1}" + (" (inertia test)" if inertia_test else ""))
 
         totals = [clock.iterations, clock.evaluation_time]

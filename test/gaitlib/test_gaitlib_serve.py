@@ -17,6 +17,7 @@ from gait_planner.gaitlib.index import Manifest, write_manifest
 from gait_planner.gaitlib.serve import cell, library_start
 from gait_planner.gaitlib.worker import plan_point
 from gait_planner.model.loader import find_scene
+from gait_planner.ocp import solve
 from gait_planner.ocp.solve import Planner
 from gait_planner.strategies import plan_once
 from gait_planner.request import plan_request
@@ -79,6 +80,29 @@ def test_a_request_inside_the_library_starts_from_its_neighbours(library):
     assert result.cost_value == pytest.approx(cold.cost_value, rel=1e-4)
     report = verify_result(result)
     assert report.ok, report.failures
+
+
+def test_a_seed_is_solved_with_the_barrier_fixed_else_adaptive(library, monkeypatch):
+    """A seed is near its optimum: the plan fixes IPOPT's barrier (`SEEDED_ATTEMPTS`); if
+    that attempt fails (here: one iteration allowed), the same start is solved with the
+    adaptive barrier, to the same optimum, and the plan says so."""
+    problem = resolve(plan_request(scene="walker2d", step_length=0.6, friction_coefficient=0.7,
+                                   compiled=True), find_scene)
+    scene, s = problem.scene, problem.settings
+    stages = []
+    planner = Planner(stage=stages.append)
+    fixed = plan_once(planner, scene, s, seed=library_start(planner, library, problem)[0])
+    assert fixed.success and stages[-1] == "warm"
+    assert "restarted" not in fixed.settings["initial_guess"]
+    monkeypatch.setitem(solve.VARIANTS, "seeded", {**solve.VARIANTS["seeded"],
+                                                   "ipopt.max_iter": 1})
+    planner = Planner()
+    adaptive = plan_once(planner, scene, s, seed=library_start(planner, library, problem)[0])
+    assert adaptive.success, adaptive.message
+    assert "the fixed-barrier attempt stopped (iteration limit reached) after 1 iterations, " \
+        "restarted with IPOPT's adaptive barrier" in adaptive.settings["initial_guess"]
+    assert adaptive.stats.iterations > 1
+    assert adaptive.cost_value == pytest.approx(fixed.cost_value, rel=1e-7)
 
 
 @pytest.mark.parametrize("fields, words", [
