@@ -4,7 +4,7 @@ paper's walker3d gait (the default request) as soon as its service is offered.
     .venv/bin/python benchmarks/node_latency.py              # 5 fresh processes of each kind
     .venv/bin/python benchmarks/node_latency.py --runs 3 --scene walker2d
 
-Two kinds of process: without the plan library (`-p plan_library:=false`: the first request
+Two kinds of process: without the warm-start store (`-p warm_start_store:=false`: the first request
 is a cold solve from the kinematic guess) and with it as `make setup` leaves it (the
 scene's default plan only: every such run gets a cache folder of its own whose compiled
 libraries are links to the real cache's and whose plans/ holds what `gait-planner prepare`
@@ -83,7 +83,7 @@ def seeded_plans(scene: str, folder: Path) -> Path:
 
 
 def one_run(scene: str, node, plans: Path | None, step_factor: float = 1.02) -> dict:
-    """One fresh node; plans None: without the plan library, else with a copy of it."""
+    """One fresh node; plans None: without the warm-start store, else with a copy of it."""
     with tempfile.TemporaryDirectory(prefix="node_latency_") as folder:
         env = dict(os.environ)
         if plans is not None:
@@ -92,7 +92,7 @@ def one_run(scene: str, node, plans: Path | None, step_factor: float = 1.02) -> 
         process = subprocess.Popen(
             [str(GAIT_PLANNER), "node", "--ros-args", "-p", f"default_scene:={scene}",
              "-p", f"output_dir:={folder}", "-p", f"allowed_output_dirs:=['{folder}']",
-             "-p", f"plan_library:={'true' if plans is not None else 'false'}"],
+             "-p", f"warm_start_store:={'true' if plans is not None else 'false'}"],
             cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         try:
             client = node.create_client(PlanGait, SERVICE)
@@ -134,7 +134,7 @@ def run(runs: int = 5, scene: str = "walker3d") -> list[dict]:
                 rows.append({"scene": scene, "run": i, "library": library,
                              **one_run(scene, node, plans if library else None)})
                 r = rows[-1]
-                print(f"run {i}{' (plan library)' if library else ''}: service offered after "
+                print(f"run {i}{' (warm-start store)' if library else ''}: service offered after "
                       f"{r['service_ready_s']:.2f} s, first answer "
                       f"{r['first_answer_s']:.2f} s ({r['first_iterations']} it, solve "
                       f"{r['first_solve_time_s']:.2f} s), warm answer {r['warm_answer_s']:.2f} s "
@@ -158,7 +158,7 @@ def main() -> None:
         for key in ("service_ready_s", "first_answer_s", "first_answer_from_start_s",
                     "warm_answer_s"):
             values = [r[key] for r in rows if r["library"] == library]
-            print(f"median {key}{' (plan library)' if library else ''}: {np.median(values):.2f}")
+            print(f"median {key}{' (warm-start store)' if library else ''}: {np.median(values):.2f}")
     print(write_results(f"node_latency_{args.scene}", rows))
 
 

@@ -276,9 +276,9 @@ def speed(cold, node) -> list[str]:
                          "warm_answer_s", "first_iterations", "warm_iterations")
                if all(k in r for r in rows)}
         out += [provenance(node), "", f"`node_latency.py`: {len(rows)} fresh `gait-planner node` "
-                f"processes (walker3d, the default request), without and with the plan library "
+                f"processes (walker3d, the default request), without and with the warm-start store "
                 f"as `make setup` leaves it (the default plan only). Medians:", ""]
-        out += table([{"kind": "with the plan library" if library else "without (cold)",
+        out += table([{"kind": "with the warm-start store" if library else "without (cold)",
                        **{k: v for (lib, k), v in med.items() if lib == library}}
                       for library in (False, True) if (library, "first_answer_s") in med], [
             ("node", "kind", ""), ("service offered s", "service_ready_s", ".2f"),

@@ -189,7 +189,7 @@ def render_cold_solve() -> str:
     node = []
     for library in (False, True):
         runs = [r for r in latency if r["library"] is library]
-        node.append([f"{'with' if library else 'without'} the plan library",
+        node.append([f"{'with' if library else 'without'} the warm-start store",
                      f"{median(runs, 'service_ready_s'):.2f} s",
                      f"{median(runs, 'first_answer_s'):.2f} s",
                      f"{median(runs, 'first_answer_from_start_s'):.2f} s", len(runs)])

@@ -144,7 +144,7 @@ fi
 # are needed and caches them by source hash; doing it here, for every ground form a request
 # may take (level or ramp, a speed, stairs up, stairs down: 308 s for the three scenes on
 # the idle 2-core VM, 2026-11-28), keeps it off every request (`gait-planner
-# prepare`), which also plans each scene's default request into the plan library
+# prepare`), which also plans each scene's default request into the warm-start store
 # (gait_planner/ocp/library.py) that the node re-plans from. A failure only costs speed
 # later.
 prep_hash="$( { printf '%s\n' "$venv" "${GAIT_PLANNER_CACHE:-$HOME/.cache/gait_planner}";

@@ -314,7 +314,7 @@ def _add_prepare(commands: argparse._SubParsersAction) -> None:
         description="Build each SCENE's problems with compiled derivatives (one per shape: "
         "level or ramp, a requested speed, stairs up, stairs down), so that the C libraries "
         "are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) and no request "
-        "within the scene's ranges compiles, and plan its default request into the plan library "
+        "within the scene's ranges compiles, and plan its default request into the warm-start store "
         "(gait_planner/ocp/warm_starts.py), from which the node's first request re-plans warm. "
         "Takes about a minute for walker3d the first time, a few seconds when cached.")
     parser.add_argument("scenes", nargs="+", metavar="NAME|FILE.yaml",
@@ -347,7 +347,7 @@ def _prepare(args: argparse.Namespace) -> int:
                 planner.prepare(scene, shape)
         except (SceneError, SettingsError) as error:
             raise CliError(str(error)) from None
-        kept = ("its default plan kept in the plan library" if result.success
+        kept = ("its default plan kept in the warm-start store" if result.success
                 else f"its default plan failed: {result.message}")
         print(f"{name}: {used}; {kept} ({time.perf_counter() - start:.1f} s)", flush=True)
     return 0

@@ -158,7 +158,7 @@ class _Built:
     build_time: float
     solvers: dict = dataclasses.field(default_factory=dict)  # variant -> IPOPT instance
     stored: list[StoredPlan] = dataclasses.field(default_factory=list)
-    library_key: str | None = None  # its file in the plan library, if the planner has one
+    library_key: str | None = None  # its file in the warm-start store, if the planner has one
 
 
 def _first_call(built: _Built, solver: ca.Function, s: GaitSettings) -> None:

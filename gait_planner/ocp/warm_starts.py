@@ -111,7 +111,7 @@ class WarmStartStore:
             return []
         return [StoredPlan(float(fields["step"][i]), float(fields["mu"][i]), fields["x"][i],
                            fields["lam_x"][i], fields["lam_g"][i], fields["qref"][i],
-                           f"the plan library ({path.name[:12]})",
+                           f"the warm-start store ({path.name[:12]})",
                            *(float(fields[name][i]) for name in _REQUEST))
                 for i in range(count)]
 

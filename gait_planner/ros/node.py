@@ -105,7 +105,12 @@ class GaitPlannerNode(Node):
         for path in remove_stale_temporaries(self._param("output_dir")):
             self.get_logger().info(f"removed the stale temporary file {path}")
         self._recorder = RrdRecorder()  # its helper imports rerun while the problem is built
-        library = WarmStartStore() if self._param("plan_library") else None
+        use_store = self._param("warm_start_store")
+        if not self._param(parameters.DEPRECATED_STORE):
+            self.get_logger().warning(f"the parameter {parameters.DEPRECATED_STORE} is "
+                                      "deprecated: use warm_start_store (the same meaning)")
+            use_store = False
+        library = WarmStartStore() if use_store else None
         self._planner = planner or Planner(progress=self._progress, stage=self._worker.enter,
                                            stop=self._worker.stopped, library=library)
         if self._param("prepare_on_start"):

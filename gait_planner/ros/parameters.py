@@ -21,6 +21,7 @@ from gait_planner.model.loader import available_scenes
 from gait_planner.request import MAX_STEPS
 
 MAX_SOLVE_TIME = 3600.0  # s, the largest time limit a request may ask for (request_ranges)
+DEPRECATED_STORE = "plan_library"  # warm_start_store's name until 2026-11-29
 
 
 def _descriptor(kind: int, description: str, **extra) -> ParameterDescriptor:
@@ -78,12 +79,16 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         "plan at start, before the service and the action are offered, so that the first "
         "request pays no build (walker3d: about 1 s from the compiled cache)",
         read_only=True)),
-    "plan_library": (True, _descriptor(
+    "warm_start_store": (True, _descriptor(
         ParameterType.PARAMETER_BOOL,
-        "Warm-start from the plans of earlier processes (the plan library in the cache "
-        "folder, gait_planner/ocp/warm_starts.py; `make setup` plans the shipped scenes' default "
-        "requests into it) and add this node's plans to it; a request with cold_start "
-        "ignores it", read_only=True)),
+        "Warm-start from the optima of earlier processes (the warm-start store in the cache "
+        "folder, gait_planner/ocp/warm_starts.py; `make setup` plans the shipped scenes' "
+        "default requests into it) and add this node's optima to it; a request with "
+        "cold_start ignores it", read_only=True)),
+    DEPRECATED_STORE: (True, _descriptor(
+        ParameterType.PARAMETER_BOOL,
+        "Deprecated name of warm_start_store (false turns the store off too, with a "
+        "warning)", read_only=True)),
     "gait_library": ("", _descriptor(
         ParameterType.PARAMETER_STRING,
         "A gait library's folder (gait-planner library build; empty: none): a request of "

@@ -521,7 +521,7 @@ def test_a_copied_scene_loads_under_any_file_name_and_keeps_its_name(tmp_path):
 
 
 def test_scenes_named_alike_never_share_a_problem_or_a_library_entry(tmp_path):
-    """The planner's problems and the plan library are keyed by the scene's text, so a copy
+    """The planner's problems and the warm-start store are keyed by the scene's text, so a copy
     named like a shipped scene but changed gets its own (the compiled cache is keyed by the
     Functions themselves, `ocp.compile`)."""
     from gait_planner.ocp.warm_starts import WarmStartStore

@@ -1,6 +1,6 @@
 """Every way the planner can reach a plan returns one that passes the independent checker
 (`gait_planner.verify`): cold from the kinematic guess with CasADi's derivatives and with
-the compiled elements, a warm re-plan, a warm start from the plan library of an earlier
+the compiled elements, a warm re-plan, a warm start from the warm-start store of an earlier
 process, and the restart with IPOPT's inertia test after a failed inertia-free attempt.
 Each test also checks that the path it names was the one taken (the result's
 `initial_guess` says how the plan started). The continuation from the scene's step length
@@ -45,12 +45,12 @@ def test_cold_and_warm_plans_pass_the_checker(walker2d, compiled):
     _passes(warm)
 
 
-def test_a_warm_start_from_the_plan_library_passes_the_checker(walker2d, tmp_path):
+def test_a_warm_start_from_the_warm_start_store_passes_the_checker(walker2d, tmp_path):
     settings = settings_for(walker2d, compiled=True)
     assert plan_once(Planner(library=WarmStartStore(tmp_path)), walker2d, settings).success
     fresh = plan_once(Planner(library=WarmStartStore(tmp_path)), walker2d,
                       settings_for(walker2d, compiled=True, friction_coefficient=0.6))
-    assert "(the plan library" in fresh.settings["initial_guess"]
+    assert "(the warm-start store" in fresh.settings["initial_guess"]
     _passes(fresh)
 
 

@@ -1,4 +1,4 @@
-"""The plan library (`gait_planner.ocp.warm_starts`): a fresh planner re-plans warm from the plans
+"""The warm-start store (`gait_planner.ocp.warm_starts`): a fresh planner re-plans warm from the plans
 an earlier one kept on disk, to the same optimum; a damaged or foreign file is ignored."""
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ def test_a_fresh_planner_replans_warm_from_the_library_to_the_same_optimum(walke
     fresh = Planner(library=WarmStartStore(tmp_path))
     warm = plan_once(fresh, walker2d, settings)
     assert warm.success, warm.message
-    assert "(the plan library" in warm.settings["initial_guess"]
+    assert "(the warm-start store" in warm.settings["initial_guess"]
     assert warm.stats.iterations < cold.stats.iterations / 4
     assert warm.cost_value == pytest.approx(cold.cost_value, rel=1e-8)
 

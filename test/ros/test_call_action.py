@@ -73,7 +73,7 @@ def test_a_busy_node_rejects_and_ctrl_c_cancels_the_goal(node_process, tmp_path)
     out_dir.mkdir()
     node_process("--ros-args", "-p", "default_scene:=walker2d",
                  "-p", "compile_derivatives:=false", "-p", "prepare_on_start:=false",
-                 "-p", "plan_library:=false", "-p", f"output_dir:={out_dir}",
+                 "-p", "warm_start_store:=false", "-p", f"output_dir:={out_dir}",
                  "-p", f"allowed_output_dirs:=['{out_dir}']")
     process, lines = _call("--cold-start", "--intervals-per-phase", "16",
                            "--output-name", "interrupted")

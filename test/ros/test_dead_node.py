@@ -41,7 +41,7 @@ def test_a_call_ends_soon_after_its_node_dies(node_process, tmp_path, signum, ac
     out = tmp_path / "out"
     out.mkdir()
     node = node_process("--ros-args", "-p", "default_scene:=walker3d",
-                        "-p", "prepare_on_start:=false", "-p", "plan_library:=false",
+                        "-p", "prepare_on_start:=false", "-p", "warm_start_store:=false",
                         "-p", f"output_dir:={out}", "-p", f"allowed_output_dirs:=['{out}']")
     log = tmp_path / "node.log"
     _wait_for(log, "serving the service and the action", node, START_WAIT)

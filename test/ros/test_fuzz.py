@@ -480,7 +480,7 @@ def live(ros_domain_id: int, tmp_path_factory: pytest.TempPathFactory):
             [str(GAIT_PLANNER), "node", "--ros-args", "-p", f"output_dir:={output}",
              "-p", f"allowed_output_dirs:=[{output}]", "-p", f"default_scene:={DEFAULT_SCENE}",
              "-p", "prepare_on_start:=false", "-p", f"max_solve_time:={NODE_MAX_SOLVE_TIME}",
-             "-p", "plan_library:=false"],
+             "-p", "warm_start_store:=false"],
             cwd=REPO, stdout=stream, stderr=subprocess.STDOUT)
     clients: list[Client] = []
     state = Live(process, output, clients, log, before)

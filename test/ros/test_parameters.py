@@ -67,7 +67,7 @@ def parameters_of_process(make_node, executor, spin_until):
 def test_parameters_are_declared_with_type_range_and_description(parameters):
     client, wait = parameters
     names = ["default_scene", "output_dir", "allowed_output_dirs", "max_solve_time",
-             "compile_derivatives", "feedback_every", "prepare_on_start", "plan_library",
+             "compile_derivatives", "feedback_every", "prepare_on_start", "warm_start_store",
              "scene_dirs", "gait_library"]
     described = {d.name: d for d in wait(client.describe_parameters(names)).descriptors}
     assert all(described[name].description for name in names)
@@ -77,10 +77,15 @@ def test_parameters_are_declared_with_type_range_and_description(parameters):
     assert described["allowed_output_dirs"].read_only
     assert described["compile_derivatives"].type == ParameterType.PARAMETER_BOOL
     assert described["prepare_on_start"].read_only
-    assert described["plan_library"].read_only
+    assert described["warm_start_store"].read_only
     assert described["gait_library"].read_only
     assert described["scene_dirs"].type == ParameterType.PARAMETER_STRING_ARRAY
     assert described["scene_dirs"].read_only
+
+
+def test_the_former_name_of_the_warm_start_store_still_turns_it_off(planner_node):
+    assert planner_node(warm_start_store=True)._planner.library is not None
+    assert planner_node(warm_start_store=True, plan_library=False)._planner.library is None
 
 
 def test_the_default_scene_is_built_at_start_when_asked(planner_node):
