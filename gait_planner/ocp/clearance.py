@@ -27,7 +27,12 @@ the impact, and the minimal-energy optimum uses that as a brake. walker3d's heel
 as on a compliant ground or a robot's soft sole, struck 24 ms early and 7.6 cm short, and
 a simulated walker's feedback doubled (`gait-planner walk`). `strike_speed_max` (m/s)
 bounds the striking point's mean horizontal speed over the interval that ends at its
-strike (`strike_schedule`, `strike_rows`): the foot comes down rather than in.
+strike (`strike_schedule`, `strike_rows`): the foot comes down rather than in. That bound
+alone brakes the swing leg in the last intervals (walker3d's swing knee torque 7 -> 14 ->
+19 -> 46 -> -24 N m over nodes 12-16, a spike for a robot's torque loop);
+`strike_deceleration_max` (m/s^2) bounds the point's speed over the swing's earlier
+intervals too, growing by that much per second (of base time) before the strike
+(`approach_schedule`), so that the leg slows over its swing.
 
 On a ramp or stairs (`gait_planner.model.ground`) a height is measured from the ground
 the scene stands on: along the ramp's normal, or above the tread under the point, each
@@ -128,6 +133,24 @@ def strike_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]]
         if points:
             out[n] = points
     return out
+
+
+def approach_schedule(strikes: dict[int, tuple[str, ...]],
+                      held: Sequence[frozenset[str] | set[str]]
+                      ) -> dict[int, dict[int, tuple[str, ...]]]:
+    """{j: {interval m: points}}: the intervals m = n - j (j >= 1, m >= 0) of the swing of
+    each point that strikes at the end of interval n (`strike_schedule`), back to the
+    interval after its release (held as there); points in the strikes' order. Their
+    strike speed rows get the bound of `GaitSettings.strike_deceleration_max`."""
+    out: dict[int, dict[int, tuple[str, ...]]] = {}
+    for n, points in strikes.items():
+        for point in points:
+            m = n - 1
+            while m >= 0 and point not in held[m]:
+                by_interval = out.setdefault(n - m, {})
+                by_interval[m] = by_interval.get(m, ()) + (point,)
+                m -= 1
+    return {j: dict(sorted(by_interval.items())) for j, by_interval in sorted(out.items())}
 
 
 def strike_rows(mb: Multibody, points: Sequence[str], ground: Ground | ParametricGround = LEVEL

@@ -18,9 +18,10 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.model.ground import PARAMETERS
-from gait_planner.ocp.clearance import (clearance_rows, clearance_schedule, ground_heights,
-                                        midpoint_heights, schedule_heights, segment_heights,
-                                        segment_schedule, strike_rows, strike_schedule)
+from gait_planner.ocp.clearance import (approach_schedule, clearance_rows,
+                                        clearance_schedule, ground_heights, midpoint_heights,
+                                        schedule_heights, segment_heights, segment_schedule,
+                                        strike_rows, strike_schedule)
 from gait_planner.ocp.elements import ElementGroup
 from gait_planner.ocp.posture import (JOINT_RANGE_ROW_UPPER, joint_limit_constants,
                                       joint_limit_rows, joint_speed_margins)
@@ -52,6 +53,19 @@ class PathRows:
                 sum(int(e.shape[0]) for _, e in self._eq + self._ineq))
             self._ineq.append(("strike_speed", rows))
             self._without_elements["strike_speed"] = ca.MX(rows.shape[0], 1)
+        approach = approach_schedule(strikes, held) if s.strike_deceleration_max > 0 else {}
+        if approach:  # the same rows j intervals before the strike, a bound growing with j
+            first = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
+            rows = []
+            for j, schedule in approach.items():
+                bound = s.strike_speed_max + s.strike_deceleration_max * j * s.base_time_step
+                rows.append(self._interval_groups(
+                    schedule, lambda points: strike_rows(mb, points, self.gs),
+                    dict.fromkeys(schedule, np.array([s.base_time_step, bound])),
+                    first + sum(int(r.shape[0]) for r in rows)))
+            rows = ca.vertcat(*rows)
+            self._ineq.append(("strike_approach", rows))
+            self._without_elements["strike_approach"] = ca.MX(rows.shape[0], 1)
         segments = (segment_schedule(mb.scene, held, self.gs, schedule)
                     if s.ground_clearance else {})
         if segments:  # stairs down: segment rows, or midpoint rows with the edge margin

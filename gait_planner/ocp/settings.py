@@ -49,7 +49,11 @@ class GaitSettings:
     and grows along a quarter sine over it (`gait_planner.ocp.clearance`; 0 = in full from
     the first swing node); strike_speed_max m/s (0 = off): a contact point's mean horizontal
     speed over the interval that ends at its strike stays below this (`gait_planner.ocp.
-    clearance`); joint_speed_max deg/s (0 = off): every joint's relative rotation
+    clearance`); strike_deceleration_max m/s^2 (0 = off; with strike_speed_max): over the
+    earlier intervals of the swing that ends in a strike, j intervals before the last, the
+    bound is strike_speed_max + strike_deceleration_max * j * base_time_step, so the
+    point slows towards the strike over its swing rather than in one interval
+    (`gait_planner.ocp.clearance.approach_schedule`); joint_speed_max deg/s (0 = off): every joint's relative rotation
     over an interval stays below joint_speed_max * h_n; speed m/s (0 = free durations):
     the half cycle's mean forward speed step_length / (t_{N-1} - t_0), held by one
     equality row on sigma (`gait_planner.ocp.transcription.speed_row`); `settings_for`
@@ -105,6 +109,7 @@ class GaitSettings:
     swing_clearance: float = 0.0
     swing_clearance_ramp: float = 0.0
     strike_speed_max: float = 0.0
+    strike_deceleration_max: float = 0.0
     joint_speed_max: float = 0.0
     speed: float = 0.0
     speed_max: float = 0.0
@@ -168,7 +173,7 @@ class GaitSettings:
                 object.__setattr__(self, name, tuple(float(b) for b in bounds))
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
-                     "joint_speed_max", "speed", "speed_max", "twist_regularisation"):
+                     "strike_deceleration_max", "joint_speed_max", "speed", "speed_max", "twist_regularisation"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")
 

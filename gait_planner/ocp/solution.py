@@ -182,6 +182,8 @@ def build_result(tr: Transcription, settings: GaitSettings, x: np.ndarray, p: np
             "torque_regularisation": repr(s.torque_regularisation),
             "foot_half_width": repr(s.foot_half_width),
             "strike_speed_max": repr(s.strike_speed_max),
+            **({"strike_deceleration_max": repr(s.strike_deceleration_max)}
+               if s.strike_deceleration_max > 0 else {}),
             "speed": repr(s.speed),
             **ground.metadata(),
             "joint_limits_deg": ",".join(f"{name}:{np.degrees(lo):.6g}:{np.degrees(hi):.6g}"

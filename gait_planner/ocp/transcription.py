@@ -491,12 +491,12 @@ def speed_row(step, duration, inverse_speed):
 def relaxed_lower_bounds(groups, lbg: np.ndarray, clearances: list[float]) -> np.ndarray:
     """lbg with the group [(name, size, is_equality)] "ground_clearance" (rows z - height)
     lowered by each row's required height `clearances` (points only above the ground) and
-    "joint_speed", "strike_speed" and "speed" free below (`speed_row`)."""
+    "joint_speed", "strike_speed", "strike_approach" and "speed" free below (`speed_row`)."""
     out, offset = lbg.copy(), 0
     for name, size, _ in groups:
         if name == "ground_clearance":
             out[offset : offset + size] = -np.asarray(clearances)
-        elif name in ("joint_speed", "strike_speed", "speed"):
+        elif name in ("joint_speed", "strike_speed", "strike_approach", "speed"):
             out[offset : offset + size] = -np.inf
         offset += size
     return out

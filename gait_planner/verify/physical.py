@@ -25,13 +25,17 @@ n . p; stairs: z less the height of the tread under the point).
   normal to n removed: horizontal on level ground and stairs) over the interval that ends
   where it is first held again, against the metadata's ``strike_speed_max`` (0 or absent:
   noted only).
+* Strike approach: with ``strike_deceleration_max`` a (m/s^2) in the metadata, the same
+  speed over the swing's interval j before that one stays below strike_speed_max + a j
+  base_time_step.
 * Joint speed: the published JointTrajectory velocities stay below `JOINT_SPEED_MAX`, or
   the scene's higher joint_speed_max option (`joint_speed_limit`).
 * Torque smoothness: away from contact switches (a node whose held contacts differ from its
   neighbour's, and the nodes next to it), no joint's published effort zigzags: three
   consecutive first differences alternating in sign, each larger than `ZIGZAG_STEP` of the
   plan's peak effort. The largest second difference away from switches, relative to the
-  peak effort, is reported.
+  peak effort, is reported, and relative to its own joint's peak for the joints whose peak
+  is at least a fifth of the plan's (a torque loop meets a step of its own joint).
 
 Every number is computed from the recording (numpy only); `check_physical(rec, scene)`
 returns a `PhysicalReport` whose `failures` are sentences.
@@ -49,6 +53,7 @@ from gait_planner.verify.mechanics import Mechanics, SceneData
 GROUND_BAND = 1e-3  # m: a point lower than this is at ground height
 JOINT_SPEED_MAX = 600.0  # deg/s
 ZIGZAG_STEP = 0.02  # of the peak effort: first differences smaller than this are noise
+STRONG_JOINT = 0.2  # of the peak effort: joints whose roughness is judged by their own peak
 FRICTION_TOLERANCE = 1e-9  # relative to max(1 N, |F|)
 SOLID_TOLERANCE = 1e-9  # m: a segment this little below a stair edge's corner only touches it
 
@@ -68,6 +73,9 @@ class PhysicalReport:
     joint_speed_bound: float  # deg/s, `joint_speed_limit`
     fastest_joint: str
     max_torque_second_difference: float  # relative to the peak effort, away from switches
+    # (that relative to its joint's own peak, joint, node): joints above STRONG_JOINT of the
+    # peak effort, away from switches (`own_peak_roughness`)
+    roughest_joint: tuple[float, str, int]
     zigzags: tuple[tuple[str, int], ...]  # (joint angle, node) where the effort zigzags
     switch_nodes: tuple[int, ...]  # nodes whose held contacts differ from the previous node's
     failures: tuple[str, ...]
@@ -170,6 +178,25 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
     if bound > 0 and strike > bound * (1 + 1e-6):
         failures.append(f"a contact point strikes at {strike:.4g} m/s along the ground "
                         f"(strike_speed_max {bound:g} m/s)")
+    deceleration = float(rec.metadata.get("strike_deceleration_max", 0.0))
+    if bound > 0 and deceleration > 0:
+        base = float(rec.metadata["base_time_step"])
+        for name in scene.contacts:
+            C = along @ mech.contact_matrix(name)
+            for n in range(1, n_nodes):
+                if name not in active[n] or name in active[n - 1]:
+                    continue
+                j = 1
+                while n - 1 - j >= 0 and name not in active[n - 1 - j]:
+                    a, b = n - 1 - j, n - j
+                    speed = float(np.linalg.norm(C @ (q[b] - q[a]))) / (times[b] - times[a])
+                    allowed = bound + deceleration * j * base
+                    if speed > allowed * (1 + 1e-6):
+                        failures.append(
+                            f"{name} moves at {speed:.4g} m/s along the ground {j} intervals "
+                            f"before its strike at node {n} (at most {allowed:.4g} m/s: "
+                            f"strike_deceleration_max {deceleration:g} m/s^2)")
+                    j += 1
 
     speed = np.degrees(np.abs(np.asarray(rec.velocities, dtype=float)))
     fastest = np.unravel_index(int(speed.argmax()), speed.shape) if speed.size else (0, 0)
@@ -180,8 +207,10 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
                         f"at node {fastest[0]} (limit {speed_limit:.0f} deg/s)")
 
     switches = switch_nodes(active)
-    second, zigzags = _torque_roughness(np.asarray(rec.effort, dtype=float),
-                                        near_switch(n_nodes, switches), rec.joint_names)
+    calm = near_switch(n_nodes, switches)
+    second, zigzags = _torque_roughness(np.asarray(rec.effort, dtype=float), calm,
+                                        rec.joint_names)
+    own = own_peak_roughness(np.asarray(rec.effort, dtype=float), calm, rec.joint_names)
     if zigzags:
         failures.append(f"joint efforts zigzag from node to node away from contact switches, "
                         f"(angle, node): {zigzags[:6]}{' ...' if len(zigzags) > 6 else ''}")
@@ -190,7 +219,7 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
         min_edge_clearance=float(crossing), edge_clearance_at=crossing_at,
         max_strike_speed=strike, strike_speed_bound=bound,
         max_joint_speed=max_speed, joint_speed_bound=speed_limit, fastest_joint=rec.joint_names[fastest[1]] if speed.size else "",
-        max_torque_second_difference=second, zigzags=tuple(zigzags),
+        max_torque_second_difference=second, roughest_joint=own, zigzags=tuple(zigzags),
         switch_nodes=switches, failures=tuple(failures))
 
 
@@ -214,6 +243,21 @@ def effort_zigzags(effort: np.ndarray, active, names) -> list[tuple[str, int]]:
     active = tuple(tuple(a) for a in active)
     return _torque_roughness(np.asarray(effort, dtype=float),
                              near_switch(len(active), switch_nodes(active)), names)[1]
+
+
+def own_peak_roughness(effort: np.ndarray, switch: np.ndarray, names
+                       ) -> tuple[float, str, int]:
+    """(largest |second difference| away from switches relative to its joint's own peak,
+    that joint, the node) over the joints whose peak is at least `STRONG_JOINT` of the
+    plan's peak effort; efforts (N+1, na), switch (N+1,) bool (a switch or next to one)."""
+    peaks = np.abs(effort).max(axis=0) if effort.size else np.zeros(0)
+    if effort.shape[0] < 4 or not peaks.size or peaks.max() == 0.0:
+        return 0.0, "", 0
+    second = np.abs(np.diff(effort, 2, axis=0)) * ~switch[1:-1, None]  # at nodes 1..N-1
+    strong = peaks >= STRONG_JOINT * peaks.max()
+    relative = np.where(strong, second.max(axis=0) / np.where(strong, peaks, 1.0), 0.0)
+    j = int(relative.argmax())
+    return float(relative[j]), str(names[j]), int(second[:, j].argmax()) + 1
 
 
 def _torque_roughness(effort: np.ndarray, switch: np.ndarray, names) -> tuple[float, list]:

@@ -171,6 +171,10 @@ def _physical(p, rows: _Rows) -> None:
     rows.row("torque 2nd difference away from switches", _number(
         p.max_torque_second_difference, "of peak"), "no zigzag",
         "FAILED" if rows.failed("zigzag") else "ok")
+    share, joint, node = p.roughest_joint
+    rows.row(f"  of its own joint's peak ({joint}, node {node})", _number(share, "of its peak"))
+    if rows.failed("before its strike"):
+        rows.row("strike approach (strike_deceleration_max)", "", "", "FAILED")
 
 
 def _continuous(c, rows: _Rows) -> None:

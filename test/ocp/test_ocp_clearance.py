@@ -107,6 +107,28 @@ def test_strikes_are_the_intervals_before_the_strike_nodes_counted_by_hand(walke
     assert strike_schedule(scene, held) == {15: ("foot_l_heel",), 23: ("foot_l_forefoot",)}
 
 
+def test_the_approach_reaches_back_over_each_striking_points_swing(walker3d_held):
+    """`approach_schedule`: j intervals before each strike interval, back to the interval
+    after the release, or to interval 0 for a swing that began in the previous half cycle
+    (EVENTS: the left heel strikes at node 16, the forefoot at 24, both released before
+    node 0)."""
+    from gait_planner.ocp.clearance import approach_schedule, strike_schedule
+
+    scene, held = walker3d_held
+    expected: dict[int, dict[int, tuple[str, ...]]] = {}
+    for point in ("foot_l_heel", "foot_l_forefoot"):
+        last = EVENTS[point][1] - 1  # the strike's interval
+        for m in range(0, last):
+            expected.setdefault(last - m, {})[m] = (point,)
+    assert approach_schedule(strike_schedule(scene, held), held) == expected
+    # held again in interval 10: two strikes, each approached back to its own release
+    held_again = [set(h) | ({"foot_l_heel"} if n == 10 else set()) for n, h in enumerate(held)]
+    approach = approach_schedule(strike_schedule(scene, held_again), held_again)
+    heel = sorted((m, j) for j, rows in approach.items() for m, points in rows.items()
+                  if "foot_l_heel" in points)
+    assert heel == [(m, 9 - m) for m in range(9)] + [(m, 15 - m) for m in range(11, 15)]
+
+
 @settings(max_examples=60, deadline=None)
 @given(pitch=st.floats(-0.6, 0.6), roll=st.floats(-0.6, 0.6), yaw=st.floats(-3.1, 3.1),
        width=st.floats(0.0, 0.08), slope=st.floats(-30.0, 30.0))
