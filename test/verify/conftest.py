@@ -14,6 +14,8 @@ from typing import NamedTuple
 
 import pytest
 
+from solved_plans import solved  # noqa: F401  (the plans shared with test/ocp)
+
 from gait_planner.io.mcap_reader import RecordedPlan, read_plan_mcap
 from gait_planner.io.mcap_writer import write_plan_mcap
 from gait_planner.model.loader import load_scene
