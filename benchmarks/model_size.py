@@ -84,7 +84,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="compass and walker2d only")
     parser.add_argument("--compiled", action="store_true",
-                        help="compiled derivative elements (GaitSettings.compiled)")
+                        help="compiled derivative elements (SolveOptions.compiled)")
     args = parser.parse_args()
     logging.basicConfig(level=logging.ERROR)  # the paper's torso inertia warns on load
     rows = run(args.quick, args.compiled)

@@ -42,11 +42,11 @@ def bench(name: str, mode: str, spread: list[float]) -> dict:
     cold = {}
     for factor in spread:
         s = settings_for(scene, step_length=nominal.step_length * factor,
-                         compiled=nominal.compiled)
+                         compiled=nominal.solve.compiled)
         cold[factor] = plan_once(planner, scene, s, warm_start=False)
     paper = cold.get(1.0) or plan_once(planner, scene, nominal, warm_start=False)
     warm = plan_once(planner, scene, settings_for(scene, step_length=nominal.step_length * 1.02,
-                                                  compiled=nominal.compiled))
+                                                  compiled=nominal.solve.compiled))
     times = [r.stats.solve_time for r in cold.values()]
     its = [r.stats.iterations for r in cold.values()]
     return {

@@ -30,7 +30,6 @@ Rows go to benchmarks/results/work_precision.json; the plot to benchmarks/work_p
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import logging
 import time
 
@@ -132,8 +131,8 @@ def solve(method: str, scene, n: int, time_limit: float):
         result = plan_once(planner, scene, s, warm_start=False)
         size = planner.problem_size(scene, s)
     else:
-        s = dataclasses.replace(s, max_solve_time=COLLOCATION_TIME_LIMIT[scene.name],
-                                compiled=method == "collocation")
+        s = s.with_solve(max_solve_time=COLLOCATION_TIME_LIMIT[scene.name],
+                         compiled=method == "collocation")
         result = plan_collocation(scene, s)  # recursive Newton-Euler
         build = result.stats.build_time
         size = {k: result.settings.get(k) for k in ("variables", "constraints",

@@ -62,7 +62,7 @@ class PlanRequest:
     max_solve_time: float | None = None
     output_name: str = ""
     cold_start: bool = False
-    compiled: bool = False  # compile the derivative elements (GaitSettings.compiled)
+    compiled: bool = False  # compile the derivative elements (SolveOptions.compiled)
     steps: int = 1  # half cycles in the result, joined by the mirror (`ocp.walk_on`)
     posture: str = ""  # "paper" or "human" (`model.posture`); empty = the scene's
     speed: float | None = None  # m/s, step_length / half cycle (GaitSettings.speed); None: free

@@ -201,7 +201,7 @@ def plan_once(planner: Planner, scene: Scene, settings: GaitSettings, *,
     plan of the same request on that coarser grid (ValueError if there is none), and a
     failed inertia-free attempt is not restarted with the inertia test (`REFINE_ATTEMPTS`).
 
-    The time limit (settings.max_solve_time, `Clock`) covers the guess, the stairs-down
+    The time limit (settings.solve.max_solve_time, `Clock`) covers the guess, the stairs-down
     start and the solve; building a problem the planner has not seen before comes on top
     (stats.build_time).
     """
@@ -228,7 +228,7 @@ def plan_once(planner: Planner, scene: Scene, settings: GaitSettings, *,
         return failed_result(scene, settings, f"could not build the problem: {err}")
     if planner.stopped():
         return failed_result(scene, settings, STOPPED, PlanStatus.STOPPED)
-    clock = Clock.begin(settings.max_solve_time)
+    clock = Clock.begin(settings.solve.max_solve_time)
     if not warm_start and refine_from is not None:
         start = refined_from(planner, scene, refine_from, settings)
     elif stairs_first:
@@ -294,7 +294,7 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
     smallest torque error) is returned: a refinement may cure the certificate and still
     zigzag (walker3d on 3 intervals per phase: on 6 the certificate is 0.221 % and the
     knee's effort zigzags, on 12 every check passes). All plans share
-    settings.max_solve_time. Returns (result, certificate; None if the plan failed); after
+    settings.solve.max_solve_time. Returns (result, certificate; None if the plan failed); after
     a refinement the result's stats count every plan's iterations and time, and its
     settings["refinement"] says what was refined and why."""
     from gait_planner.verify.certify import certified, grid_defects  # Pinocchio: on first use
@@ -310,8 +310,8 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
         defects = latest[2]
         if not defects:
             break
-        left = settings.max_solve_time - (time.perf_counter() - start)
-        fine = dataclasses.replace(refined_settings(coarse), max_solve_time=max(left, 1e-3))
+        left = settings.solve.max_solve_time - (time.perf_counter() - start)
+        fine = refined_settings(coarse).with_solve(max_solve_time=max(left, 1e-3))
         why = (f"the plan on {sum(coarse.intervals)} intervals "
                f"({latest[0].settings['initial_guess']}): {'; '.join(defects)}")
         if left <= 0:

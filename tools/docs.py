@@ -251,7 +251,7 @@ def render_request_limits() -> str:
 
     from gait_planner.model.loader import load_scene_file
     from gait_planner.ocp import request_ranges as ranges
-    from gait_planner.ocp.settings import GaitSettings, settings_for, speed_range, step_range
+    from gait_planner.ocp.settings import SolveOptions, settings_for, speed_range, step_range
     from gait_planner.request import MAX_STEPS
 
     node = yaml.safe_load((ROOT / "config/gait_planner.yaml").read_text())
@@ -276,7 +276,7 @@ def render_request_limits() -> str:
             f"* `intervals_per_phase`: {n_lo} to {n_hi};\n"
             f"* `max_solve_time`: up to {ranges.MAX_SOLVE_TIME:g} s; 0 means the node's "
             f"`max_solve_time` ({limit:g} s in `config/gait_planner.yaml`), in `plan` the "
-            f"scene's option `max_solve_time` (default {GaitSettings.max_solve_time:g} s);\n"
+            f"scene's option `max_solve_time` (default {SolveOptions.max_solve_time:g} s);\n"
             f"* `steps`: 1 to {MAX_STEPS} half cycles;\n"
             f"* `speed`: with a step length, what the scene's σ bounds allow at it, "
             f"step_length / longest to step_length / shortest half cycle ({speeds}); "

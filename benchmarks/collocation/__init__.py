@@ -4,7 +4,7 @@ minimal coordinates, the method of bioptim, OpenSim Moco or Drake users.
 
 `plan_collocation(scene, settings, intervals_per_phase=None, progress=None)` returns the
 product's `PlanResult`; `MinimalModel` is the minimal-coordinate model (q(theta), equations
-of motion, impact map, mirror), `CollocationTranscription` the NLP. With settings.compiled
+of motion, impact map, mirror), `CollocationTranscription` the NLP. With settings.solve.compiled
 its derivatives come from per-point elements compiled to C (`collocation.elements`,
 through the product's `ocp.derivatives` and `ocp.compile`), otherwise from CasADi's
 differentiation of the whole expanded graph (`collocation.solve`).

@@ -15,7 +15,7 @@ differentiated the whole graph on the clock, walker3d at 4 intervals per phase 1
 
 The NLP is built with recursive Newton-Euler dynamics (`collocation.rnea.SpatialModel`, the
 same values as `MinimalModel` to round-off); IPOPT evaluates f and g as one expanded SX
-graph. Its derivatives (`collocation_nlp`), as settings.compiled says:
+graph. Its derivatives (`collocation_nlp`), as settings.solve.compiled says:
 * compiled (the baseline of benchmarks/work_precision.py): the rows and cost terms that are
   one formula per collocation point, knot or interval are elements (`collocation.elements`)
   whose Jacobians and Lagrangian Hessians `ocp.derivatives.nlp_derivatives` maps over the
@@ -158,7 +158,7 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
     """Plan the half cycle of (scene, settings) by Hermite-Simpson collocation in minimal
     coordinates (`benchmarks.collocation.transcription`); intervals_per_phase sets the
     collocation mesh (None: the DMOCC nodes), the problem itself is that of `settings`
-    (`collocation.mesh`); settings.compiled: derivatives compiled from the elements
+    (`collocation.mesh`); settings.solve.compiled: derivatives compiled from the elements
     (`collocation_nlp`). Returns a `PlanResult` as the product's (`collocation.result`),
     with the NLP's size in result.settings (variables, constraints, jacobian_nonzeros,
     hessian_nonzeros) and how its derivatives were evaluated ("derivatives"). Everything
@@ -171,14 +171,14 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
     except (ValueError, RuntimeError) as err:
         return failed_result(scene, settings, f"could not build the problem: {err}")
     nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
-    nlp, derivatives, used = collocation_nlp(tr, settings.compiled)
+    nlp, derivatives, used = collocation_nlp(tr, settings.solve.compiled)
     lbx, ubx, lbg, ubg = tr.bounds()
     callback = IterationCallback(nx, ng, lbg, ubg)
     solvers: dict[str, ca.Function] = {}
     for variant in dict.fromkeys(v for _, attempt in ATTEMPTS for v, _, _ in attempt):
         opts = ipopt_options(callback, settings)
         opts.update(COLLOCATION_VARIANTS[variant])
-        opts["ipopt.max_iter"] = min(opts["ipopt.max_iter"], settings.max_iterations)
+        opts["ipopt.max_iter"] = min(opts["ipopt.max_iter"], settings.solve.max_iterations)
         opts.update(derivatives)
         solvers[variant] = ca.nlpsol(f"collocation_{variant}", "ipopt", nlp, opts)
     size = problem_size(derivatives["jac_g"], derivatives["hess_lag"], nx, ng)
@@ -186,7 +186,7 @@ def plan_collocation(scene: Scene, settings: GaitSettings, *, intervals_per_phas
     start = time.perf_counter()
     p = np.array([settings.step_length, settings.friction_coefficient])
     sig = tr.variables.index("sigma")
-    callback.deadline = start + settings.max_solve_time
+    callback.deadline = start + settings.solve.max_solve_time
     callback.started, callback.iteration, callback.report = start, 0, progress
     origin = ("kinematic guess (ocp.guess) in minimal coordinates, linear; sigma fixed at its "
               "upper bound and limits relaxed, then free")

@@ -23,11 +23,11 @@ from gait_planner.gaitlib.index import (LibraryIndex, Manifest, load_start, read
 from gait_planner.gaitlib.worker import point_request
 from gait_planner.model.loader import find_scene
 from gait_planner.ocp.warm_starts import StoredPlan
-from gait_planner.ocp.settings import GaitSettings
+from gait_planner.ocp.settings import GaitSettings, SolveOptions
 from gait_planner.ocp.solve import Planner
 from gait_planner.problem import Problem, SceneLookup, resolve
 
-_FREE = ("max_solve_time", "compiled")  # settings a library's plans need not share
+_FREE = ("max_solve_time", "compiled")  # solve options a library's plans need not share
 
 
 def cell(grid: Grid, values: dict[str, float]) -> list[tuple[tuple[int, ...], float]] | str:
@@ -79,10 +79,13 @@ def library_start(planner: Planner, folder: str | Path, problem: Problem,
     own_scene, own = point.scene, point.settings
     values = {field: float(getattr(settings, field)) for field in AXES}
     same = dataclasses.replace(own, **{f: values[f] for f in grid.fields},
-                               **{f: getattr(settings, f) for f in _FREE})
+                               solve=dataclasses.replace(
+                                   own.solve, **{f: getattr(settings.solve, f) for f in _FREE}))
     if (scene.name, scene.source) != (own_scene.name, own_scene.source) or same != settings:
-        differ = [f.name for f in dataclasses.fields(GaitSettings)
-                  if getattr(same, f.name) != getattr(settings, f.name)]
+        differ = [f.name for f in dataclasses.fields(GaitSettings) if f.name != "solve"
+                  and getattr(same, f.name) != getattr(settings, f.name)]
+        differ += [f.name for f in dataclasses.fields(SolveOptions)
+                   if getattr(same.solve, f.name) != getattr(settings.solve, f.name)]
         return None, (f"not from the gait library {folder.name}: the request differs from it "
                       "in " + (", ".join(differ) if differ else "its scene"))
     corners = cell(grid, values)

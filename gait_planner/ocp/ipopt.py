@@ -79,12 +79,12 @@ def ipopt_options(callback: IterationCallback, s: GaitSettings) -> dict:
         "ipopt.print_level": 0,
         "ipopt.sb": "yes",
         "ipopt.linear_solver": "mumps",
-        "ipopt.tol": s.tolerance,
-        "ipopt.constr_viol_tol": s.constraint_tolerance,
+        "ipopt.tol": s.solve.tolerance,
+        "ipopt.constr_viol_tol": s.solve.constraint_tolerance,
         # IPOPT's "acceptable" stop keeps the tight constraint tolerance: only the
         # optimality error is relaxed (to 1e-6, IPOPT's default acceptable_tol)
-        "ipopt.acceptable_constr_viol_tol": s.constraint_tolerance,
-        "ipopt.max_iter": s.max_iterations,
+        "ipopt.acceptable_constr_viol_tol": s.solve.constraint_tolerance,
+        "ipopt.max_iter": s.solve.max_iterations,
         "ipopt.mu_strategy": "adaptive",
         "ipopt.warm_start_init_point": "yes",
     }

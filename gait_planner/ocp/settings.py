@@ -25,6 +25,37 @@ class SettingsError(ValueError):
 
 
 @dataclass(frozen=True)
+class SolveOptions:
+    """How IPOPT solves a gait problem, apart from what the problem is (`GaitSettings`):
+    tolerance (IPOPT tol), constraint_tolerance (IPOPT constr_viol_tol), max_iterations,
+    max_solve_time s (with refinements, the time of all plans of a request), compiled:
+    build the per-node derivative elements as C (`gait_planner.ocp.compile`; a one-time
+    cost per machine, cached; off here, on by default in the command line, the node and
+    the benchmarks' runs; without a C compiler for what the cache lacks, the planner falls
+    back to CasADi's derivatives). Scene files and `settings_for` take them by these names,
+    as gait options."""
+
+    tolerance: float = 1e-8
+    constraint_tolerance: float = 1e-10
+    max_iterations: int = 3000
+    max_solve_time: float = 600.0
+    compiled: bool = False
+
+    def __post_init__(self):
+        for name in ("tolerance", "constraint_tolerance", "max_solve_time"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not math.isfinite(value) or value <= 0:
+                raise SettingsError(f"{name}: must be a positive number, got {value!r}")
+        if isinstance(self.max_iterations, bool) or not isinstance(self.max_iterations, int) \
+                or self.max_iterations < 1:
+            raise SettingsError(f"max_iterations: must be a whole number >= 1, got "
+                                f"{self.max_iterations!r}")
+        if not isinstance(self.compiled, bool):
+            raise SettingsError(f"compiled: must be true or false, got {self.compiled!r}")
+
+
+@dataclass(frozen=True)
 class GaitSettings:
     """What the transcription needs beyond the scene's bodies.
 
@@ -85,11 +116,7 @@ class GaitSettings:
     refinements: how many times a converged plan that misses the continuous-dynamics
     certificate is planned again on a grid twice as fine, from itself
     (`gait_planner.strategies.plan_certified`, `gait_planner.ocp.refine`; 0 = never);
-    max_iterations, max_solve_time s (IPOPT; with refinements, the time of all plans); tolerance (IPOPT tol);
-    constraint_tolerance (IPOPT constr_viol_tol); compiled: build the per-node derivative
-    elements as C (`gait_planner.ocp.compile`; a one-time cost per machine, cached; off
-    here, on by default in the command line, the node and the benchmarks' runs; without a
-    C compiler for what the cache lacks, the planner falls back to CasADi's derivatives).
+    solve: how the problem is solved, not what it is (`SolveOptions`).
     """
 
     step_length: float
@@ -123,11 +150,11 @@ class GaitSettings:
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
     refinements: int = 2
-    max_iterations: int = 3000
-    max_solve_time: float = 600.0
-    tolerance: float = 1e-8
-    constraint_tolerance: float = 1e-10
-    compiled: bool = False
+    solve: SolveOptions = SolveOptions()
+
+    def with_solve(self, **changes) -> "GaitSettings":
+        """These settings with their `SolveOptions` changed (e.g. max_solve_time)."""
+        return dataclasses.replace(self, solve=dataclasses.replace(self.solve, **changes))
 
     def __post_init__(self):
         def bad(name, why):
@@ -155,8 +182,6 @@ class GaitSettings:
         if isinstance(self.refinements, bool) or not isinstance(self.refinements, int) \
                 or not 0 <= self.refinements <= 3:
             bad("refinements", f"must be a whole number from 0 to 3, got {self.refinements!r}")
-        if self.max_solve_time <= 0:
-            bad("max_solve_time", f"must be positive (s), got {self.max_solve_time}")
         try:  # degrees, validated and made a float
             object.__setattr__(self, "torso_lean_max", check_torso_lean_max(self.torso_lean_max))
         except PostureError as err:
@@ -254,10 +279,11 @@ def check_speed(s: GaitSettings, scene_name: str) -> None:
                 f"{at}: [{slow:.4f}, {fast:.4f}] m/s ({why})")
 
 
-_OPTION_NAMES = {f.name for f in dataclasses.fields(GaitSettings)} - {
+_SOLVE_NAMES = {f.name for f in dataclasses.fields(SolveOptions)}
+_OPTION_NAMES = ({f.name for f in dataclasses.fields(GaitSettings)} - {
     "step_length", "base_time_step", "scaling_bounds", "friction_coefficient", "cost",
-    "intervals",
-}
+    "intervals", "solve",
+}) | _SOLVE_NAMES
 
 
 def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | None = None,
@@ -304,6 +330,7 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
             if (kept := tuple(l for l in limits if (phase, l[0]) not in taken)))
     if max_solve_time is not None:
         options["max_solve_time"] = max_solve_time
+    solve = SolveOptions(**{name: options.pop(name) for name in _SOLVE_NAMES if name in options})
     chosen = gait.cost if cost is None else cost
     twist = options.get("twist_regularisation")
     if isinstance(twist, Mapping):  # a weight per cost, in that cost's units
@@ -330,6 +357,7 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
                               else float(friction_coefficient)),
         cost=chosen,
         intervals=intervals,
+        solve=solve,
         **options,
     )
     check_speed(settings, scene.name)

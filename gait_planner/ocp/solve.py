@@ -177,7 +177,7 @@ def _first_call(built: _Built, solver: ca.Function, s: GaitSettings) -> None:
 
 
 def _key(scene: Scene, s: GaitSettings):
-    return scene.name, scene.source, dataclasses.replace(shape_of(s), max_solve_time=1.0)
+    return scene.name, scene.source, shape_of(s).with_solve(max_solve_time=1.0)
 
 
 def stored(settings: GaitSettings, reached: Reached) -> StoredPlan:
@@ -256,7 +256,7 @@ class Planner:
             expanded = expand_nlp(tr)
             nlp = {"x": expanded.x, "p": expanded.p, "f": expanded.f, "g": expanded.g}
             derivatives, used = None, "CasADi, whole SX graph"
-            if s.compiled:  # a cache miss is announced, still as the building stage:
+            if s.solve.compiled:  # a cache miss is announced, still as the building stage:
                 # "building: compiling ... (how long)"
                 def announce(text: str) -> None:
                     self.stage(f"building: {text}")
@@ -328,7 +328,7 @@ class Planner:
             start = time.perf_counter()
             opts = ipopt_options(built.callback, s)
             opts.update(VARIANTS[variant])
-            opts["ipopt.max_iter"] = min(opts["ipopt.max_iter"], s.max_iterations)
+            opts["ipopt.max_iter"] = min(opts["ipopt.max_iter"], s.solve.max_iterations)
             opts.update(built.derivatives)
             solver = ca.nlpsol(f"gait_{variant}", "ipopt", built.nlp, opts)
             _first_call(built, solver, s)

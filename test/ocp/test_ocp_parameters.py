@@ -5,7 +5,6 @@ constants planned."""
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -30,8 +29,7 @@ REQUESTS = (("level", {}), ("ramp", {"slope": 5.0}), ("stairs_up", {"step_height
 
 
 def _settings(**options):
-    return dataclasses.replace(settings_for(SCENE, **options), compiled=True,
-                               max_solve_time=300.0)
+    return settings_for(SCENE, **options).with_solve(compiled=True, max_solve_time=300.0)
 
 
 def test_requests_of_one_form_share_one_problem():

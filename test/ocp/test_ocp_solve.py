@@ -30,7 +30,7 @@ def test_an_attempt_from_an_optimum_stays_there(optimum):
     planner, scene, settings, cold = optimum
     kept = planner.stored_plans(scene, settings)[0]
     before = len(planner.stored_plans(scene, settings))
-    clock = Clock.begin(settings.max_solve_time)
+    clock = Clock.begin(settings.solve.max_solve_time)
     reached = planner.attempt(scene, settings, WARM_ATTEMPTS[0], Start.of(kept, "kept"), clock)
     assert reached.success and clock.iterations <= 3
     assert np.max(np.abs(reached.x - kept.x)) < 1e-6

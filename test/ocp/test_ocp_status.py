@@ -4,7 +4,6 @@ failed, or stopped on request; and a result is not changed by the steps after th
 
 from __future__ import annotations
 
-import dataclasses
 
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
@@ -19,7 +18,7 @@ def test_converged_failed_and_stopped():
     settings = settings_for(scene)
     converged = plan_once(Planner(), scene, settings, warm_start=False)
     assert converged.success and converged.status is PlanStatus.CONVERGED
-    capped = plan_once(Planner(), scene, dataclasses.replace(settings, max_iterations=2),
+    capped = plan_once(Planner(), scene, settings.with_solve(max_iterations=2),
                        warm_start=False)
     assert not capped.success and capped.status is PlanStatus.FAILED
     stopped = plan_once(Planner(stop=lambda: True), scene, settings, warm_start=False)
