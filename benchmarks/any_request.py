@@ -7,6 +7,13 @@ certifies it (`strategies.plan_certified`: refinement after a failed certificate
 
     .venv/bin/python benchmarks/any_request.py                  # walker3d, 30 requests
     .venv/bin/python benchmarks/any_request.py --scene walker2d --requests 10
+    .venv/bin/python benchmarks/any_request.py --library FOLDER  # the same, from a library
+
+With --library (a gait library of the scene, `gait-planner library build`): a request inside
+the library's grid starts from its neighbours' interpolation (`gaitlib.serve.library_start`,
+as the node's parameter gait_library does; the time includes reading the library), every
+other one is planned cold as without it. Rows to results/any_request_library.json, with
+where each answer started.
 
 Reports per request the time from the call to the certified answer, IPOPT iterations,
 success, the certificate's verdict and whether anything was compiled (the planner's
@@ -24,8 +31,11 @@ import time
 import numpy as np
 
 from gait_planner.model.loader import load_scene  # first: it pins numpy's BLAS kernels
+from gait_planner.gaitlib.serve import library_start
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
+from gait_planner.problem import Problem
+from gait_planner.request import plan_request
 from gait_planner.strategies import plan_certified
 from results_io import write_results
 
@@ -52,6 +62,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scene", default="walker3d")
     parser.add_argument("--requests", type=int, default=30)
+    parser.add_argument("--library", help="a gait library of the scene to answer from")
     args = parser.parse_args()
     scene = load_scene(args.scene)
     compiled: list[str] = []
@@ -75,7 +86,12 @@ def main() -> None:
             continue
         before = len(compiled)
         start = time.perf_counter()
-        result, cert = plan_certified(planner, scene, settings, warm_start=False)
+        seed = None
+        if args.library:
+            problem = Problem(plan_request(scene=args.scene, **options), scene, settings)
+            seed, row["library"] = library_start(planner, args.library, problem)
+        result, cert = plan_certified(planner, scene, settings, warm_start=seed is not None,
+                                      seed=seed)
         row.update(answer_s=time.perf_counter() - start, success=result.success,
                    iterations=result.stats.iterations, build_s=result.stats.build_time,
                    certified=bool(cert is not None and not cert.failures),
@@ -93,9 +109,14 @@ def main() -> None:
               "median_s": float(np.median(times)), "p95_s": float(np.percentile(times, 95)),
               "max_s": float(times.max()),
               "median_iterations": float(np.median([r["iterations"] for r in answered]))}
+    if args.library:
+        served = [r for r in answered if r["library"].startswith("started from")]
+        totals.update(from_library=len(served), library_median_s=float(np.median(
+            [r["answer_s"] for r in served])) if served else None)
     print(totals)
-    print(write_results("any_request", rows, {"scene": args.scene, "seed": SEED,
-                                              "time_limit_s": TIME_LIMIT, "totals": totals}))
+    print(write_results("any_request_library" if args.library else "any_request", rows,
+                        {"scene": args.scene, "seed": SEED, "time_limit_s": TIME_LIMIT,
+                         "totals": totals, "library": args.library}))
 
 
 if __name__ == "__main__":

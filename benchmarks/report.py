@@ -8,6 +8,7 @@ whose file is missing says so. Conclusions are computed from the rows, not typed
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 
@@ -677,7 +678,42 @@ def robots(doc) -> list[str]:
     return out
 
 
-def any_request(doc) -> list[str]:
+def _request_rows(doc) -> list[dict]:
+    """any_request.py's rows with their ground, speed, step, mu and outcome in words."""
+    return [dict(r, ground=("slope %g°" % r["request"]["slope"] if "slope" in r["request"]
+                            else "stairs %+g m" % r["request"]["step_height"]
+                            if "step_height" in r["request"] else "level"),
+                 speed=r["request"].get("speed", "free"), step=r["request"]["step_length"],
+                 mu=r["request"]["friction_coefficient"],
+                 outcome=("refused" if "refused" in r else
+                          "certified" if r["certified"] else
+                          "converged, not certified" if r["success"] else "failed"),
+                 start=("library" if r.get("library", "").startswith("started from")
+                        else "cold"))
+            for r in doc["rows"]]
+
+
+def any_request_library(doc) -> list[str]:
+    """Section 12's rows answered with a gait library (`any_request.py --library`)."""
+    if doc is None:
+        return ["From a gait library: not measured (`any_request.py --library FOLDER`).", ""]
+    h, t = doc["header"], doc["header"]["totals"]
+    median = t.get("library_median_s")
+    out = [provenance(doc), "",
+           f"From a gait library: the same requests, answered by a process serving the walker3d library `{Path(h['library']).name}` as the node's "
+           f"parameter gait_library does; a request inside the library's grid starts from its "
+           f"neighbours, every other one is planned cold as above. {t['from_library']} of the "
+           f"{t['requests'] - t['refused']} answered requests were inside it"
+           + (f", answered in a median {median:.3f} s" if median is not None else "")
+           + f"; all answers: median {t['median_s']:.2f} s, p95 {t['p95_s']:.1f} s.", ""]
+    out += table(_request_rows(doc), [
+        ("ground", "ground", ""), ("speed m/s", "speed", ""), ("step m", "step", ""),
+        ("mu", "mu", ""), ("start", "start", ""), ("outcome", "outcome", ""),
+        ("iterations", "iterations", ".0f"), ("answer s", "answer_s", ".2f")])
+    return out + [""]
+
+
+def any_request(doc, library_doc=None) -> list[str]:
     out = ["## 12. Any request without compiling", ""]
     if doc is None:
         return out + ["Not measured (run `make bench`).", ""]
@@ -696,20 +732,11 @@ def any_request(doc) -> list[str]:
             f"| {t['requests']} | {t['refused']} | {t['compilations']} | {t['converged']} | "
             f"{t['certified']} | {t['median_s']:.2f} | {t['p95_s']:.1f} | {t['max_s']:.1f} | "
             f"{t['median_iterations']:.0f} |", ""]
-    rows = [dict(r, ground=("slope %g°" % r["request"]["slope"] if "slope" in r["request"]
-                            else "stairs %+g m" % r["request"]["step_height"]
-                            if "step_height" in r["request"] else "level"),
-                 speed=r["request"].get("speed", "free"), step=r["request"]["step_length"],
-                 mu=r["request"]["friction_coefficient"],
-                 outcome=("refused" if "refused" in r else
-                          "certified" if r["certified"] else
-                          "converged, not certified" if r["success"] else "failed"))
-            for r in doc["rows"]]
-    out += table(rows, [("ground", "ground", ""), ("speed m/s", "speed", ""),
-                        ("step m", "step", ""), ("mu", "mu", ""), ("outcome", "outcome", ""),
-                        ("iterations", "iterations", ".0f"), ("answer s", "answer_s", ".2f"),
-                        ("compiled", "compiled", "")])
-    return out + [""]
+    out += table(_request_rows(doc), [
+        ("ground", "ground", ""), ("speed m/s", "speed", ""), ("step m", "step", ""),
+        ("mu", "mu", ""), ("outcome", "outcome", ""), ("iterations", "iterations", ".0f"),
+        ("answer s", "answer_s", ".2f"), ("compiled", "compiled", "")])
+    return out + [""] + any_request_library(library_doc)
 
 
 def main() -> None:
@@ -717,7 +744,8 @@ def main() -> None:
                                          "model_size_compiled", "hard_cases", "cold_solve",
                                          "node_latency_walker3d", "request_sweep", "walk",
                                          "gait_trends", "gait_library", "robots",
-                                         "any_request", "model_error")}
+                                         "any_request", "any_request_library",
+                                         "model_error")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
              "`benchmarks/results/*.json`; every number below is in those files with the "
@@ -738,7 +766,7 @@ def main() -> None:
     lines += peers({scene: doc for scene in ("walker2d", "walker3d")
                     if (doc := load_results(f"peers_{scene}"))})
     lines += robots(docs["robots"])
-    lines += any_request(docs["any_request"])
+    lines += any_request(docs["any_request"], docs["any_request_library"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")

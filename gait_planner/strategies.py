@@ -47,8 +47,9 @@ from gait_planner.result import PlanResult, PlanStatus
 COLD_ATTEMPTS = ([("cold", True, True), ("cold", False, False)],
                  [("cold_inertia", True, True), ("cold_inertia", False, False)])
 WARM_ATTEMPTS = ([("warm", False, False)],)
-# A gait library's seed: the barrier fixed near zero (`ocp.solve.FIXED_BARRIER`), and if
-# that attempt fails, a warm one from the same start with IPOPT's adaptive barrier.
+# A gait library's seed: the barrier fixed near zero (`ocp.solve.FIXED_BARRIER`, at most
+# `SEEDED_ITERATIONS`), and if that attempt fails, a warm one from the same start with
+# IPOPT's adaptive barrier; if that fails too, the request is planned cold (`plan_once`).
 SEEDED_ATTEMPTS = ([("seeded", False, False)], WARM_ATTEMPTS[0])
 # A refinement (a plan started from a coarser plan of the same request) gets no restart with
 # the inertia test: the coarse plan stands if the refined grid fails. Measured 2026-11-26
@@ -222,8 +223,9 @@ def plan_once(planner: Planner, scene: Scene, settings: GaitSettings, *,
                     else REFINE_ATTEMPTS if refine_from is not None else COLD_ATTEMPTS)
         # every solver the plan may use, its fallbacks' and a continuation's (warm)
         # included, before the clock starts
-        planner.build(scene, settings, variants(attempts + WARM_ATTEMPTS),
-                      refinement=refine_from is not None)
+        planner.build(scene, settings, variants(
+            attempts + WARM_ATTEMPTS + (COLD_ATTEMPTS if attempts is SEEDED_ATTEMPTS else ())),
+            refinement=refine_from is not None)
     except (ValueError, RuntimeError) as err:
         return failed_result(scene, settings, f"could not build the problem: {err}")
     if planner.stopped():
@@ -246,6 +248,13 @@ def plan_once(planner: Planner, scene: Scene, settings: GaitSettings, *,
         start = guess_start(planner, scene, settings, guess, f"{guess} guess; sigma fixed at "
                             "its upper bound and limits relaxed, then free")
     reached, origin = _attempts(planner, scene, settings, attempts, start, guess, clock)
+    if attempts is SEEDED_ATTEMPTS and not (reached.success or planner.stopped()
+                                            or clock.expired()):
+        planner.stage("initial guess")
+        cold = guess_start(planner, scene, settings, guess, f"; then cold from the {guess} "
+                           "guess, sigma fixed at its upper bound and limits relaxed, then free")
+        reached, more = _attempts(planner, scene, settings, COLD_ATTEMPTS, cold, guess, clock)
+        origin += more
     if planner.stopped():
         return failed_result(scene, settings, STOPPED, PlanStatus.STOPPED)
     return planner.result(scene, settings, reached, clock, origin)

@@ -71,8 +71,11 @@ NEAR_OPTIMUM = {f"ipopt.mumps_{option}": 0 for option in ("permuting_scaling", "
 # system every iteration. walker3d in-library answers (libraries 5 cm apart, the cells'
 # centres; 2026-11-29): 5 / 7 / 12 iterations in 152 / 204 / 301 ms adaptive, 5 / 7 / 8 in
 # 117 / 164 / 216 ms with the barrier fixed, the same J to 1e-8 (benchmarks/HISTORY.md).
-# Not for other warm starts, which may start far from the optimum.
+# Not for other warm starts, which may start far from the optimum. Capped at
+# SEEDED_ITERATIONS: a seed that needs more is not near its optimum (walker3d on a 9.52 deg
+# ramp from a library 2.5 deg and 5 cm apart: 996 iterations, then locally infeasible).
 FIXED_BARRIER = {"ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-9}
+SEEDED_ITERATIONS = 100
 WARM = {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
                            for push in ("bound_push", "mult_bound_push", "slack_bound_push")},
         **NEAR_OPTIMUM}
@@ -81,7 +84,7 @@ VARIANTS = {
     "cold": {**INERTIA_FREE, "ipopt.max_iter": FIRST_ATTEMPT_ITERATIONS},
     "cold_inertia": {},
     "warm": WARM,
-    "seeded": {**WARM, **FIXED_BARRIER},
+    "seeded": {**WARM, **FIXED_BARRIER, "ipopt.max_iter": SEEDED_ITERATIONS},
 }
 COLD_VARIANTS = ("cold", "cold_inertia")  # the rest start near an optimum
 

@@ -82,10 +82,11 @@ def test_a_request_inside_the_library_starts_from_its_neighbours(library):
     assert report.ok, report.failures
 
 
-def test_a_seed_is_solved_with_the_barrier_fixed_else_adaptive(library, monkeypatch):
+def test_a_seed_is_solved_with_the_barrier_fixed_else_adaptive_else_cold(library, monkeypatch):
     """A seed is near its optimum: the plan fixes IPOPT's barrier (`SEEDED_ATTEMPTS`); if
     that attempt fails (here: one iteration allowed), the same start is solved with the
-    adaptive barrier, to the same optimum, and the plan says so."""
+    adaptive barrier, and if that fails too, the request is planned cold: each reaches the
+    same optimum, and the plan says which way."""
     problem = resolve(plan_request(scene="walker2d", step_length=0.6, friction_coefficient=0.7,
                                    compiled=True), find_scene)
     scene, s = problem.scene, problem.settings
@@ -103,6 +104,14 @@ def test_a_seed_is_solved_with_the_barrier_fixed_else_adaptive(library, monkeypa
         "restarted with IPOPT's adaptive barrier" in adaptive.settings["initial_guess"]
     assert adaptive.stats.iterations > 1
     assert adaptive.cost_value == pytest.approx(fixed.cost_value, rel=1e-7)
+    monkeypatch.setitem(solve.VARIANTS, "warm", {**solve.VARIANTS["warm"], "ipopt.max_iter": 1})
+    planner = Planner()
+    cold = plan_once(planner, scene, s, seed=library_start(planner, library, problem)[0])
+    assert cold.success, cold.message
+    assert cold.settings["initial_guess"].endswith(
+        "restarted with IPOPT's adaptive barrier; then cold from the kinematic guess, sigma "
+        "fixed at its upper bound and limits relaxed, then free")
+    assert cold.cost_value == pytest.approx(fixed.cost_value, rel=1e-6)
 
 
 @pytest.mark.parametrize("fields, words", [
