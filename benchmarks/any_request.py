@@ -27,10 +27,12 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 import numpy as np
 
 from gait_planner.model.loader import load_scene  # first: it pins numpy's BLAS kernels
+from gait_planner.gaitlib.index import read_manifest
 from gait_planner.gaitlib.serve import library_start
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
@@ -116,7 +118,9 @@ def main() -> None:
     print(totals)
     print(write_results("any_request_library" if args.library else "any_request", rows,
                         {"scene": args.scene, "seed": SEED, "time_limit_s": TIME_LIMIT,
-                         "totals": totals, "library": args.library}))
+                         "totals": totals, "library": args.library,
+                         "library_grid": read_manifest(Path(args.library)).grid
+                         if args.library else None}))
 
 
 if __name__ == "__main__":

@@ -700,9 +700,12 @@ def any_request_library(doc) -> list[str]:
     h, t = doc["header"], doc["header"]["totals"]
     median = t.get("library_median_s")
     out = [provenance(doc), "",
-           f"From a gait library: the same requests, answered by a process serving the walker3d library `{Path(h['library']).name}` as the node's "
-           f"parameter gait_library does; a request inside the library's grid starts from its "
-           f"neighbours, every other one is planned cold as above. {t['from_library']} of the "
+           f"From a gait library: the same requests, answered by a process serving the "
+           f"walker3d library `{h.get('library_grid') or Path(h['library']).name}` (a grid "
+           "of plans over the free-speed walk's fields, `gait-planner library build`) as "
+           "the node's parameter gait_library does: a request inside its grid starts from "
+           "its neighbours (a seed whose attempts fail is planned cold), every other one is "
+           f"planned cold as above. {t['from_library']} of the "
            f"{t['requests'] - t['refused']} answered requests were inside it"
            + (f", answered in a median {median:.3f} s" if median is not None else "")
            + f"; all answers: median {t['median_s']:.2f} s, p95 {t['p95_s']:.1f} s.", ""]
