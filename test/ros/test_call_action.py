@@ -20,9 +20,13 @@ GAIT_PLANNER = str(Path(sys.executable).parent / "gait-planner")
 
 def _call(*arguments: str) -> tuple[subprocess.Popen, queue.Queue]:
     """Start `gait-planner call --action ARGUMENTS`; its stderr lines arrive in the queue,
-    then None."""
+    then None. Its SIGINT is the default whatever the suite inherited: a shell starts a
+    background job with SIGINT ignored, and Python then keeps ignoring it (the Ctrl-C test
+    failed so in a fresh clone's `make test-slow` started with `&`, 2026-11-29; CI's
+    `timeout` gives its child the default)."""
     process = subprocess.Popen([GAIT_PLANNER, "call", "--action", *arguments],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     lines: queue.Queue = queue.Queue()
 
     def read() -> None:
