@@ -84,9 +84,9 @@ class GaitSettings:
     earlier intervals of the swing that ends in a strike, j intervals before the last, the
     bound is strike_speed_max + strike_deceleration_max * j * base_time_step, so the
     point slows towards the strike over its swing rather than in one interval
-    (`gait_planner.ocp.clearance.approach_schedule`); joint_speed_max deg/s (0 = off): every joint's relative rotation
-    over an interval stays below joint_speed_max * h_n; speed m/s (0 = free durations):
-    the half cycle's mean forward speed step_length / (t_{N-1} - t_0), held by one
+    (`gait_planner.ocp.clearance.approach_schedule`); joint_speed_max deg/s (0 = off):
+    every joint's relative rotation over an interval stays below joint_speed_max * h_n;
+    speed m/s (0 = free durations): the half cycle's mean forward speed step_length / (t_{N-1} - t_0), held by one
     equality row on sigma (`gait_planner.ocp.transcription.speed_row`); `settings_for`
     refuses a speed outside `speed_range`; speed_max m/s (0 = none): the fastest mean
     speed of this gait the scene declares plannable, a measured limit (faster requests
@@ -198,7 +198,8 @@ class GaitSettings:
                 object.__setattr__(self, name, tuple(float(b) for b in bounds))
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
-                     "strike_deceleration_max", "joint_speed_max", "speed", "speed_max", "twist_regularisation"):
+                     "strike_deceleration_max", "joint_speed_max", "speed", "speed_max",
+                     "twist_regularisation"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")
 

@@ -168,35 +168,34 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
 
     strike, times = 0.0, np.asarray(rec.times, dtype=float)
     along = np.eye(3) - np.outer(normal, normal)  # drops the motion along n
+    bound = float(rec.metadata.get("strike_speed_max", 0.0))
+    deceleration = float(rec.metadata.get("strike_deceleration_max", 0.0)) if bound > 0 else 0.0
+    approach = []  # failures of the strike approach, after the strike speed's
     for name in scene.contacts:
         C = along @ mech.contact_matrix(name)
+
+        def mean_speed(a: int) -> float:
+            """The point's mean speed along the ground from node a to a + 1 (m/s)."""
+            return float(np.linalg.norm(C @ (q[a + 1] - q[a]))) / (times[a + 1] - times[a])
+
         for n in range(1, n_nodes):
-            if name in active[n] and name not in active[n - 1]:
-                step = float(np.linalg.norm(C @ (q[n] - q[n - 1])))
-                strike = max(strike, step / (times[n] - times[n - 1]))
-    bound = float(rec.metadata.get("strike_speed_max", 0.0))
+            if name not in active[n] or name in active[n - 1]:
+                continue
+            strike = max(strike, mean_speed(n - 1))
+            j = 1
+            while deceleration > 0 and n - 1 - j >= 0 and name not in active[n - 1 - j]:
+                speed = mean_speed(n - 1 - j)
+                allowed = bound + deceleration * j * float(rec.metadata["base_time_step"])
+                if speed > allowed * (1 + 1e-6):
+                    approach.append(
+                        f"{name} moves at {speed:.4g} m/s along the ground {j} intervals "
+                        f"before its strike at node {n} (at most {allowed:.4g} m/s: "
+                        f"strike_deceleration_max {deceleration:g} m/s^2)")
+                j += 1
     if bound > 0 and strike > bound * (1 + 1e-6):
         failures.append(f"a contact point strikes at {strike:.4g} m/s along the ground "
                         f"(strike_speed_max {bound:g} m/s)")
-    deceleration = float(rec.metadata.get("strike_deceleration_max", 0.0))
-    if bound > 0 and deceleration > 0:
-        base = float(rec.metadata["base_time_step"])
-        for name in scene.contacts:
-            C = along @ mech.contact_matrix(name)
-            for n in range(1, n_nodes):
-                if name not in active[n] or name in active[n - 1]:
-                    continue
-                j = 1
-                while n - 1 - j >= 0 and name not in active[n - 1 - j]:
-                    a, b = n - 1 - j, n - j
-                    speed = float(np.linalg.norm(C @ (q[b] - q[a]))) / (times[b] - times[a])
-                    allowed = bound + deceleration * j * base
-                    if speed > allowed * (1 + 1e-6):
-                        failures.append(
-                            f"{name} moves at {speed:.4g} m/s along the ground {j} intervals "
-                            f"before its strike at node {n} (at most {allowed:.4g} m/s: "
-                            f"strike_deceleration_max {deceleration:g} m/s^2)")
-                    j += 1
+    failures += approach
 
     speed = np.degrees(np.abs(np.asarray(rec.velocities, dtype=float)))
     fastest = np.unravel_index(int(speed.argmax()), speed.shape) if speed.size else (0, 0)
