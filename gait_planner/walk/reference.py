@@ -108,6 +108,7 @@ class Reference:
     period: float
     step_length: float
     root_rate0: tuple[np.ndarray, np.ndarray]  # root COM velocity, angular velocity (world) at t=0
+    normal: np.ndarray  # (3,) the ground's unit normal (e_z on level ground and stairs)
 
     @classmethod
     def from_recording(cls, rec: RecordedPlan, steps: int) -> "Reference":
@@ -147,7 +148,7 @@ class Reference:
         flip = np.array([1.0, -1.0, 1.0])
         return cls(scene, steps, np.concatenate(parts["t"]), q, joint_angles(scene, q),
                    np.vstack(parts["r"]), np.vstack(parts["e"]), tuple(parts["a"]), period, s,
-                   (v * flip, -w * flip))
+                   (v * flip, -w * flip), ground.normal)
 
     def _node_weight(self, t: float) -> tuple[int, float]:
         """(n, a): t lies a of the way from node n to node n + 1 (clipped to the ends)."""

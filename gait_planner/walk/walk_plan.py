@@ -28,7 +28,7 @@ CONFIG = Path(__file__).resolve().parents[2] / "config" / "walk.yaml"
 
 _KEYS = {"simulation": ("time_step", "foot_sphere_radius", "contact_time_constant"),
          "joints": ("kp", "kd"), "torso": ("kp", "kd"),
-         "placement": ("kp", "kd", "max_shift"),
+         "placement": ("kp", "kd", "max_shift", "height_kp"),
          "stop": ("height_drop", "tilt", "joint_error")}
 
 
@@ -116,7 +116,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
                if model_error is not None and model_error.torque_delay else None)
     place = cfg["placement"]
     gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], cfg["torso"]["kp"], cfg["torso"]["kd"],
-                  place["kp"], place["kd"])
+                  place["kp"], place["kd"], place["height_kp"])
     control = ReferenceController(model, wm, ref, gains, place["max_shift"], scale)
     root_site = wm.root_site
 
