@@ -1,7 +1,7 @@
 """Plans walked in MuJoCo (issue #25): `gait-planner walk` on the default plans of walker2d
-and walker3d, walker3d's plan with the human posture, walker3d's hard requests and a plan
-recorded over 10 half cycles, each walked --steps half cycles, with the self-test (the
-plan's torques x0 and x0.5, config/walk.yaml).
+and walker3d, walker3d's plan with the human posture, walker3d's hard requests, its run and
+a plan recorded over 10 half cycles, each walked --steps half cycles, with the self-test
+(the plan's torques x0 and x0.5, config/walk.yaml).
 
     .venv/bin/python benchmarks/walk.py            # every row (~10 min on 2 cores)
     .venv/bin/python benchmarks/walk.py --quick    # walker2d's default plan only (~30 s)
@@ -51,7 +51,8 @@ class Row:
 
 
 def rows_to_walk(quick: bool) -> list[Row]:
-    """The default plans, walker3d's human posture, its hard requests, a 10-step plan."""
+    """The default plans, walker3d's human posture, its hard requests, its run, a 10-step
+    plan."""
     if quick:
         return [Row("walker2d", "default")]
     from gait_planner.model.loader import load_scene
@@ -70,7 +71,8 @@ def rows_to_walk(quick: bool) -> list[Row]:
                        if isinstance(v, dict) else v)
                    for k, v in case.overrides.items() if k not in FLAGS}
         out.append(Row("walker3d", case.name, tuple(args), dict(case.replace), options))
-    return out + [Row("walker3d", "10 half cycles recorded (--steps 10)", ("--steps", "10"))]
+    return out + [Row("walker3d", "run", ("--gait", "run")),
+                  Row("walker3d", "10 half cycles recorded (--steps 10)", ("--steps", "10"))]
 
 
 def scene_file(row: Row, path: Path) -> str:
