@@ -226,6 +226,9 @@ def render_walk() -> str:
     for r in load("walk")["rows"]:
         tests = ", ".join(f"×{t['torque_scale']:g}: {t['half_cycles_walked']} "
                           f"({100 * t['feedback_share']:.0f} %)" for t in r["self_test"])
+        if r["half_cycles_walked"] is None:  # the plan failed: nothing was walked
+            rows.append([r["scene"], r["case"], "-", r["stopped"], "-", "-", "-"])
+            continue
         rows.append([r["scene"], r["case"], f"{r['half_cycles_walked']} of {r['steps']}",
                      r["stopped"], f"{100 * r['feedback_share']:.0f} %",
                      f"{r['joint_rms_deg']:.2f} / {r['joint_max_deg']:.2f}", tests])

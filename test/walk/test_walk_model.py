@@ -131,11 +131,11 @@ def test_the_check_fails_for_another_walker(recording):
 @settings(max_examples=25, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(node=st.integers(0, 10 ** 6), leg=st.integers(0, 1),
-       shift=st.tuples(*[st.floats(-0.01, 0.01)] * 3))
+       shift=st.tuples(*[st.floats(-0.002, 0.002)] * 3))
 def test_a_legs_offsets_move_its_foot_by_the_shift_without_turning_it(recording, node, leg,
                                                                       shift):
     """The controller's foot placement and swing height (`walk.controller`): the joint
-    offsets of a whole leg (hip to ankle, `hip_legs`) for a shift of at most 1 cm move the
+    offsets of a whole leg (hip to ankle, `hip_legs`) for a shift of at most 2 mm move the
     foot by that shift (in walker2d's plane) to 25 % + 0.1 mm (the damping takes 7 %, a
     nearly straight knee bends the path) and turn it by under 2 mrad
     (the hip's angles alone, as before 2026-11-29, moved walker3d's foot 1.8 mm of a 6.5 mm
