@@ -7,7 +7,7 @@ from __future__ import annotations
 import shutil
 import sqlite3
 
-
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -138,6 +138,28 @@ def test_a_corner_without_a_plan_is_named(library, tmp_path):
     request = plan_request(scene="walker2d", step_length=0.6, friction_coefficient=0.7)
     assert "its points p01-01 around the request have no plan" in library_start(
         Planner(), copy, resolve(request, find_scene))[1]
+
+
+def test_a_library_that_changes_is_read_again(library, tmp_path):
+    """A serving process keeps what it read (`serve._open`, `serve._start`) only while the
+    files are unchanged: a point dropped from the index, or a corner's optimum replaced,
+    is seen by the next request."""
+    copy = tmp_path / "copy"
+    shutil.copytree(library, copy)
+    planner = Planner()
+    problem = resolve(plan_request(scene="walker2d", step_length=0.6, friction_coefficient=1.0),
+                      find_scene)
+    first, _ = library_start(planner, copy, problem)
+    assert first is not None
+    plans = copy / "plans"
+    shutil.copy(plans / "p01-01.start.npz", tmp_path / "other.npz")
+    (tmp_path / "other.npz").replace(plans / "p00-01.start.npz")  # a corner replaced
+    second, _ = library_start(planner, copy, problem)
+    assert second is not None and not np.array_equal(second.x, first.x)
+    with sqlite3.connect(copy / "index.sqlite") as db:
+        db.execute("DELETE FROM plans WHERE name = 'p01-01'")
+    assert "its points p01-01 around the request have no plan" in library_start(
+        planner, copy, problem)[1]
 
 
 
