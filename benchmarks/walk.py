@@ -1,7 +1,8 @@
 """Plans walked in MuJoCo (issue #25): `gait-planner walk` on the default plans of walker2d
-and walker3d, walker3d's plan with the human posture, walker3d's hard requests, its run and
-a plan recorded over 10 half cycles, each walked --steps half cycles, with the self-test
-(the plan's torques x0 and x0.5, config/walk.yaml).
+and walker3d, walker3d's plan with the human posture, walker3d's hard requests (the run and
+the forefoot-first stairs down in their own gaits) and a plan recorded over 10 half cycles,
+each walked --steps half cycles, with the self-test (the plan's torques x0 and x0.5,
+config/walk.yaml).
 
     .venv/bin/python benchmarks/walk.py            # every row (~10 min on 2 cores)
     .venv/bin/python benchmarks/walk.py --quick    # walker2d's default plan only (~30 s)
@@ -35,7 +36,8 @@ from hard_cases import cases as hard_cases
 ROOT = Path(__file__).resolve().parent.parent
 # hard_cases.py's request fields that `gait-planner plan` takes as options
 FLAGS = {"step_length": "--step-length", "friction_coefficient": "--mu",
-         "intervals_per_phase": "--intervals", "cost": "--cost"}
+         "intervals_per_phase": "--intervals", "cost": "--cost", "slope": "--slope",
+         "step_height": "--step-height", "speed": "--speed"}
 
 
 @dataclass(frozen=True)
@@ -51,8 +53,8 @@ class Row:
 
 
 def rows_to_walk(quick: bool) -> list[Row]:
-    """The default plans, walker3d's human posture, its hard requests, its run, a 10-step
-    plan."""
+    """The default plans, walker3d's human posture, its hard requests (each in its gait: the
+    run, the forefoot-first stairs down), a 10-step plan."""
     if quick:
         return [Row("walker2d", "default")]
     from gait_planner.model.loader import load_scene
@@ -64,15 +66,14 @@ def rows_to_walk(quick: bool) -> list[Row]:
         if case.guess != "kinematic":  # a solver start, not a request
             continue
         args = [a for key, value in case.overrides.items() if key in FLAGS
-                for a in (FLAGS[key], str(value))]
+                for a in (FLAGS[key], str(value))] + (["--gait", case.gait] if case.gait else [])
         # gait options: a dict option (joint_limits) keeps only the entries it changes
         declared = scene.gait.options
         options = {k: ({n: r for n, r in v.items() if declared.get(k, {}).get(n) != r}
                        if isinstance(v, dict) else v)
                    for k, v in case.overrides.items() if k not in FLAGS}
         out.append(Row("walker3d", case.name, tuple(args), dict(case.replace), options))
-    return out + [Row("walker3d", "run", ("--gait", "run")),
-                  Row("walker3d", "10 half cycles recorded (--steps 10)", ("--steps", "10"))]
+    return out + [Row("walker3d", "10 half cycles recorded (--steps 10)", ("--steps", "10"))]
 
 
 def scene_file(row: Row, path: Path) -> str:

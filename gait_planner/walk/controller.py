@@ -50,7 +50,7 @@ class Gains:
     torso_kd: float  # N m s/rad
     placement_kp: float = 0.0  # -, foot shift per m of centre-of-mass offset error
     placement_kd: float = 0.0  # s, foot shift per m/s of centre-of-mass velocity error
-    height_kp: float = 0.0  # -, share of the swing foot's height error (along the ground's normal) corrected
+    height_kp: float = 0.0  # -, share of the swing foot's height error (ground normal) corrected
 
 
 def hip_legs(scene: Scene, joint_names) -> list[tuple[list[int], set[str], list[int]]]:

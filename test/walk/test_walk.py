@@ -3,8 +3,8 @@
 Measured with config/walk.yaml as committed (2026-11-29, benchmarks/walk.py): walker2d's
 default plan walks 10 of 10 half cycles (feedback share 0.24, joint RMS 0.61 deg), with the
 plan's torques x0 1 (share 2.5), x0.5 4 (1.8); walker3d's walks 10 of 10 (share 0.33, joint
-RMS 0.94 deg), x0 1, x0.5 2. The bounds below leave room for round-off in the plan (the walk of a chaotic
-system: benchmarks/HISTORY.md gives the spread over simulation settings).
+RMS 0.94 deg), x0 1, x0.5 2. The bounds below leave room for round-off in the plan (the
+walk of a chaotic system: benchmarks/HISTORY.md gives the spread over simulation settings).
 """
 
 from __future__ import annotations
