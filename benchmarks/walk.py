@@ -57,7 +57,7 @@ def rows_to_walk(quick: bool) -> list[Row]:
     run, the forefoot-first stairs down), a 10-step plan."""
     if quick:
         return [Row("walker2d", "default")]
-    from gait_planner.model.loader import load_scene
+    from gait_planner.model.loader import load_scene, with_gait
 
     scene = load_scene("walker3d")
     out = [Row("walker2d", "default"), Row("walker3d", "default"),
@@ -65,13 +65,19 @@ def rows_to_walk(quick: bool) -> list[Row]:
     for case in hard_cases(scene):
         if case.guess != "kinematic":  # a solver start, not a request
             continue
-        args = [a for key, value in case.overrides.items() if key in FLAGS
+        overrides = dict(case.overrides)
+        # `plan --speed` without --step-length frees the step (step_length_free); the hard
+        # case's speed keeps its gait's step unless it frees it
+        if "speed" in overrides and not overrides.pop("step_length_free", False):
+            gait = with_gait(scene, case.gait) if case.gait else scene
+            overrides.setdefault("step_length", gait.gait.step_length)
+        args = [a for key, value in overrides.items() if key in FLAGS
                 for a in (FLAGS[key], str(value))] + (["--gait", case.gait] if case.gait else [])
         # gait options: a dict option (joint_limits) keeps only the entries it changes
         declared = scene.gait.options
         options = {k: ({n: r for n, r in v.items() if declared.get(k, {}).get(n) != r}
                        if isinstance(v, dict) else v)
-                   for k, v in case.overrides.items() if k not in FLAGS}
+                   for k, v in overrides.items() if k not in FLAGS}
         out.append(Row("walker3d", case.name, tuple(args), dict(case.replace), options))
     return out + [Row("walker3d", "10 half cycles recorded (--steps 10)", ("--steps", "10"))]
 
