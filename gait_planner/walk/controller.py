@@ -32,13 +32,14 @@ a MuJoCo state whose kinematics are current (after `mj_step1`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from gait_planner.model.angles import angle_names
 from gait_planner.model.scene import Scene
 
-__all__ = ["Gains", "ReferenceController", "hip_legs", "torso_torque", "rotation_error",
+__all__ = ["Gains", "Leg", "ReferenceController", "hip_legs", "torso_torque", "rotation_error",
            "placement_shift", "placement_offsets", "smoothstep"]
 
 
@@ -53,9 +54,16 @@ class Gains:
     height_kp: float = 0.0  # -, share of the swing foot's height error (ground normal) corrected
 
 
-def hip_legs(scene: Scene, joint_names) -> list[tuple[list[int], set[str], list[int]]]:
-    """Per joint on the root: (indices of its angles in `joint_names`, the contacts below
-    it, the indices of the angles of it and every joint below it: the leg)."""
+class Leg(NamedTuple):
+    """A joint on the root and what hangs from it; indices into the joint angle names."""
+
+    hip: list[int]  # the joint's own angles
+    contacts: set[str]  # the contact points below it
+    chain: list[int]  # the angles of it and every joint below it
+
+
+def hip_legs(scene: Scene, joint_names) -> list[Leg]:
+    """A `Leg` per joint on the root, its indices into `joint_names`."""
     children: dict[str, list] = {}
     for j in scene.joints:
         children.setdefault(j.parent, []).append(j)
@@ -69,7 +77,7 @@ def hip_legs(scene: Scene, joint_names) -> list[tuple[list[int], set[str], list[
             chain += [names.index(a) for a in j.angle_names]
             todo += children.get(j.child, [])
         contacts = {c.name for c in scene.contacts if c.body in below}
-        legs.append(([names.index(a) for a in joint.angle_names], contacts, sorted(chain)))
+        legs.append(Leg([names.index(a) for a in joint.angle_names], contacts, sorted(chain)))
     return legs
 
 
@@ -128,8 +136,9 @@ class ReferenceController:
         self.max_shift, self.scale = max_shift, scale
         scene = ref.scene
         self.legs = hip_legs(scene, angle_names(scene))
-        self.swings = ref.swing_windows([contacts for _, contacts, _ in self.legs])
-        self.feet = [model.body(scene.contact(sorted(c)[0]).body).id for _, c, _ in self.legs]
+        self.swings = ref.swing_windows([leg.contacts for leg in self.legs])
+        self.feet = [model.body(scene.contact(sorted(leg.contacts)[0]).body).id
+                     for leg in self.legs]
         self.root = model.body(wm.root).id
         self.joint_ids = np.array([model.joint(n).id for n in angle_names(scene)])
         self.contact_site = dict(zip((c.name for c in scene.contacts), wm.contact_sites))
@@ -151,14 +160,14 @@ class ReferenceController:
         swing = next((w for w in self.swings if w[0] <= t < w[1]), None)
         if swing is not None and active:
             t0, t1, leg = swing
-            idx = self.legs[leg][2]
-            shift = (smoothstep((t - t0) / (t1 - t0)) * self._shift(data, t, active)
-                     + self._lift(data, t, self.legs[leg][1]))
+            idx, q_ref = self.legs[leg].chain, ref.q_at(t)
+            shift = (smoothstep((t - t0) / (t1 - t0)) * self._shift(data, t, q_ref, active)
+                     + self._lift(data, q_ref, self.legs[leg].contacts))
             target[idx] += placement_offsets(*self._foot_jacobians(data, leg, wm.dof[idx]),
                                              shift)
         q, v = data.qpos[wm.qpos], data.qvel[wm.dof]
         fb = g.kp * (target - q) + g.kd * (rates - v)
-        stance = [idx for idx, contacts, _ in self.legs if contacts & set(active)]
+        stance = [leg.hip for leg in self.legs if leg.contacts & set(active)]
         if stance:
             h = model.opt.timestep
             _, D_ref = ref.root_at(t)
@@ -175,13 +184,13 @@ class ReferenceController:
         i, p = self.points[contact]
         return q_row[12 * i:12 * i + 3] + q_row[12 * i + 3:12 * i + 12].reshape(3, 3).T @ p
 
-    def _shift(self, data, t: float, active) -> np.ndarray:
-        """`placement_shift` of the centre of mass against the held contacts `active`."""
+    def _shift(self, data, t: float, q_ref: np.ndarray, active) -> np.ndarray:
+        """`placement_shift` of the centre of mass against the held contacts `active`; q_ref
+        the plan's configuration at t."""
         import mujoco
 
         ref, h = self.ref, self.model.opt.timestep
         mujoco.mj_subtreeVel(self.model, data)
-        q_ref = ref.q_at(t)
         planned = np.mean([self.planned_point(q_ref, c) for c in active], axis=0)
         support = np.mean([data.site_xpos[self.contact_site[c]] for c in active], axis=0)
         com_rate = (ref.com_at(t + h) - ref.com_at(t - h)) / (2 * h)
@@ -189,10 +198,10 @@ class ReferenceController:
                                data.subtree_com[self.root] - support - (ref.com_at(t) - planned),
                                data.subtree_linvel[self.root] - com_rate, self.max_shift)
 
-    def _lift(self, data, t: float, contacts) -> np.ndarray:
+    def _lift(self, data, q_ref: np.ndarray, contacts) -> np.ndarray:
         """(3,) m: height_kp x the contact points' mean height error along the ground's
-        normal (the plan's minus the walker's)."""
-        n, q_ref = self.ref.normal, self.ref.q_at(t)
+        normal (the plan's configuration q_ref minus the walker's)."""
+        n = self.ref.normal
         error = np.mean([n @ (self.planned_point(q_ref, c) - data.site_xpos[self.contact_site[c]])
                          for c in sorted(contacts)])
         return self.gains.height_kp * error * n
