@@ -688,9 +688,24 @@ def _request_rows(doc) -> list[dict]:
                  outcome=("refused" if "refused" in r else
                           "certified" if r["certified"] else
                           "converged, not certified" if r["success"] else "failed"),
-                 start=("library" if r.get("library", "").startswith("started from")
-                        else "cold"))
+                 start=_start_word(r))
             for r in doc["rows"]]
+
+
+def _start_word(row: dict) -> str:
+    """Where an answer started, in a word: a gait library, a path of parameters from the
+    warm-start store or this process, a warm re-plan, or cold (first, or after a failed
+    path)."""
+    if row.get("library", "").startswith("started from"):
+        return "library"
+    start = row.get("start", "")
+    if "refused" in row or not start:
+        return "cold" if "refused" not in row else "–"
+    if start.startswith("refined"):
+        return "refined"
+    if "along a parameter path" in start:
+        return "path, then cold" if "failed after" in start.split(";")[0] else "path"
+    return "warm" if start.startswith("warm") else "cold"
 
 
 def any_request_library(doc) -> list[str]:
@@ -716,29 +731,43 @@ def any_request_library(doc) -> list[str]:
     return out + [""]
 
 
-def any_request(doc, library_doc=None) -> list[str]:
+def _totals_row(label: str, t: dict) -> str:
+    return (f"| {label} | {t['requests']} | {t['refused']} | {t['compilations']} | "
+            f"{t['converged']} | {t['certified']} | {t['median_s']:.2f} | {t['p95_s']:.1f} | "
+            f"{t['max_s']:.1f} | {t['median_iterations']:.0f} |")
+
+
+def any_request(doc, cold_doc=None, library_doc=None) -> list[str]:
     out = ["## 12. Any request without compiling", ""]
     if doc is None:
         return out + ["Not measured (run `make bench`).", ""]
     h, t = doc["header"], doc["header"]["totals"]
+    store = h.get("start") == "warm-start store"
     out += [provenance(doc), "",
             f"`any_request.py` (issue #39): one fresh process after `make setup` answers "
             f"{t['requests']} requests drawn at random (seed {h['seed']}) across "
             f"{h['scene']}'s ranges (a third each level, ramp within ±10°, stairs within "
             f"±0.15 m; half at a speed within 0.8-1.6 m/s; friction 0.4-1.2, step 0.4-0.9 m), "
-            f"each cold and certified as the node certifies it (refined grids included), "
+            + ("each from a copy of the warm-start store `make setup` leaves (the default "
+               "plan and the scene's warm-start anchors) along a path of parameters from the "
+               "nearest plan kept (`gait_planner/parameter_path.py`; planned cold if the "
+               "path fails), " if store else "each cold, ")
+            + f"and certified as the node certifies it (refined grids included), "
             f"{h['time_limit_s']:g} s per request. A request whose speed its step cannot "
             "reach within the scene's durations is refused before planning, with the "
             "reachable range.", "",
-            "| requests | refused | compilations | converged | certified | median s | p95 s "
-            "| max s | median iterations |", "|---|---|---|---|---|---|---|---|---|",
-            f"| {t['requests']} | {t['refused']} | {t['compilations']} | {t['converged']} | "
-            f"{t['certified']} | {t['median_s']:.2f} | {t['p95_s']:.1f} | {t['max_s']:.1f} | "
-            f"{t['median_iterations']:.0f} |", ""]
+            "| start | requests | refused | compilations | converged | certified | median s "
+            "| p95 s | max s | median iterations |", "|---|---|---|---|---|---|---|---|---|---|",
+            _totals_row("warm-start store, paths" if store else "cold", t)]
+    if cold_doc is not None:
+        out.append(_totals_row(f"cold ({cold_doc['header']['date_utc'][:16]} UTC)",
+                               cold_doc["header"]["totals"]))
+    out.append("")
     out += table(_request_rows(doc), [
         ("ground", "ground", ""), ("speed m/s", "speed", ""), ("step m", "step", ""),
-        ("mu", "mu", ""), ("outcome", "outcome", ""), ("iterations", "iterations", ".0f"),
-        ("answer s", "answer_s", ".2f"), ("compiled", "compiled", "")])
+        ("mu", "mu", ""), ("start", "start", ""), ("outcome", "outcome", ""),
+        ("iterations", "iterations", ".0f"), ("answer s", "answer_s", ".2f"),
+        ("compiled", "compiled", "")])
     return out + [""] + any_request_library(library_doc)
 
 
@@ -747,7 +776,8 @@ def main() -> None:
                                          "model_size_compiled", "hard_cases", "cold_solve",
                                          "node_latency_walker3d", "request_sweep", "walk",
                                          "gait_trends", "gait_library", "robots",
-                                         "any_request", "any_request_library",
+                                         "any_request", "any_request_cold",
+                                         "any_request_library",
                                          "model_error")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
@@ -769,7 +799,8 @@ def main() -> None:
     lines += peers({scene: doc for scene in ("walker2d", "walker3d")
                     if (doc := load_results(f"peers_{scene}"))})
     lines += robots(docs["robots"])
-    lines += any_request(docs["any_request"], docs["any_request_library"])
+    lines += any_request(docs["any_request"], docs["any_request_cold"],
+                         docs["any_request_library"])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")

@@ -33,6 +33,7 @@ from gait_planner.ocp.settings import GaitSettings, free_step_range, ground_of
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
 from gait_planner.ocp.solve import STOPPED, Clock, Planner, Reached, Start, stored
 from gait_planner.ocp.warm_starts import StoredPlan
+from gait_planner import parameter_path
 from gait_planner.result import PlanResult, PlanStatus
 
 # Attempts, each a list of stages (variant, sigma fixed, limits relaxed): a cold plan fixes
@@ -57,7 +58,17 @@ SEEDED_ATTEMPTS = ([("seeded", False, False)], WARM_ATTEMPTS[0])
 # its refinement's inertia-free attempt stopped at the cap after 24 s, and the restart with
 # the inertia test (regularisation 1e5-1e7, MUMPS reallocating) slowed from 0.1 s to over a
 # minute an iteration, so the request ended at 617 s, past its limit, with the coarse plan.
-REFINE_ATTEMPTS = COLD_ATTEMPTS[:1]
+# It starts with the barrier fixed from 1e-4 (`ocp.solve.VARIANTS["continued"]`), then, if
+# that fails, from the same start as a cold plan's first attempt: walker3d's refinements to
+# 80 intervals of four requests that missed their certificate or zigzagged on 40 took 167 /
+# 247 / 347 / 448 iterations (9.5 / 6.2 / 13.8 / 14.7 s) cold, 114 / 220 / 176 / 337 (6.0
+# / 4.9 / 7.0 / 11.5 s) this way, each plan passing the same checks (2026-11-29).
+REFINE_ATTEMPTS = ([("continued", False, False)], COLD_ATTEMPTS[0])
+# What the first attempt of a sequence whose failure the next retries from the same start
+# (no continuation, no inertia test) is called, and what follows, in words
+_RETRIED = {"seeded": ("fixed-barrier", "restarted with IPOPT's adaptive barrier"),
+            "continued": ("fixed-barrier", "restarted with sigma fixed and limits relaxed, "
+                                           "then free")}
 # Stairs down (m per step) a cold plan starts on from its kinematic guess; a deeper stair
 # is planned on this depth first and continued from that plan (warm). walker2d,
 # 2026-11-27: 0.10 m down converged cold in 388 iterations, 0.15 m down found no plan in
@@ -83,6 +94,14 @@ def continuation_base(scene: Scene, s: GaitSettings) -> GaitSettings | None:
     base = dataclasses.replace(s, step_length=scene.gait.step_length,
                                slope=0.0 if s.step_height == 0 else s.slope)
     return None if base == s else base
+
+
+def described_plan(plan: StoredPlan) -> str:
+    """A kept plan's request, in words."""
+    pace = f" at {plan.speed:g} m/s" if plan.speed else ""
+    ground = (f"a {plan.slope:g} deg ramp" if plan.slope else
+              f"{plan.step_height:g} m stairs" if plan.step_height else "level ground")
+    return f"step length {plan.step:.4f} m, mu {plan.mu:.3g} on {ground}{pace}"
 
 
 def described(s: GaitSettings) -> str:
@@ -123,22 +142,24 @@ def refined_from(planner: Planner, scene: Scene, coarse: GaitSettings, fine: Gai
     coarse_tr, fine_tr = planner.build(scene, coarse, ()), planner.build(scene, fine, ())
     x, qref = refined_start(coarse_tr, plans[-1], fine_tr, coarse)
     return Start(x, np.zeros(x.size), np.zeros(int(fine_tr.g.shape[0])), qref,
-                 f"refined from the plan on {coarse_tr.N} intervals to {fine_tr.N}; "
-                 "sigma fixed and limits relaxed, then free")
+                 f"refined from the plan on {coarse_tr.N} intervals to {fine_tr.N}, the "
+                 "barrier fixed from 1e-4")
 
 
-def stair_start(planner: Planner, scene: Scene, settings: GaitSettings, guess: str
-                ) -> tuple[Start | None, PlanResult]:
+def stair_start(planner: Planner, scene: Scene, settings: GaitSettings, guess: str,
+                clock: Clock) -> tuple[Start | None, PlanResult]:
     """The start of a cold plan on stairs down: the same request on stairs at most
     `STAIR_COLD_MAX` deep with the edge margin and midpoint rows instead of the segment
     rows, and the scene's own scaling bounds (not `stairs_down_scaling_bounds`), planned
     by `plan_once` (warm from a plan of that problem the planner keeps, else cold from
-    `guess`; its problem is kept for later plans). Returns (the start at its optimum, its
+    `guess`; its problem is kept for later plans) within what is left of the request's
+    `clock`. Returns (the start at its optimum, its
     multipliers of g zero: the segment rows are not its rows; its result), or (None, a
     failed result of `settings` saying so) if it failed."""
     lower = dataclasses.replace(
         settings, step_height=max(settings.step_height, -STAIR_COLD_MAX),
-        stair_segment_rows=False, scaling_bounds=tuple(scene.gait.scaling_bounds))
+        stair_segment_rows=False, scaling_bounds=tuple(scene.gait.scaling_bounds)
+    ).with_solve(max_solve_time=max(clock.deadline - time.perf_counter(), 1e-3))
     result = plan_once(planner, scene, lower, warm_start=True, guess=guess)
     if not result.success:
         return None, failed_result(
@@ -213,6 +234,12 @@ def plan_once(planner: Planner, scene: Scene, settings: GaitSettings, *,
         planner.build(scene, settings, (), refinement=refine_from is not None)
         candidates = [r for r in planner.stored_plans(scene, settings) if r.on(settings)]
         candidates += [] if seed is None else [seed]
+        path = (parameter_path.nearest(planner, scene, settings)
+                if warm_start and seed is None and refine_from is None else None)
+        if path is not None and path[2] <= 1.0 and path[0].on(settings):
+            path = None  # near enough to re-plan warm
+        elif path is not None:
+            candidates = []  # continued along the path; planned as below if that fails
         warm_start = warm_start and bool(candidates)
         stairs_first = (not warm_start and refine_from is None
                         and settings.step_height < 0 and settings.stair_segment_rows)
@@ -224,29 +251,50 @@ def plan_once(planner: Planner, scene: Scene, settings: GaitSettings, *,
         # every solver the plan may use, its fallbacks' and a continuation's (warm)
         # included, before the clock starts
         planner.build(scene, settings, variants(
-            attempts + WARM_ATTEMPTS + (COLD_ATTEMPTS if attempts is SEEDED_ATTEMPTS else ())),
+            attempts + WARM_ATTEMPTS + (COLD_ATTEMPTS if attempts is SEEDED_ATTEMPTS else ())
+            + (([("continued", False, False)],) if path is not None else ())),
             refinement=refine_from is not None)
     except (ValueError, RuntimeError) as err:
         return failed_result(scene, settings, f"could not build the problem: {err}")
     if planner.stopped():
         return failed_result(scene, settings, STOPPED, PlanStatus.STOPPED)
     clock = Clock.begin(settings.solve.max_solve_time)
+    before = ""
+    if path is not None:
+        planner.stage("continuing along a parameter path")
+        plan, point, _ = path
+        reached, steps = parameter_path.follow(planner, scene, settings, plan, point, clock)
+        before = (f"continued from the plan for {described_plan(plan)} ({plan.source}) in "
+                  f"{steps} steps along a parameter path")
+        if reached is not None:
+            return planner.result(scene, settings, reached, clock, before)
+        if planner.stopped():
+            return failed_result(scene, settings, STOPPED, PlanStatus.STOPPED)
+        before += f" (failed after {clock.iterations} iterations)"
+        if clock.expired():
+            failed = failed_result(scene, settings, f"{before}; the time limit of "
+                                   f"{settings.solve.max_solve_time:g} s was reached")
+            return dataclasses.replace(failed, stats=dataclasses.replace(
+                failed.stats, iterations=clock.iterations,
+                solve_time=time.perf_counter() - clock.started))
+        before += "; then "
     if not warm_start and refine_from is not None:
         start = refined_from(planner, scene, refine_from, settings)
     elif stairs_first:
-        start, lower = stair_start(planner, scene, settings, guess)
+        start, lower = stair_start(planner, scene, settings, guess, clock)
         if start is None:
             return (failed_result(scene, settings, STOPPED, PlanStatus.STOPPED)
                     if planner.stopped() else lower)
-        clock.iterations = lower.stats.iterations
-        clock.evaluation_time = lower.stats.evaluation_time
+        clock.iterations += lower.stats.iterations
+        clock.evaluation_time += lower.stats.evaluation_time
+        start = dataclasses.replace(start, origin=before + start.origin)
     elif warm_start:
         start = Start.of(nearest, f"warm start from the plan for step length "
                                   f"{nearest.step:.4f} m, mu {nearest.mu:.3g} ({nearest.source})")
     else:
         planner.stage("initial guess")
-        start = guess_start(planner, scene, settings, guess, f"{guess} guess; sigma fixed at "
-                            "its upper bound and limits relaxed, then free")
+        start = guess_start(planner, scene, settings, guess, f"{before}{guess} guess; sigma "
+                            "fixed at its upper bound and limits relaxed, then free")
     reached, origin = _attempts(planner, scene, settings, attempts, start, guess, clock)
     if attempts is SEEDED_ATTEMPTS and not (reached.success or planner.stopped()
                                             or clock.expired()):
@@ -265,20 +313,21 @@ def _attempts(planner: Planner, scene: Scene, settings: GaitSettings, attempts, 
     """`attempts` in turn from `start` until one succeeds, the request's time is up or the
     plan is stopped; after a failed inertia-free attempt of a cold plan the `continuation`
     is tried before the restart with the inertia test. Returns what was reached last and
-    the start's origin with what happened, in words."""
+    the start's origin with what happened, in words. A seeded or refined plan's first
+    attempt is retried by the next (`_RETRIED`) without a continuation."""
     origin = start.origin
-    seeded = attempts is SEEDED_ATTEMPTS
+    retried = _RETRIED.get(attempts[0][0][0])
     for number, attempt in enumerate(attempts):
         reached = planner.attempt(scene, settings, attempt, start, clock,
-                                  inertia_test=number > 0 and not seeded)
+                                  inertia_test=number > 0 and retried is None)
         if reached.success or planner.stopped() or clock.expired() \
                 or number + 1 == len(attempts):
             break
-        origin += (f"; the {'fixed-barrier' if seeded else 'inertia-free'} attempt stopped "
+        origin += (f"; the {retried[0] if retried else 'inertia-free'} attempt stopped "
                    f"({STATUS_WORDS.get(reached.status, reached.status)}) after "
                    f"{clock.iterations} iterations")
-        if seeded:
-            origin += ", restarted with IPOPT's adaptive barrier"
+        if retried:
+            origin += f", {retried[1]}"
             continue
         base = continuation_base(scene, settings)
         if number == 0 and base is not None:

@@ -328,6 +328,22 @@ def _compile_note(stage: str) -> None:
         _stage(stage)
 
 
+def _plan_anchors(planner, scene) -> list[bool]:
+    """Plan the scene's warm-start anchors (`ocp.settings.anchor_requests`), each from the
+    nearest plan kept, into the planner's warm-start store; whether each converged."""
+    from gait_planner.ocp.settings import anchor_requests, settings_for
+    from gait_planner.strategies import plan_once
+
+    out = []
+    for anchor in anchor_requests(scene):
+        result = plan_once(planner, scene, settings_for(scene, compiled=True, **anchor))
+        out.append(result.success)
+        if not result.success:
+            print(f"{scene.name}: the warm-start anchor {anchor} failed: {result.message}",
+                  flush=True)
+    return out
+
+
 def _prepare(args: argparse.Namespace) -> int:
     from gait_planner.model.loader import SceneError, find_scene
     from gait_planner.ocp.warm_starts import WarmStartStore
@@ -345,9 +361,12 @@ def _prepare(args: argparse.Namespace) -> int:
             result = plan_once(planner, scene, settings, warm_start=False)
             for shape in form_requests(scene, settings)[1:]:  # the default's is built
                 planner.prepare(scene, shape)
+            anchors = _plan_anchors(planner, scene) if result.success else []
         except (SceneError, SettingsError) as error:
             raise CliError(str(error)) from None
-        kept = ("its default plan kept in the warm-start store" if result.success
+        kept = ("its default plan" + (f" and {sum(anchors)} of {len(anchors)} warm-start "
+                                      "anchors" if anchors else "")
+                + " kept in the warm-start store" if result.success
                 else f"its default plan failed: {result.message}")
         print(f"{name}: {used}; {kept} ({time.perf_counter() - start:.1f} s)", flush=True)
     return 0

@@ -102,8 +102,9 @@ class GaitSettings:
     (`check_ground`); stair_segment_rows: on stairs down, each swing segment is kept above
     the stair edges' corners by the segment rows (True) or by the edge margin (False: the
     start of a cold plan, `gait_planner.ocp.solve`; `gait_planner.model.ground.Ground`);
-    stairs_down_scaling_bounds (lower, upper): sigma's bounds on stairs down in place of
-    scaling_bounds (empty: the same), set by `settings_for`;
+    stairs_down_scaling_bounds, speed_scaling_bounds (lower, upper): sigma's bounds on
+    stairs down, at a requested speed (empty: scaling_bounds); `settings_for` sets
+    scaling_bounds to the widest of those that apply;
     phase_joint_limits: ((phase, ((angle, lo rad, hi rad), ...)), ...) from the option
     ``phase_joint_limits: {phase: {angle: [lo, hi]}}`` in degrees, ranges at the nodes that
     start an interval of that phase only; posture "paper" (the scene's declared ranges) or
@@ -146,6 +147,7 @@ class GaitSettings:
     step_height: float = 0.0
     stair_segment_rows: bool = True
     stairs_down_scaling_bounds: tuple[float, ...] = ()
+    speed_scaling_bounds: tuple[float, ...] = ()
     twist_regularisation: float = 0.0
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
@@ -186,7 +188,8 @@ class GaitSettings:
             object.__setattr__(self, "torso_lean_max", check_torso_lean_max(self.torso_lean_max))
         except PostureError as err:
             raise SettingsError(str(err)) from None
-        for name, unit in (("step_length_bounds", " m"), ("stairs_down_scaling_bounds", "")):
+        for name, unit in (("step_length_bounds", " m"), ("stairs_down_scaling_bounds", ""),
+                           ("speed_scaling_bounds", "")):
             bounds = getattr(self, name)
             if bounds != ():
                 if (not isinstance(bounds, (list, tuple)) or len(bounds) != 2
@@ -287,6 +290,30 @@ _OPTION_NAMES = ({f.name for f in dataclasses.fields(GaitSettings)} - {
 }) | _SOLVE_NAMES
 
 
+# The gait option listing the requests `gait-planner prepare` plans into the warm-start
+# store besides the default (`anchor_requests`)
+ANCHORS_OPTION = "warm_start_anchors"
+_ANCHOR_FIELDS = ("slope", "step_height", "speed", "step_length", "friction_coefficient")
+
+
+def anchor_requests(scene: Scene) -> list[dict]:
+    """The scene's warm-start anchors (gait option `warm_start_anchors`: a list of
+    requests, each a mapping of some of slope, step_height, speed, step_length and
+    friction_coefficient): planned by `gait-planner prepare` so that a request is continued
+    from a near plan (`gait_planner.parameter_path`). [] if the scene declares none;
+    SettingsError naming what is wrong with the list."""
+    anchors = (scene.gait.options.get(ANCHORS_OPTION) or []) if scene.gait else []
+    if not isinstance(anchors, (list, tuple)):
+        raise SettingsError(f"{ANCHORS_OPTION} must be a list of requests, got {anchors!r}")
+    for anchor in anchors:
+        if not isinstance(anchor, Mapping) or not anchor or set(anchor) - set(_ANCHOR_FIELDS) \
+                or not all(isinstance(v, (int, float)) and math.isfinite(v)
+                           for v in anchor.values()):
+            raise SettingsError(f"{ANCHORS_OPTION}: {anchor!r} is not a request (a mapping "
+                                f"of numbers, its keys among {', '.join(_ANCHOR_FIELDS)})")
+    return [dict(anchor) for anchor in anchors]
+
+
 def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | None = None,
                  friction_coefficient: float | None = None,
                  intervals_per_phase: int | None = None,
@@ -306,6 +333,7 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
     if gait is None:
         raise SettingsError(f"scene {scene.name!r} declares no gait: nothing to plan")
     options = dict(gait.options)
+    options.pop(ANCHORS_OPTION, None)  # `anchor_requests`: not a setting of a plan
     unknown = (set(options) | set(overrides)) - _OPTION_NAMES
     if unknown:
         raise SettingsError(
@@ -346,10 +374,13 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
         base_time_step *= sum(intervals) / (int(intervals_per_phase) * len(intervals))
         intervals = (int(intervals_per_phase),) * len(gait.phases)
     scaling_bounds = tuple(gait.scaling_bounds)
-    height = options.get("step_height", 0.0)
-    if isinstance(height, (int, float)) and height < 0 \
-            and options.get("stairs_down_scaling_bounds"):
-        scaling_bounds = tuple(options["stairs_down_scaling_bounds"])
+    height, speed = options.get("step_height", 0.0), options.get("speed", 0.0)
+    for applies, name in ((isinstance(height, (int, float)) and height < 0,
+                           "stairs_down_scaling_bounds"),
+                          (isinstance(speed, (int, float)) and speed > 0, "speed_scaling_bounds")):
+        wider = options.get(name)
+        if applies and wider and len(wider) == 2:  # checked by GaitSettings
+            scaling_bounds = (min(scaling_bounds[0], wider[0]), max(scaling_bounds[1], wider[1]))
     settings = GaitSettings(
         step_length=gait.step_length if step_length is None else float(step_length),
         base_time_step=base_time_step,

@@ -76,6 +76,17 @@ NEAR_OPTIMUM = {f"ipopt.mumps_{option}": 0 for option in ("permuting_scaling", "
 # ramp from a library 2.5 deg and 5 cm apart: 996 iterations, then locally infeasible).
 FIXED_BARRIER = {"ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-9}
 SEEDED_ITERATIONS = 100
+# A step of a parameter path (`gait_planner.parameter_path`: the request's ground, pace,
+# step and friction moved from a kept optimum towards the request's): the barrier fixed
+# (monotone) from 1e-4, so that the optimum's active set can change (contact forces leave
+# their cones' faces, clearances and sigma their bounds) where at 1e-9 a step that changes
+# it stalled. walker3d, 2026-11-29 (benchmarks/HISTORY.md), 11 requests continued from the
+# default plan in steps of 2.5 deg, 2.5 cm of stair, 5 cm of step, 0.1 m/s: from 1e-9
+# (the seeded variant) 7 of 11 steps into a stair or a speed stopped at its cap of 100;
+# from 1e-4 they took 20-90 iterations; 1e-4 with a loose tolerance in the steps before the
+# last: fewer iterations on the way, more in the last step, 3 of 5 requests slower.
+CONTINUED_BARRIER = {"ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-4}
+CONTINUED_ITERATIONS = 150
 WARM = {**INERTIA_FREE, **{f"ipopt.warm_start_{push}": 1e-9
                            for push in ("bound_push", "mult_bound_push", "slack_bound_push")},
         **NEAR_OPTIMUM}
@@ -85,6 +96,7 @@ VARIANTS = {
     "cold_inertia": {},
     "warm": WARM,
     "seeded": {**WARM, **FIXED_BARRIER, "ipopt.max_iter": SEEDED_ITERATIONS},
+    "continued": {**WARM, **CONTINUED_BARRIER, "ipopt.max_iter": CONTINUED_ITERATIONS},
 }
 COLD_VARIANTS = ("cold", "cold_inertia")  # the rest start near an optimum
 
@@ -293,6 +305,16 @@ class Planner:
         """The optima kept for warm starts of the problem of (scene, settings), oldest
         first (building it if the planner has not yet)."""
         return list(self._build(scene, settings).stored)
+
+    def all_plans(self, scene: Scene, settings: GaitSettings) -> list[StoredPlan]:
+        """The optima kept of every problem of `scene` built so far on the grid of
+        `settings` (so their x mean what its x means), whatever their ground or speed,
+        oldest first per problem: the starts of `gait_planner.parameter_path`."""
+        own = self._build(scene, settings).tr
+        grid = (own.N, own.x.shape[0])
+        return [plan for (name, source, _), built in self._built.items()
+                if (name, source) == (scene.name, scene.source)
+                and (built.tr.N, built.tr.x.shape[0]) == grid for plan in built.stored]
 
     def fits(self, scene: Scene, settings: GaitSettings, plan: StoredPlan) -> None:
         """ValueError unless `plan`'s sizes are those of the problem of (scene, settings)."""

@@ -407,6 +407,13 @@ class Transcription(PathRows):
         return ca.vertcat(ca.vec(self.Qref), self.step, self.mu, self.ground_p,
                           self.inverse_speed)
 
+    def duration(self, x: np.ndarray) -> float:
+        """The half cycle's duration (s) at the NLP's x (nx,), as `speed_row` counts it
+        (the first N-1 intervals, each base_time_step times its phase's sigma)."""
+        sigma = np.asarray(x, dtype=float)[-int(self.S.shape[0]):]
+        scaling = [self.mb.scene.gait.phases[k].scaling for k in self.phase_of_interval]
+        return float(self.settings.base_time_step * np.sum(sigma[scaling[: self.N - 1]]))
+
     def parameters(self, qref: np.ndarray, settings: GaitSettings) -> np.ndarray:
         """The numeric p of a request (`settings`, of this problem's `shape_of`) with the
         references qref (N-1, k): step length, friction coefficient, its ground's

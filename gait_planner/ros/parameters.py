@@ -83,8 +83,9 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         ParameterType.PARAMETER_BOOL,
         "Warm-start from the optima of earlier processes (the warm-start store in the cache "
         "folder, gait_planner/ocp/warm_starts.py; `make setup` plans the shipped scenes' "
-        "default requests into it) and add this node's optima to it; a request with "
-        "cold_start ignores it", read_only=True)),
+        "default requests and warm-start anchors into it; a request on another ground or at "
+        "another pace is continued from the nearest along a path of parameters) and add this "
+        "node's optima to it; a request with cold_start ignores it", read_only=True)),
     DEPRECATED_STORE: (True, _descriptor(
         ParameterType.PARAMETER_BOOL,
         "Deprecated name of warm_start_store (false turns the store off too, with a "

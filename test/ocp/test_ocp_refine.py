@@ -122,12 +122,16 @@ def test_a_plan_that_misses_the_certificate_is_refined_until_it_passes(coarse_wa
 @pytest.mark.slow
 def test_a_failed_refinement_is_not_restarted_and_the_coarse_plan_stands(coarse_walker2d,
                                                                          monkeypatch):
-    """With the inertia-free attempt capped at 3 iterations, the coarse plan converges only
-    through the restart with the inertia test, and its refinement fails: that one is not
-    restarted (`strategies.REFINE_ATTEMPTS`; walker3d's 1.0 m step spent 590 s in such a
-    restart), and the coarse plan is returned with the reason."""
+    """With the inertia-free attempt and the continued one capped at 3 iterations, the
+    coarse plan converges only through the restart with the inertia test, and its
+    refinement fails both ways (barrier fixed from 1e-4, then as a cold plan's first
+    attempt): it is not restarted with the inertia test (`strategies.REFINE_ATTEMPTS`;
+    walker3d's 1.0 m step spent 590 s in such a restart), and the coarse plan is returned
+    with the reason."""
     scene, settings, _, _ = coarse_walker2d
-    monkeypatch.setitem(solve.VARIANTS, "cold", {**solve.VARIANTS["cold"], "ipopt.max_iter": 3})
+    for variant in ("cold", "continued"):
+        monkeypatch.setitem(solve.VARIANTS, variant,
+                            {**solve.VARIANTS[variant], "ipopt.max_iter": 3})
     result, cert = plan_certified(Planner(), scene, dataclasses.replace(settings, refinements=1),
                                   warm_start=False)
     assert result.success, result.message
@@ -135,7 +139,7 @@ def test_a_failed_refinement_is_not_restarted_and_the_coarse_plan_stands(coarse_
     assert result.n_nodes - 1 == sum(settings.intervals) and not cert.ok
     note = result.settings["refinement"]
     refined = note.split(f"refined to {2 * sum(settings.intervals)}: ")[1]
-    assert refined.startswith("IPOPT: iteration limit reached") and "after 3 iterations" in refined
+    assert refined.startswith("IPOPT: iteration limit reached") and "after 6 iterations" in refined
 
 
 @pytest.mark.slow
