@@ -45,7 +45,9 @@ from gait_planner.ocp.warm_starts import StoredPlan
 # of each took 15-60 IPOPT iterations on walker3d (module docstring)
 PATH_STEP = {"slope": 2.5, "step_height": 0.025, "step_length": 0.05,
              "friction_coefficient": 0.2, "speed": 0.1}
-SMALLEST_STEP = 1.0 / 16.0  # of the whole path: a step that fails below this ends it
+# of the whole path: a failed step is halved while it is no shorter (a path of more than 16
+# steps is not halved: it ends at its first failed step)
+SMALLEST_STEP = 1.0 / 16.0
 ANOTHER_SHAPE = 1.0  # the distance a start on another problem shape adds (one step more)
 _FIELDS = tuple(PATH_STEP)
 
@@ -122,7 +124,7 @@ def follow(planner: Planner, scene: Scene, settings: GaitSettings, plan: StoredP
     of parameters (module docstring), within `clock`. Returns (what the request's own
     problem reached, None if the path did not get there; the solves made)."""
     target = point_of(settings)
-    steps = max(1, math.ceil(distance(point, target) - 1e-9))  # the shape's step aside
+    steps = max(1, math.ceil(distance(point, target) - 1e-9))  # the values' steps alone
     margin = settings.step_height < 0 and settings.stair_segment_rows and steps > 1
     end = dataclasses.replace(settings, stair_segment_rows=False) if margin else settings
     done, size, solved = 0.0, 1.0 / steps, 0
@@ -139,7 +141,7 @@ def follow(planner: Planner, scene: Scene, settings: GaitSettings, plan: StoredP
             x, lam_x, lam_g, qref, done = kept.x, kept.lam_x, kept.lam_g, kept.qref, f
         else:
             size /= 2.0
-        if size < SMALLEST_STEP or clock.expired() or planner.stopped():
+        if size < min(SMALLEST_STEP, 1.0 / steps) or clock.expired() or planner.stopped():
             return None, solved
     if margin:  # the segment rows, from the plan with the margin at the request's values
         kept = stored(end, reached)

@@ -20,6 +20,7 @@ RANK = {
     "ocp": 4,  # the transcription and the planner
     "io": 5, "problem": 5,  # formats and messages; a request resolved once
     "verify": 6,  # the independent verifier
+    "parameter_path": 6,  # a request continued from a kept plan along its parameters
     "strategies": 7,  # how a request is planned: start, continuation, restarts, refinement
     "walk": 8,  # MuJoCo
     "viz": 9,  # pictures: rerun, figures

@@ -21,6 +21,7 @@ docs/measured.json holds what a person times by hand on a fresh clone (`time mak
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import re
 import shlex
@@ -254,8 +255,14 @@ def render_request_limits() -> str:
 
     from gait_planner.model.loader import load_scene_file
     from gait_planner.ocp import request_ranges as ranges
-    from gait_planner.ocp.settings import SolveOptions, settings_for, speed_range, step_range
+    from gait_planner.ocp.settings import (SolveOptions, settings_for, speed_range, step_range,
+                                           widened_scaling_bounds)
     from gait_planner.request import MAX_STEPS
+
+    def paced(st):
+        """`st` at a requested speed: sigma's bounds as a speed widens them."""
+        st = dataclasses.replace(st, speed=1.0)
+        return dataclasses.replace(st, scaling_bounds=widened_scaling_bounds(st))
 
     node = yaml.safe_load((ROOT / "config/gait_planner.yaml").read_text())
     limit = node["gait_planner"]["ros__parameters"]["max_solve_time"]
@@ -264,11 +271,11 @@ def render_request_limits() -> str:
     speeds = ", ".join(
         f"{path.stem} {lo:.3f} to {hi:.3f} m/s at its {st.step_length:g} m step"
         for path in sorted((ROOT / "config/scenes").glob("walker*.yaml"))
-        for st in [settings_for(load_scene_file(path))] for lo, hi in [speed_range(st)])
+        for st in [paced(settings_for(load_scene_file(path)))] for lo, hi in [speed_range(st)])
     free = ", ".join(
         f"{path.stem} {lo:.3f} to {hi:.3f} m/s with steps of {a:g} to {b:g} m"
         for path in sorted((ROOT / "config/scenes").glob("walker*.yaml"))
-        for st in [settings_for(load_scene_file(path), step_length_free=True)]
+        for st in [paced(settings_for(load_scene_file(path), step_length_free=True))]
         for lo, hi in [speed_range(st)] for a, b in [step_range(st)])
     fastest = ", ".join(
         f"{path.stem} {st.speed_max:g} m/s" for path in sorted((ROOT / "config/scenes").glob("walker*.yaml"))

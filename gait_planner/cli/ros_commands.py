@@ -18,8 +18,8 @@ SPEED_HELP = ("mean forward speed of the half cycle, m/s: step length / duration
               "phase durations (default 0: durations free). Reachable: the step length over "
               "the half cycle's nominal length times sigma's scaling bounds, up to the "
               "gait's speed_max, e.g. at the 0.6338 m step walker2d 1.083 to 3.250 m/s, "
-              "walker3d 1.083 to 3.000 m/s (its walk's speed_max); a speed outside is "
-              "refused with its range")
+              "walker3d 0.542 to 3.000 m/s (sigma up to 3.0 at a speed; its walk's "
+              "speed_max); a speed outside is refused with its range")
 
 
 # `plan`, `run` and `call` --slope and --step-height (gait_planner.model.ground)

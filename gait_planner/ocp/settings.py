@@ -226,6 +226,18 @@ def check_effort_limits(scene: Scene, limits) -> tuple[tuple[str, float], ...]:
     return tuple(out)
 
 
+def widened_scaling_bounds(s: GaitSettings) -> tuple[float, float]:
+    """sigma's bounds for the request `s`: its scaling_bounds widened by
+    stairs_down_scaling_bounds on stairs down and by speed_scaling_bounds at a requested
+    speed (`settings_for` applies it to the scene's bounds)."""
+    lo, hi = s.scaling_bounds
+    for applies, wider in ((s.step_height < 0, s.stairs_down_scaling_bounds),
+                           (s.speed > 0, s.speed_scaling_bounds)):
+        if applies and wider:
+            lo, hi = min(lo, wider[0]), max(hi, wider[1])
+    return lo, hi
+
+
 def duration_range(s: GaitSettings) -> tuple[float, float]:
     """(shortest, longest) half cycle t_{N-1} - t_0 of `s`, s: its sum(intervals) - 1
     intervals (interval N-1 is the mirror image of interval 0) of base_time_step each at
@@ -373,18 +385,10 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
     if intervals_per_phase is not None:  # another grid on the same half cycle
         base_time_step *= sum(intervals) / (int(intervals_per_phase) * len(intervals))
         intervals = (int(intervals_per_phase),) * len(gait.phases)
-    scaling_bounds = tuple(gait.scaling_bounds)
-    height, speed = options.get("step_height", 0.0), options.get("speed", 0.0)
-    for applies, name in ((isinstance(height, (int, float)) and height < 0,
-                           "stairs_down_scaling_bounds"),
-                          (isinstance(speed, (int, float)) and speed > 0, "speed_scaling_bounds")):
-        wider = options.get(name)
-        if applies and wider and len(wider) == 2:  # checked by GaitSettings
-            scaling_bounds = (min(scaling_bounds[0], wider[0]), max(scaling_bounds[1], wider[1]))
     settings = GaitSettings(
         step_length=gait.step_length if step_length is None else float(step_length),
         base_time_step=base_time_step,
-        scaling_bounds=scaling_bounds,
+        scaling_bounds=tuple(gait.scaling_bounds),
         friction_coefficient=(gait.friction_coefficient if friction_coefficient is None
                               else float(friction_coefficient)),
         cost=chosen,
@@ -392,6 +396,7 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
         solve=solve,
         **options,
     )
+    settings = dataclasses.replace(settings, scaling_bounds=widened_scaling_bounds(settings))
     check_speed(settings, scene.name)
     check_ground(settings, scene)
     return settings

@@ -127,3 +127,22 @@ def test_a_slow_pace_of_a_long_step_is_planned_not_refused():
     assert settings_for(WALKER3D, step_height=-0.1, speed=1.0).scaling_bounds == (0.5, 3.0)
     with pytest.raises(SettingsError, match="speed = 0.5 m/s is outside"):
         settings_for(WALKER3D, speed=0.5, step_length=0.9)
+
+
+def test_a_failed_path_is_planned_cold_and_says_so(monkeypatch):
+    """With each path step capped at one iteration the path fails (every step halved down
+    to 1/16 of the way), and the request is planned cold from its guess, as without a
+    kept plan; its origin names both."""
+    from gait_planner.ocp import solve
+
+    planner = Planner()
+    assert plan_once(planner, WALKER2D, settings_for(WALKER2D, compiled=True),
+                     warm_start=False).success
+    monkeypatch.setitem(solve.VARIANTS, "continued",
+                        {**solve.VARIANTS["continued"], "ipopt.max_iter": 1})
+    result = plan_once(planner, WALKER2D, settings_for(WALKER2D, compiled=True, slope=5.0))
+    assert result.success, result.message
+    origin = result.settings["initial_guess"]
+    assert "along a parameter path (failed after" in origin and "kinematic guess" in origin
+    reference = np.load(CONSTANTS)
+    assert result.cost_value == pytest.approx(float(reference["ramp_J"]), rel=1e-7)
