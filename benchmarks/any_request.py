@@ -83,10 +83,13 @@ def main() -> None:
 
     store = not (args.cold or args.library)
     # a copy of the store `make setup` left, so that this run's plans do not start the next
-    copy = Path(tempfile.mkdtemp(prefix="any_request_"))
-    if store and WarmStartStore().folder.is_dir():
-        shutil.copytree(WarmStartStore().folder, copy / "plans")
-    planner = Planner(stage=stage, library=WarmStartStore(copy) if store else None)
+    library = None
+    if store:
+        copy = Path(tempfile.mkdtemp(prefix="any_request_"))
+        if WarmStartStore().folder.is_dir():
+            shutil.copytree(WarmStartStore().folder, copy / "plans")
+        library = WarmStartStore(copy)
+    planner = Planner(stage=stage, library=library)
     rng = np.random.default_rng(SEED)
     rows = []
     for i in range(args.requests):

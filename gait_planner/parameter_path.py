@@ -89,8 +89,6 @@ def nearest(planner: Planner, scene: Scene, settings: GaitSettings
     target = point_of(settings)
     best = None
     for plan in planner.all_plans(scene, settings):
-        if plan.x.shape != (int(tr.x.shape[0]),):
-            continue
         point = start_point(plan, tr.duration(plan.x), settings.speed > 0)
         d = distance(point, target, _shape(plan.step_height, plan.speed)
                      == _shape(settings.step_height, settings.speed))

@@ -96,19 +96,21 @@ def continuation_base(scene: Scene, s: GaitSettings) -> GaitSettings | None:
     return None if base == s else base
 
 
+def _ground_words(slope: float, step_height: float) -> str:
+    return (f"a {slope:g} deg ramp" if slope else
+            f"{step_height:g} m stairs" if step_height else "level ground")
+
+
 def described_plan(plan: StoredPlan) -> str:
     """A kept plan's request, in words."""
     pace = f" at {plan.speed:g} m/s" if plan.speed else ""
-    ground = (f"a {plan.slope:g} deg ramp" if plan.slope else
-              f"{plan.step_height:g} m stairs" if plan.step_height else "level ground")
-    return f"step length {plan.step:.4f} m, mu {plan.mu:.3g} on {ground}{pace}"
+    return (f"step length {plan.step:.4f} m, mu {plan.mu:.3g} on "
+            f"{_ground_words(plan.slope, plan.step_height)}{pace}")
 
 
 def described(s: GaitSettings) -> str:
     """A request's step length and ground, in words."""
-    ground = (f"a {s.slope:g} deg ramp" if s.slope else
-              f"{s.step_height:g} m stairs" if s.step_height else "level ground")
-    return f"step length {s.step_length:.4f} m on {ground}"
+    return f"step length {s.step_length:.4f} m on {_ground_words(s.slope, s.step_height)}"
 
 
 def guess_start(planner: Planner, scene: Scene, settings: GaitSettings, guess: str,

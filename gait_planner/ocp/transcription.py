@@ -411,8 +411,8 @@ class Transcription(PathRows):
         """The half cycle's duration (s) at the NLP's x (nx,), as `speed_row` counts it
         (the first N-1 intervals, each base_time_step times its phase's sigma)."""
         sigma = np.asarray(x, dtype=float)[-int(self.S.shape[0]):]
-        scaling = [self.mb.scene.gait.phases[k].scaling for k in self.phase_of_interval]
-        return float(self.settings.base_time_step * np.sum(sigma[scaling[: self.N - 1]]))
+        scaling = self.layout.scaling_of_interval[: self.N - 1]
+        return float(self.settings.base_time_step * np.sum(sigma[scaling]))
 
     def parameters(self, qref: np.ndarray, settings: GaitSettings) -> np.ndarray:
         """The numeric p of a request (`settings`, of this problem's `shape_of`) with the
