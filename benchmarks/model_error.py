@@ -7,7 +7,8 @@ a real robot differs from its URDF (`gait_planner.walk.model_error.ModelError`):
 * friction 0.5 at the feet (the plans assume their scene's coefficient);
 * contact time constants of 2 and 10 ms (the controller's model: 5 ms);
 * a 50 ms delay of the controller's commands (feed-forward, torso feedback, joint targets;
-  each joint's own PD acting on its present state);
+  each joint's own PD acting on its present state), which the controller predicts through
+  (config/walk.yaml `delay.predict`);
 * all of them at once, 20 seeds: masses as above, friction 0.5, a time constant from
   U[2, 10] ms, the 50 ms delay.
 
@@ -113,8 +114,11 @@ def main() -> int:
     share = (sum(w["half_cycles_walked"] == args.steps for w in perturbed) / len(perturbed)
              if perturbed else float("nan"))
     print(f"perturbed walks that completed {args.steps} half cycles: {100 * share:.0f} %")
-    print(write_results("model_error", rows, {"steps": args.steps, "seeds": seeds,
-                                              "completed_share": share, "quick": args.quick}))
+    from gait_planner.walk.walk_plan import load_config
+
+    print(write_results("model_error", rows, {
+        "steps": args.steps, "seeds": seeds, "completed_share": share, "quick": args.quick,
+        "delay_predict": load_config()["delay"]["predict"]}))
     return 0
 
 

@@ -334,7 +334,11 @@ def model_error(doc) -> list[str]:
             "by the same controller on a MuJoCo walker changed as a robot differs from its "
             "URDF (`gait_planner.walk.model_error`; the command delay delays the feed-forward, "
             "the torso feedback and the joint targets, each joint's own PD acting on its "
-            "present state). Perturbed walks that completed every half cycle: "
+            "present state; "
+            + ("the controller computes each command for the state it will meet, predicted on "
+               "the nominal walker through the delay: `delay.predict`, `gait_planner.walk."
+               "predictor`" if h.get("delay_predict") else "the controller acts on the present "
+               "state") + "). Perturbed walks that completed every half cycle: "
             f"**{h.get('completed_share', float('nan')):.0%}** (target 90 %).", ""]
     rows = [dict(r, done=f"{r['completed']} of {r['walks']}",
                  cycles=f"{r['half_cycles_min']} / {r['half_cycles_median']:g}",

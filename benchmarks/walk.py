@@ -6,6 +6,8 @@ config/walk.yaml).
 
     .venv/bin/python benchmarks/walk.py            # every row (~10 min on 2 cores)
     .venv/bin/python benchmarks/walk.py --quick    # walker2d's default plan only (~30 s)
+    .venv/bin/python benchmarks/walk.py --plans DIR  # keep the plans in DIR; a later run
+                                                     # walks those it finds there again
 
 Each plan is made as a user makes it: `gait-planner plan --json` in a subprocess, in a
 temporary folder. The hard requests are those of `hard_cases.py` a user can ask for: its
@@ -126,6 +128,24 @@ def _rounded(x, digits: int = 3):
     return round(x, digits) if isinstance(x, float) else x
 
 
+def kept_plan(row: Row, stem: Path, time_limit: float) -> tuple[Path | None, dict]:
+    """`plan`, unless stem.json holds the summary of an earlier run's plan of the same row
+    (its scene, case and options): then that plan (stem.mcap) is walked again."""
+    key = {"scene": row.scene, "case": row.case, "args": list(row.args),
+           "gait": {k: list(v) if isinstance(v, tuple) else v for k, v in row.gait.items()},
+           "options": row.options}
+    saved = stem.with_suffix(".json")
+    if saved.is_file():
+        earlier = json.loads(saved.read_text())
+        if earlier["row"] == key:
+            out = stem.with_suffix(".mcap")
+            return (out if earlier["plan"]["success"] and out.is_file() else None), \
+                earlier["plan"]
+    recording, planned = plan(row, stem, time_limit)
+    saved.write_text(json.dumps({"row": key, "plan": planned}))
+    return recording, planned
+
+
 def walk_row(recording: Path, steps: int) -> dict:
     """The walk of the recording and its self-test, as JSON-ready numbers."""
     from gait_planner.cli.walk import self_test
@@ -161,13 +181,18 @@ def main() -> int:
     parser.add_argument("--steps", type=int, default=10, help="half cycles to walk")
     parser.add_argument("--quick", action="store_true", help="walker2d's default plan only")
     parser.add_argument("--time-limit", type=float, default=120.0, help="s per plan")
+    parser.add_argument("--plans", type=Path, default=None,
+                        help="keep the plans in this folder and walk those found there again "
+                             "(the controller's work without re-planning)")
     args = parser.parse_args()
     from results_io import write_results
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
+        folder = args.plans or Path(tmp)
+        folder.mkdir(parents=True, exist_ok=True)
         for i, row in enumerate(rows_to_walk(args.quick)):
-            recording, planned = plan(row, Path(tmp) / f"plan_{i:02d}", args.time_limit)
+            recording, planned = kept_plan(row, folder / f"plan_{i:02d}", args.time_limit)
             out = {"scene": row.scene, "case": row.case, "plan_options": " ".join(row.args),
                    "scene_changes": {**row.gait, **row.options}, "steps": args.steps,
                    "plan": {k: _rounded(v) for k, v in planned.items()}}

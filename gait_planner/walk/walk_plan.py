@@ -19,6 +19,7 @@ import yaml
 
 from gait_planner.walk.controller import Gains, ReferenceController
 from gait_planner.walk.model_error import DelayedTorque, ModelError
+from gait_planner.walk.predictor import DelayPredictor
 from gait_planner.walk.robot_urdf import RobotUrdf
 
 __all__ = ["CONFIG", "ground_forces", "load_config", "walk"]
@@ -48,6 +49,9 @@ def load_config(path: str | Path = CONFIG) -> dict[str, Any]:
                     or not math.isfinite(value) or value < 0 or (positive and value == 0):
                 raise ValueError(f"{path}: {section}.{key} must be a finite number "
                                  f"{'> 0' if positive else '>= 0'}, got {value!r}")
+    predict = (cfg.get("delay") or {}).get("predict") if isinstance(cfg, dict) else None
+    if not isinstance(predict, bool):
+        raise ValueError(f"{path}: delay.predict must be true or false, got {predict!r}")
     scales = cfg.get("self_test_scales")
     if not isinstance(scales, list) or not all(isinstance(x, (int, float)) and 0 <= x < 1
                                                for x in scales):
@@ -112,8 +116,16 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
                      sim["contact_time_constant"], cfg["joints"]["kd"], robot)
     factors = model_error.apply(wm.model) if model_error is not None else {}
     model, data = wm.model, mujoco.MjData(wm.model)
-    delayed = (DelayedTorque(round(model_error.torque_delay / model.opt.timestep))
-               if model_error is not None and model_error.torque_delay else None)
+    delay_steps = (round(model_error.torque_delay / model.opt.timestep)
+                   if model_error is not None else 0)
+    delayed = DelayedTorque(delay_steps) if delay_steps else None
+    predictor = None
+    if delay_steps and cfg["delay"]["predict"]:  # the nominal walker: no model error
+        nominal = build_model(rec, scene, half_width, sim["foot_sphere_radius"],
+                              sim["time_step"], sim["contact_time_constant"],
+                              cfg["joints"]["kd"], robot)
+        predictor = DelayPredictor(nominal.model, delay_steps, cfg["joints"]["kp"], wm.dof,
+                                   wm.qpos)
     place = cfg["placement"]
     gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], cfg["torso"]["kp"], cfg["torso"]["kd"],
                   place["kp"], place["kd"], place["height_kp"])
@@ -140,13 +152,19 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         # what is recorded at a step is all of one state
         mujoco.mj_step1(model, data)
         t = data.time
-        ff, fb, plan_effort, plan_angles = control(data)
+        # under a delay with prediction: the command for the state it will meet
+        state = predictor(data) if predictor is not None else data
+        ff, fb, plan_effort, plan_angles = control(state)
+        if predictor is not None:  # tracking is judged against the plan now
+            plan_angles = ref.at(t)[0]
         data.qfrc_applied[:] = 0.0
         # -kd v is MuJoCo's (implicit) joint damping (walk.mujoco_model)
-        torque = ff + fb + gains.kd * data.qvel[wm.dof]
+        torque = ff + fb + gains.kd * state.qvel[wm.dof]
         if delayed is not None:  # the command late, the joint's own kp q now
-            kp_q = gains.kp * data.qpos[wm.qpos]
-            torque = delayed(torque + kp_q, kp_q)
+            command = torque + gains.kp * state.qpos[wm.qpos]
+            if predictor is not None:
+                predictor.sent(command)
+            torque = delayed(command, gains.kp * data.qpos[wm.qpos])
         data.qfrc_applied[wm.dof] = torque
         errs.append(plan_angles - data.qpos[wm.qpos])
         ffs.append(ff)
@@ -203,6 +221,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         "feedforward_rms_nm": _rms(ffs), "feedback_rms_nm": _rms(fbs), "plan_rms_nm": _rms(plans),
         "torso_drift_m": drift, "foot_placement_error_m": placement,
         "controller": {"joints": cfg["joints"], "torso": cfg["torso"], "placement": place,
+                       "delay": cfg["delay"],
                        "simulation": sim, "foot_half_width": half_width},
         **({"model_error": {"differences": model_error.describe(), "mass_factors": factors}}
            if model_error is not None else {}),
@@ -216,16 +235,16 @@ def ground_forces(model, data, wm) -> np.ndarray:
     step."""
     import mujoco
 
-    ground = model.geom("ground").id
     force = np.zeros(6)
     per_point = np.zeros((len(wm.contact_sites), 3))
     for c in range(data.ncon):
         geoms = (data.contact[c].geom1, data.contact[c].geom2)
-        foot = geoms[1] if geoms[0] == ground else geoms[0]
+        on_foot = wm.geom_contact[geoms[0]] < 0  # geom1 is the ground (the plane or a tread)
+        foot = geoms[1] if on_foot else geoms[0]
         mujoco.mj_contactForce(model, data, c, force)
         # the contact frame's rows are its axes, the first the normal, from geom1 to geom2
         f = data.contact[c].frame.reshape(3, 3).T @ force[:3]
-        per_point[wm.geom_contact[foot]] += f if geoms[0] == ground else -f
+        per_point[wm.geom_contact[foot]] += f if on_foot else -f
     return per_point
 
 

@@ -5,7 +5,8 @@ Measured 2026-11-27 with config/walk.yaml: walker2d 10 deg down walks 4 of 10 ha
 its first with 0.46 deg joint RMS (as the level plan's); 0.15 m stairs up 3 of 10. The
 level-ground controller then drifts; the first half cycle is what these tests hold: were
 the ground in MuJoCo not the plan's (a level plane under a ramp plan, treads a step off),
-the walker would leave the plan at once.
+the walker would leave the plan at once. The walk's ground forces are read on either
+ground (the treads are no plane named "ground").
 """
 
 from __future__ import annotations
@@ -34,9 +35,20 @@ def _plan(folder: Path, *options: str, scene: str = "walker2d") -> Path:
 def test_the_first_half_cycle_on_the_planned_ground_follows_the_plan(tmp_path, options):
     from gait_planner.walk.walk_plan import walk
 
-    summary = walk(_plan(tmp_path, *options), 2)
+    from gait_planner.io.mcap_reader import read_plan_mcap
+    from gait_planner.walk.reference import scene_of
+
+    path = _plan(tmp_path, *options)
+    summary = walk(path, 2, series=True)
     assert summary["half_cycles_walked"] >= 1, summary["stopped"]
     assert summary["joint_rms_per_half_cycle_deg"][0] < 1.5
+    # the ground (a turned plane or the treads) carries the walker: over its first half
+    # cycle the mean vertical force is its weight, as periodic motion has it
+    series = summary["series"]
+    first = series["time"] < read_plan_mcap(path).times[-2]
+    weight = 9.81 * sum(b.mass for b in scene_of(read_plan_mcap(path)).bodies)
+    lift = series["ground_force"][first][:, :, 2].sum(axis=1).mean()
+    assert lift == pytest.approx(weight, rel=0.1)
 
 
 # walker3d on 10 deg ramps with config/walk.yaml (2026-11-29, benchmarks/walk.py): down walks

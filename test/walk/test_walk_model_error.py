@@ -1,7 +1,9 @@
 """A walker that is not the plan's model (`gait_planner.walk.model_error`): no difference
 walks as the plain walk does, masses and inertias change by their drawn factors (the
 robot's total mass within the spread), friction and contact stiffness reach every
-contact, and a delayed command arrives the given number of steps late."""
+contact, and a delayed command arrives the given number of steps late; the delay predictor
+(`gait_planner.walk.predictor`) foresees the nominal walker exactly, and with it a 50 ms
+delay is walked."""
 
 from __future__ import annotations
 
@@ -88,3 +90,45 @@ def test_a_delayed_command_arrives_steps_late(steps, n):
 def test_an_impossible_difference_is_refused(fields, words):
     with pytest.raises(ValueError, match=words):
         ModelError(**fields)
+
+
+def test_the_predictor_foresees_the_nominal_walker_exactly(walker2d_plan):
+    """On the plan's own walker the prediction is the simulation itself: the state
+    `steps` steps after any step, under the commands in flight, to round-off."""
+    import mujoco
+
+    from gait_planner.walk.predictor import DelayPredictor
+
+    model, steps, kp = _model(walker2d_plan), 7, 300.0
+    data = mujoco.MjData(model)
+    data.qpos[1] = 1.2  # the planar root's height: the walker falls onto its feet
+    dofs = qpos = np.arange(3, model.nv)  # the planar root's 3 dofs come first
+    delayed, predictor = DelayedTorque(steps), DelayPredictor(model, steps, kp, dofs, qpos)
+    rng = np.random.default_rng(5)
+    states, predicted = [], []
+    for _ in range(400):
+        mujoco.mj_step1(model, data)
+        predicted.append(predictor(data).qpos.copy())
+        states.append(data.qpos.copy())
+        command = rng.normal(0.0, 20.0, len(dofs)) + kp * data.qpos[qpos]
+        predictor.sent(command)
+        data.qfrc_applied[:] = 0.0
+        data.qfrc_applied[dofs] = delayed(command, kp * data.qpos[qpos])
+        mujoco.mj_step2(model, data)
+    assert np.array_equal(predicted[0], states[0])  # no command sent yet: nothing foreseen
+    assert data.ncon > 0  # it ended on the ground
+    for k in range(1, len(states) - steps):
+        assert np.allclose(predicted[k], states[k + steps], rtol=0, atol=1e-12)
+
+
+@pytest.mark.slow
+def test_a_50_ms_delay_is_walked_with_the_predictor_and_not_without(walker2d_plan):
+    from gait_planner.walk.walk_plan import load_config, walk
+
+    late = ModelError(torque_delay=0.05)
+    predicted = walk(walker2d_plan, 10, model_error=late)
+    assert predicted["half_cycles_walked"] == 10, predicted["stopped"]
+    assert predicted["feedback_share"] <= 0.40
+    blind = load_config()
+    blind["delay"]["predict"] = False
+    assert walk(walker2d_plan, 10, model_error=late, config=blind)["half_cycles_walked"] < 10
