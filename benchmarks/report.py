@@ -303,8 +303,12 @@ def walk(doc) -> list[str]:
             "down (the self-test: the feedback must not do the plan's work). Feedback share: "
             "RMS feedback / RMS plan torque; drift: the torso's distance from the plan (x y z) "
             "after the last half cycle walked; placement: the worst distance of a held contact "
-            "point from the plan's at a half cycle's end. The hard requests are "
-            "`hard_cases.py`'s a user can ask for (plan options or a changed scene file).", ""]
+            "point from the plan's at a half cycle's end; unplanned touches: a contact point "
+            "carrying over a tenth of the weight where the plan holds it at neither "
+            "neighbouring node (`gait_planner.walk.touches`: an early strike if the plan "
+            "strikes it within 0.1 s, else a scuff), how many and the first. The hard "
+            "requests are `hard_cases.py`'s a user can ask for (plan options or a changed "
+            "scene file).", ""]
     rows = [dict(r, planned=(f"{r['plan'].get('nodes')} nodes, {r['plan']['wall_s']:.0f} s"
                              + ("" if r["plan"].get("certified") else ", certificate fails")
                              if r["plan"]["success"] else "failed"),
@@ -312,7 +316,8 @@ def walk(doc) -> list[str]:
                             else f"{r['half_cycles_walked']} of {r['steps']}"),
                  drift=" ".join(f"{x:+.3f}" for x in r.get("torso_drift_last_m") or []),
                  selftest=", ".join(f"×{t['torque_scale']:g}: {t['half_cycles_walked']} "
-                                    f"({t['feedback_share']:.0%})" for t in r["self_test"]))
+                                    f"({t['feedback_share']:.0%})" for t in r["self_test"]),
+                 touches=_touches(r.get("unplanned_touches")))
             for r in doc["rows"]]
     return out + table(rows, [
         ("scene", "scene", ""), ("case", "case", ""), ("plan", "planned", ""),
@@ -320,7 +325,16 @@ def walk(doc) -> list[str]:
         ("feedback share", "feedback_share", ".0%"), ("joint RMS deg", "joint_rms_deg", ".2f"),
         ("joint max deg", "joint_max_deg", ".1f"), ("drift m", "drift", ""),
         ("placement m", "foot_placement_error_max_m", ".3f"),
+        ("unplanned touches (first)", "touches", ""),
         ("self-test: walked (feedback)", "selftest", ""), ("why it stopped", "stopped", "")]) + [""]
+
+
+def _touches(touches: list[dict] | None) -> str:
+    """A walk's unplanned touches in words (`gait_planner.walk.touches.described`); – if
+    the run did not record them."""
+    from gait_planner.walk.touches import described
+
+    return "–" if touches is None else described(touches)
 
 
 def model_error(doc) -> list[str]:

@@ -17,7 +17,8 @@ angles and rates + two loops on what the joints do not control (the floating bas
   linear inverted pendulum for kp = 1, kd = sqrt(z / g)), and the swing leg's joint targets
   (the whole leg, hip to ankle: `hip_legs`) move, along the swing (`smoothstep`), towards
   angles that put the foot there without turning it (damped least squares on the foot's
-  Jacobian).
+  Jacobian). On a ramp the horizontal shift runs along the ground (a vertical part keeps
+  the foot's height above it).
 * Swing height: the swing foot is kept at the plan's height above the ground. Its contact
   points' mean height error along the ground's normal (a ramp's, e_z on level ground and
   stairs), times height_kp, is added to the shift. Without it the swing heel ran 5-8 mm
@@ -161,7 +162,10 @@ class ReferenceController:
         if swing is not None and active:
             t0, t1, leg = swing
             idx, q_ref = self.legs[leg].chain, ref.q_at(t)
-            shift = (smoothstep((t - t0) / (t1 - t0)) * self._shift(data, t, q_ref, active)
+            along = self._shift(data, t, q_ref, active)
+            n = ref.normal
+            along[2] = -(n @ along) / n[2]  # along the ground: its height above it kept
+            shift = (smoothstep((t - t0) / (t1 - t0)) * along
                      + self._lift(data, q_ref, self.legs[leg].contacts))
             target[idx] += placement_offsets(*self._foot_jacobians(data, leg, wm.dof[idx]),
                                              shift)

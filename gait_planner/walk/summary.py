@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from gait_planner.walk.touches import described
+
 __all__ = ["format_summary", "half_cycles_done"]
 
 
@@ -29,7 +31,8 @@ def format_summary(r: dict[str, Any]) -> str:
              "  torso drift per half cycle (m, x y z): "
              + "; ".join(" ".join(f"{v:+.3f}" for v in d) for d in r["torso_drift_m"]),
              "  foot placement error per half cycle (m): "
-             + " ".join(f"{v:.3f}" for v in r["foot_placement_error_m"])]
+             + " ".join(f"{v:.3f}" for v in r["foot_placement_error_m"]),
+             f"  unplanned touches     {described(r['unplanned_touches'])}"]
     if "out" in r:
         lines.append(f"  recorded in {r['out']}")
     if "rrd" in r:

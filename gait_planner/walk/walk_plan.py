@@ -21,10 +21,12 @@ from gait_planner.walk.controller import Gains, ReferenceController
 from gait_planner.walk.model_error import DelayedTorque, ModelError
 from gait_planner.walk.predictor import DelayPredictor
 from gait_planner.walk.robot_urdf import RobotUrdf
+from gait_planner.walk.touches import Touches
 
 __all__ = ["CONFIG", "ground_forces", "load_config", "walk"]
 
 CONFIG = Path(__file__).resolve().parents[2] / "config" / "walk.yaml"
+TOUCH_SHARE = 0.1  # of the walker's weight: a contact point carrying more is touching
 
 
 _KEYS = {"simulation": ("time_step", "foot_sphere_radius", "contact_time_constant"),
@@ -140,6 +142,9 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
 
     stop = cfg["stop"]
     h = model.opt.timestep
+    weight = float(np.sum(model.body_mass)) * float(-model.opt.gravity[2])
+    touches = Touches(ref.times, ref.active, [c.name for c in scene.contacts],
+                      TOUCH_SHARE * weight)
     t_end = steps * ref.period
     errs, ffs, fbs, plans = [], [], [], []
     trace: dict[str, list] = {k: [] for k in ("time", "position", "velocity", "torso",
@@ -182,8 +187,10 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
             trace["torso_ref"].append(np.r_[phi_ref, D_ref.reshape(-1)])
             trace["contact_position"].append(data.site_xpos[wm.contact_sites].copy())
         mujoco.mj_step2(model, data)
-        if series:  # the contact forces of that state, solved in mj_step2
-            trace["ground_force"].append(ground_forces(model, data, wm))
+        forces = ground_forces(model, data, wm)  # of that state, solved in mj_step2
+        touches.update(t, forces @ ref.normal)  # the normal force on each point
+        if series:
+            trace["ground_force"].append(forces)
         worst = int(np.argmax(np.abs(errs[-1])))
         if com[2] < phi_ref[2] - stop["height_drop"]:
             reason = (f"fall: torso centre of mass {com[2]:.3f} m high, "
@@ -220,6 +227,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         "feedback_share": _rms(fbs) / max(_rms(plans), 1e-12),
         "feedforward_rms_nm": _rms(ffs), "feedback_rms_nm": _rms(fbs), "plan_rms_nm": _rms(plans),
         "torso_drift_m": drift, "foot_placement_error_m": placement,
+        "unplanned_touches": touches.summary(),
         "controller": {"joints": cfg["joints"], "torso": cfg["torso"], "placement": place,
                        "delay": cfg["delay"],
                        "simulation": sim, "foot_half_width": half_width},
