@@ -317,7 +317,7 @@ def walk(doc) -> list[str]:
                  drift=" ".join(f"{x:+.3f}" for x in r.get("torso_drift_last_m") or []),
                  selftest=", ".join(f"×{t['torque_scale']:g}: {t['half_cycles_walked']} "
                                     f"({t['feedback_share']:.0%})" for t in r["self_test"]),
-                 touches=_touches(r.get("unplanned_touches")))
+                 touches=_touches(r.get("unplanned_touches"), r.get("unplanned_touch_count")))
             for r in doc["rows"]]
     return out + table(rows, [
         ("scene", "scene", ""), ("case", "case", ""), ("plan", "planned", ""),
@@ -329,12 +329,12 @@ def walk(doc) -> list[str]:
         ("self-test: walked (feedback)", "selftest", ""), ("why it stopped", "stopped", "")]) + [""]
 
 
-def _touches(touches: list[dict] | None) -> str:
+def _touches(touches: list[dict] | None, count: int | None) -> str:
     """A walk's unplanned touches in words (`gait_planner.walk.touches.described`); – if
     the run did not record them."""
     from gait_planner.walk.touches import described
 
-    return "–" if touches is None else described(touches)
+    return "–" if touches is None else described(touches, count)
 
 
 def model_error(doc) -> list[str]:

@@ -17,7 +17,8 @@ a poor guess) are no request and are left out. A plan that fails is a row withou
 Rows go to benchmarks/results/walk.json: half cycles walked (of --steps), why the walk
 stopped (walk's own sentence), feedback share (RMS feedback / RMS plan torque), joint RMS
 and max error (deg), the torso's drift after the last half cycle walked, the worst foot
-placement error, the unplanned touches (`gait_planner.walk.touches`), and the self-test's
+placement error, the unplanned touches (`gait_planner.walk.touches`: the first three and
+how many), and the self-test's
 half cycles and shares.
 """
 
@@ -161,7 +162,8 @@ def walk_row(recording: Path, steps: int) -> dict:
             "torso_drift_last_m": [round(x, 3) for x in (r["torso_drift_m"] or [[]])[-1]],
             "foot_placement_error_max_m": round(max(r["foot_placement_error_m"], default=0.0),
                                                 3),
-            "unplanned_touches": r["unplanned_touches"],
+            "unplanned_touches": r["unplanned_touches"][:3],
+            "unplanned_touch_count": len(r["unplanned_touches"]),
             "self_test": [{k: _rounded(v) for k, v in t.items()} for t in tests]}
 
 

@@ -356,7 +356,7 @@ def _prepare(args: argparse.Namespace) -> int:
         try:
             scene = find_scene(name)
             settings = settings_for(scene, compiled=True)
-            planner = Planner(library=WarmStartStore(), stage=_compile_note)
+            planner = Planner(library=WarmStartStore(), stage=_compile_note, pin=True)
             used = planner.prepare(scene, settings)
             result = plan_once(planner, scene, settings, warm_start=False)
             for shape in form_requests(scene, settings)[1:]:  # the default's is built

@@ -213,12 +213,14 @@ class Planner:
     `PlanStatus.STOPPED`, message `STOPPED`; a problem being built is finished first and
     kept for later plans); library: the plans of earlier processes (`ocp.warm_starts`),
     read when a problem is built and written after every optimum kept (None: this
-    process's plans only)."""
+    process's plans only); pin: the optima it keeps are pinned in the library (`gait-planner
+    prepare`'s default plans and warm-start anchors, `StoredPlan.pinned`)."""
 
     def __init__(self, *, progress: Progress | None = None, stage: Stage | None = None,
-                 stop: Stop | None = None, library: WarmStartStore | None = None):
+                 stop: Stop | None = None, library: WarmStartStore | None = None,
+                 pin: bool = False):
         self.progress, self.stage, self.stop = progress, stage or (lambda name: None), stop
-        self.library = library
+        self.library, self.pin = library, pin
         self._built: dict = {}
 
     def stopped(self) -> bool:
@@ -329,7 +331,7 @@ class Planner:
         """Keep an optimum of (scene, settings) for warm starts, in the library too if the
         planner has one."""
         built = self._build(scene, settings)
-        built.stored.append(plan)
+        built.stored.append(dataclasses.replace(plan, pinned=True) if self.pin else plan)
         if self.library is not None and built.library_key is not None:
             self.library.save(built.library_key, built.stored)
 

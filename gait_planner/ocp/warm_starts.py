@@ -15,11 +15,15 @@ match, is ignored.
 into the library, and the node uses it: a fresh node's first walker3d request (the default)
 re-plans from it in 1 IPOPT iteration instead of 64 cold, answered in 0.71 s instead of
 2.91 s (benchmarks/node_latency.py, 2026-11-23); other requests as warm re-plans. A request
-with cold_start = true ignores it, as it ignores the plans of the running process.
+with cold_start = true ignores it, as it ignores the plans of the running process. A
+problem's file keeps the MAX_PLANS newest plans of the processes that used it, and besides
+them, pinned, the plans `prepare` made (the default and the scene's warm-start anchors),
+so that a node answering many requests of one shape does not evict its anchors.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import zipfile
@@ -31,9 +35,9 @@ import numpy as np
 from gait_planner.atomic import atomic_target
 from gait_planner.ocp.compile import cache_folder
 
-MAX_PLANS = 16  # per problem; the oldest go first
+MAX_PLANS = 16  # per problem, besides its pinned plans; the oldest go first
 _REQUEST = ("slope", "step_height", "speed")  # StoredPlan's request beyond step and mu
-_FIELDS = ("step", "mu", "x", "lam_x", "lam_g", "qref", *_REQUEST)
+_FIELDS = ("step", "mu", "x", "lam_x", "lam_g", "qref", *_REQUEST, "pinned")
 _CODE = ("model", "dynamics", "ocp")  # packages whose source defines the stored vectors
 
 
@@ -43,7 +47,9 @@ class StoredPlan:
     NLP's x (nx,) and multipliers lam_x (nx,), lam_g (ng,), the reference configurations
     qref (N-1, k) of its reparametrisation, where it came from ("this process" or the
     library file), and the rest of its request: slope deg, step height m, speed m/s (one
-    problem serves every value of these, `ocp.transcription.shape_of`)."""
+    problem serves every value of these, `ocp.transcription.shape_of`); pinned: planned by
+    `gait-planner prepare` (the default and the warm-start anchors), never evicted by the
+    plans a busy process keeps after it."""
 
     step: float
     mu: float
@@ -55,6 +61,7 @@ class StoredPlan:
     slope: float = 0.0
     step_height: float = 0.0
     speed: float = 0.0
+    pinned: bool = False
 
     @property
     def request(self) -> tuple[float, ...]:
@@ -105,32 +112,38 @@ class WarmStartStore:
         count = fields["step"].shape[0]
         shapes_ok = (fields["x"].shape == (count, nx) and fields["lam_x"].shape == (count, nx)
                      and fields["lam_g"].shape == (count, ng) and fields["qref"].ndim == 3
-                     and all(fields[name].shape == (count,) for name in ("mu", *_REQUEST)))
+                     and all(fields[name].shape == (count,)
+                             for name in ("mu", *_REQUEST, "pinned")))
         finite = shapes_ok and all(np.all(np.isfinite(v)) for v in fields.values())
         if not finite:
             return []
         return [StoredPlan(float(fields["step"][i]), float(fields["mu"][i]), fields["x"][i],
                            fields["lam_x"][i], fields["lam_g"][i], fields["qref"][i],
                            f"the warm-start store ({path.name[:12]})",
-                           *(float(fields[name][i]) for name in _REQUEST))
+                           *(float(fields[name][i]) for name in _REQUEST),
+                           bool(fields["pinned"][i]))
                 for i in range(count)]
 
     def save(self, key: str, plans: list[StoredPlan]) -> None:
-        """Write the newest MAX_PLANS of `plans` (one per request: a later plan of the same
-        `StoredPlan.request` replaces an earlier one) as problem `key`'s file, atomically.
-        An unwritable folder is not an error: nothing is kept."""
+        """Write the pinned plans and the newest MAX_PLANS others of `plans` (one per
+        request: a later plan of the same `StoredPlan.request` replaces an earlier one, and
+        stays pinned if that one was) as problem `key`'s file, atomically. An unwritable
+        folder is not an error: nothing is kept."""
         kept: dict[tuple[float, ...], StoredPlan] = {}
         for plan in plans:
-            kept.pop(plan.request, None)
+            earlier = kept.pop(plan.request, None)
+            if earlier is not None and earlier.pinned and not plan.pinned:
+                plan = dataclasses.replace(plan, pinned=True)
             kept[plan.request] = plan
-        newest = list(kept.values())[-MAX_PLANS:]
+        pinned = [p for p in kept.values() if p.pinned]
+        newest = pinned + [p for p in kept.values() if not p.pinned][-MAX_PLANS:]
         if not newest:
             return
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
             with atomic_target(self.path(key)) as tmp, open(tmp, "wb") as out:
                 np.savez(out, **{name: np.array([getattr(p, name) for p in newest])
-                                 for name in ("step", "mu", *_REQUEST)},
+                                 for name in ("step", "mu", *_REQUEST, "pinned")},
                          x=np.stack([p.x for p in newest]),
                          lam_x=np.stack([p.lam_x for p in newest]),
                          lam_g=np.stack([p.lam_g for p in newest]),

@@ -65,10 +65,12 @@ class Touches:
         return None
 
 
-def described(touches: list[dict[str, Any]]) -> str:
-    """A walk's touches (`Touches.summary`) in words: how many, and the first."""
+def described(touches: list[dict[str, Any]], count: int | None = None) -> str:
+    """A walk's touches (`Touches.summary`, or its first ones and their `count`) in words:
+    how many, and the first."""
     if not touches:
         return "none"
     t = touches[0]
     early = f", {1e3 * t['early_s']:.0f} ms early" if "early_s" in t else ""
-    return f"{len(touches)} (first: {t['kind']} {t['point']} at {t['start_s']:.3f} s{early})"
+    return (f"{len(touches) if count is None else count} (first: {t['kind']} {t['point']} "
+            f"at {t['start_s']:.3f} s{early})")

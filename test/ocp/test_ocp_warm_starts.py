@@ -72,3 +72,24 @@ def test_the_newest_plan_of_a_request_replaces_the_older_and_at_most_max_plans_a
     assert len({p.step for p in loaded}) == MAX_PLANS
     assert max(p.x[0] for p in loaded) == MAX_PLANS + 7
     assert library.load("k", 4, 2) == []
+
+
+def test_pinned_plans_outlive_any_number_of_later_plans(tmp_path):
+    """The plans `gait-planner prepare` keeps (the default and the warm-start anchors) stay
+    when a busy process keeps more than MAX_PLANS of its own; one re-planned stays pinned."""
+    import numpy as np
+
+    from gait_planner.ocp.warm_starts import MAX_PLANS
+
+    def plan(step: float, pinned: bool = False) -> StoredPlan:
+        return StoredPlan(step, 0.8, np.full(3, step), np.zeros(3), np.zeros(2),
+                          np.zeros((2, 4)), pinned=pinned)
+
+    library = WarmStartStore(tmp_path)
+    anchors = [plan(10.0 + i, pinned=True) for i in range(3)]
+    later = [plan(0.01 * i) for i in range(3 * MAX_PLANS)]
+    library.save("k", anchors + later + [plan(11.0)])  # anchor 11.0 re-planned, unpinned
+    loaded = library.load("k", 3, 2)
+    assert len(loaded) == 3 + MAX_PLANS
+    assert {p.step for p in loaded if p.pinned} == {10.0, 11.0, 12.0}
+    assert [p.step for p in loaded if not p.pinned] == [p.step for p in later[-MAX_PLANS:]]
