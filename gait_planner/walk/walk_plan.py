@@ -5,7 +5,8 @@
 (the plan's positions and velocities) and runs the reference controller (`walk.controller`)
 with the parameters of config/walk.yaml until the last half cycle ends or the walker falls
 (torso centre of mass `height_drop` below the plan's, or its d3 `tilt` from the plan's) or
-loses tracking (a joint `joint_error` from the plan). Returns a JSON-ready summary.
+loses tracking (a joint `joint_error` from the plan). Returns a JSON-ready summary, with
+the ground touched where the plan has a foot in the air (`walk.touches`).
 """
 
 from __future__ import annotations
@@ -94,7 +95,8 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     section), the recording's /robot_description, which is that URDF, with the section's
     locked joints, its package folders and the URDF's own folder and parents (for the foot
     meshes only); model_error: how the simulated walker differs from the plan's model
-    (`walk.model_error`: masses, friction, contact stiffness, a torque delay; the summary's
+    (`walk.model_error`: masses, friction, contact stiffness, a torque delay, which with
+    config delay.predict the controller predicts through, `walk.predictor`; the summary's
     "model_error" says what, with the mass factors drawn)."""
     import mujoco
 
