@@ -19,7 +19,9 @@ at the default step of 0.5 ms), the plan at its nodes. Entities:
   cycle walked), ``plots/half_cycle/torso_drift/{x,y,z}`` and
   ``plots/half_cycle/foot_placement`` (m), the summary's, at each half cycle's end;
 * ``plots/half_cycles/<plot>``: grey lines at the half cycles' ends in every plot;
-* ``walk``: the summary (markdown).
+* ``world/sim/touches/<contact>``: the ground touched where the plan has that point in the
+  air (`gait_planner.walk.touches`), a red point labelled with its kind while it lasts;
+* ``walk``: the summary (markdown), with the touches.
 
 Colours: the plan's series light, the simulation's (and the feedback) full; joint angles and
 torques by axis (pitch blue, roll orange, yaw green); heel red, forefoot blue.
@@ -48,6 +50,7 @@ from gait_planner.model.scene import InitialPose
 from gait_planner.ocp.mirror import contact_partners
 from gait_planner.walk.recording import output_path
 from gait_planner.walk.reference import Reference
+from gait_planner.walk.touches import described
 
 __all__ = ["save_walk_rrd", "walk_blueprint"]
 
@@ -124,6 +127,24 @@ def _log_walkers(rec, scene, sim_t, sim_q, ground, positions, plan_t, plan_q, pl
                     colors=(20, 160, 60) if name == "sim" else (150, 220, 160), show_labels=False)
 
 
+def _log_touches(rec, scene, series, touches: list[dict[str, Any]]) -> None:
+    """Each unplanned touch as a red point where the simulated contact point was when it
+    began, from its start to its end (s)."""
+    names = [c.name for c in scene.contacts]
+    for touch in touches:
+        j = names.index(touch["point"])
+        k = int(np.argmin(np.abs(series["time"] - touch["start_s"])))
+        early = f", {1e3 * touch['early_s']:.0f} ms early" if "early_s" in touch else ""
+        path = f"world/sim/touches/{touch['point']}"
+        rec.set_time("time", duration=touch["start_s"])
+        rec.log(path, rr.Points3D([series["contact_position"][k, j]], radii=0.02,
+                                  colors=(230, 30, 30),
+                                  labels=[f"{touch['kind']}{early}, {touch['peak_n']:.0f} N"]))
+        rec.set_time("time", duration=touch["end_s"] + 0.02)
+        rec.log(path, rr.Clear(recursive=False))
+    rec.reset_time()
+
+
 def _groups(scene, names) -> list[PlotGroup]:
     """The plots: per joint and leg its angles (sim, plan) and torques (feed-forward,
     feedback); per foot its points' normal forces; the three per-half-cycle errors."""
@@ -173,6 +194,7 @@ def _summary(result: dict[str, Any]) -> str:
             f"half cycles\n\n{result['stopped']} ({result['recording']})\n\n"
             f"joint RMS {result['joint_rms_deg']:.2f} deg (max {result['joint_max_deg']:.2f}), "
             f"feedback share {100 * result['feedback_share']:.0f} %\n\n"
+            f"unplanned touches: {described(result['unplanned_touches'])}\n\n"
             "3D: the simulated walker solid, the plan faint (grey skeleton); ground forces "
             "green (plan light), 1.5 mm per N. Plots: the plan light, the simulation full.\n\n"
             "| half cycle | joint RMS (deg) | torso drift x y z (m) | foot placement (m) |\n"
@@ -265,6 +287,7 @@ def save_walk_rrd(result: dict[str, Any], path: str | os.PathLike, every: int = 
                          ref.times, ref.q, plan_f)
             _log_plots(rec, scene, groups, values,
                        ref.period * np.arange(1, result["steps"] + 1))
+            _log_touches(rec, scene, series, result["unplanned_touches"])
             rec.log("walk", rr.TextDocument(_summary(result),
                                             media_type=rr.MediaType.MARKDOWN), static=True)
             rec.flush()

@@ -1,6 +1,6 @@
 """Unplanned touches (`gait_planner.walk.touches`): a point loaded where the plan holds it at
 neither neighbouring node is a touch; one the plan strikes soon after is an early strike,
-any other a scuff; a walk reports its touches."""
+any other a scuff; a walk reports its touches, and its rerun view marks them."""
 
 from __future__ import annotations
 
@@ -51,8 +51,16 @@ def test_a_walk_reports_its_touches(tmp_path):
     exe = Path(sys.executable).with_name("gait-planner")
     subprocess.run([str(exe), "plan", "--scene", "walker3d", "--out", str(out), "--no-rrd"],
                    check=True, capture_output=True)
-    summary = walk(out, 2)
+    summary = walk(out, 2, series=True)
     # the default plan's first heel strike comes 15-25 ms early in MuJoCo (2026-11-29)
     first = summary["unplanned_touches"][0]
     assert first["kind"] == "early strike" and first["point"].endswith("heel")
     assert 0.0 < first["early_s"] < 0.05
+    # the walk's rerun view marks it where the simulated heel was, while it lasts
+    from rerun.chunk import RrdReader
+
+    from gait_planner.viz.rerun_walk import save_walk_rrd
+
+    rrd = save_walk_rrd(summary, tmp_path / "walk.rrd")
+    paths = {chunk.entity_path for chunk in RrdReader(rrd).stream()}
+    assert f"/world/sim/touches/{first['point']}" in paths
