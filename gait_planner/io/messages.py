@@ -439,10 +439,13 @@ def walk_response_fields(steps: int, walked: Mapping[str, Any] | None,
     (`error` says why: walk_stopped "not walked: ERROR", feedback share NaN)."""
     if walked is None:
         return {"walk_steps": int(steps), "walk_half_cycles": 0,
-                "walk_feedback_share": math.nan, "walk_stopped": f"not walked: {error}"}
+                "walk_feedback_share": math.nan, "walk_stopped": f"not walked: {error}",
+                "walk_touches": 0, "walk_first_touch": ""}
+    touches = walked["unplanned_touches"]
     return {"walk_steps": int(steps), "walk_half_cycles": int(walked["half_cycles_walked"]),
             "walk_feedback_share": float(walked["feedback_share"]),
-            "walk_stopped": str(walked["stopped"])}
+            "walk_stopped": str(walked["stopped"]), "walk_touches": len(touches),
+            "walk_first_touch": touches[0]["words"] if touches else ""}
 
 
 def _setting(result: PlanResult, key: str) -> float:

@@ -103,6 +103,7 @@ def answer_dict(res) -> dict:
         "continuous_dynamics": res.continuous_dynamics,
         "walk_steps": res.walk_steps, "walk_half_cycles": res.walk_half_cycles,
         "walk_feedback_share": res.walk_feedback_share, "walk_stopped": res.walk_stopped,
+        "walk_touches": res.walk_touches, "walk_first_touch": res.walk_first_touch,
     }
 
 

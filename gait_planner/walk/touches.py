@@ -7,9 +7,10 @@ times (M,) s and the contact points it holds at each node) is fed, step by step,
 ground's normal force on each planned contact point (`walk_plan.ground_forces`); a touch is
 a run of steps in which a point carries more than `threshold` N while the plan holds it at
 neither the node before nor the node after. `summary()` lists each touch: its start and
-end (s), the point, its peak force (N), and what it was: an ``early strike`` if the plan
+end (s), the point, its peak force (N), what it was (an ``early strike`` if the plan
 strikes that point within `EARLY` s after the touch began (how early: the plan's strike
-time minus the touch's start), otherwise a ``scuff`` (a swing foot dragging on the ground).
+time minus the touch's start), otherwise a ``scuff``: a swing foot dragging on the ground),
+and all that in words (`in_words`).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["EARLY", "Touches", "described"]
+__all__ = ["EARLY", "Touches", "described", "in_words"]
 
 EARLY = 0.1  # s: a touch this long before the plan's strike of the point is an early strike
 
@@ -51,10 +52,11 @@ class Touches:
         for touch in sorted(self.done + list(self.open.values()), key=lambda x: x["start_s"]):
             strike = self._next_strike(touch["point"], touch["start_s"])
             early = strike is not None and strike - touch["start_s"] <= EARLY
-            out.append({"start_s": round(touch["start_s"], 4), "end_s": round(touch["end_s"], 4),
-                        "point": touch["point"], "peak_n": round(touch["peak_n"], 1),
-                        "kind": "early strike" if early else "scuff",
-                        **({"early_s": round(strike - touch["start_s"], 4)} if early else {})})
+            entry = {"start_s": round(touch["start_s"], 4), "end_s": round(touch["end_s"], 4),
+                     "point": touch["point"], "peak_n": round(touch["peak_n"], 1),
+                     "kind": "early strike" if early else "scuff",
+                     **({"early_s": round(strike - touch["start_s"], 4)} if early else {})}
+            out.append({**entry, "words": in_words(entry)})
         return out
 
     def _next_strike(self, point: str, t: float) -> float | None:
@@ -65,12 +67,15 @@ class Touches:
         return None
 
 
+def in_words(touch: dict[str, Any]) -> str:
+    """One touch (`Touches.summary`'s entry): its kind, point and time, how early."""
+    early = f", {1e3 * touch['early_s']:.0f} ms early" if "early_s" in touch else ""
+    return f"{touch['kind']} {touch['point']} at {touch['start_s']:.3f} s{early}"
+
+
 def described(touches: list[dict[str, Any]], count: int | None = None) -> str:
     """A walk's touches (`Touches.summary`, or its first ones and their `count`) in words:
     how many, and the first."""
     if not touches:
         return "none"
-    t = touches[0]
-    early = f", {1e3 * t['early_s']:.0f} ms early" if "early_s" in t else ""
-    return (f"{len(touches) if count is None else count} (first: {t['kind']} {t['point']} "
-            f"at {t['start_s']:.3f} s{early})")
+    return f"{len(touches) if count is None else count} (first: {in_words(touches[0])})"

@@ -64,6 +64,8 @@ EXPECTED_FIELDS = {
         "walk_half_cycles": "int32",
         "walk_feedback_share": "double",
         "walk_stopped": "string",
+        "walk_touches": "int32",
+        "walk_first_touch": "string",
     },
     ContactForces: {
         "header": "std_msgs/Header",

@@ -102,6 +102,8 @@ def test_the_node_walks_each_plan_and_answers_how_it_went(
     assert (result.walk_steps, result.walk_half_cycles) == (3, 3), result.walk_stopped
     assert result.walk_stopped == "completed"
     assert 0.0 < result.walk_feedback_share < 2.0
+    # walker2d's default plan touches nowhere the plan has a foot in the air (2026-11-29)
+    assert (result.walk_touches, result.walk_first_touch) == (0, "")
 
     # a plan that cannot be walked (compass: no feet) is still a plan; the node keeps serving
     assert spin_until(service.service_is_ready, 20)
@@ -122,7 +124,8 @@ def test_without_walk_steps_the_walk_fields_stay_empty(planner_node, clients, sp
     assert spin_until(call.done, 240), "no answer"
     answer = call.result()
     assert answer.success, answer.message
-    assert (answer.walk_steps, answer.walk_half_cycles, answer.walk_stopped) == (0, 0, "")
+    assert (answer.walk_steps, answer.walk_half_cycles, answer.walk_stopped,
+            answer.walk_touches, answer.walk_first_touch) == (0, 0, "", 0, "")
 
 
 # ---------------------------------------------------------------------- the command line
