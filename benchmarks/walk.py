@@ -18,8 +18,7 @@ Rows go to benchmarks/results/walk.json: half cycles walked (of --steps), why th
 stopped (walk's own sentence), feedback share (RMS feedback / RMS plan torque), joint RMS
 and max error (deg), the torso's drift after the last half cycle walked, the worst foot
 placement error, the unplanned touches (`gait_planner.walk.touches`: the first three and
-how many), and the self-test's
-half cycles and shares.
+how many), and the self-test's half cycles and shares.
 """
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ at the default step of 0.5 ms), the plan at its nodes. Entities:
   ``plots/half_cycle/foot_placement`` (m), the summary's, at each half cycle's end;
 * ``plots/half_cycles/<plot>``: grey lines at the half cycles' ends in every plot;
 * ``world/sim/touches/<contact>``: the ground touched where the plan has that point in the
-  air (`gait_planner.walk.touches`), a red point labelled with its kind while it lasts;
+  air (`gait_planner.walk.touches`), a red point labelled in its words while it lasts;
 * ``walk``: the summary (markdown), with the touches.
 
 Colours: the plan's series light, the simulation's (and the feedback) full; joint angles and
@@ -50,7 +50,7 @@ from gait_planner.model.scene import InitialPose
 from gait_planner.ocp.mirror import contact_partners
 from gait_planner.walk.recording import output_path
 from gait_planner.walk.reference import Reference
-from gait_planner.walk.touches import described
+from gait_planner.walk.touches import described, in_words
 
 __all__ = ["save_walk_rrd", "walk_blueprint"]
 
@@ -134,12 +134,11 @@ def _log_touches(rec, scene, series, touches: list[dict[str, Any]]) -> None:
     for touch in touches:
         j = names.index(touch["point"])
         k = int(np.argmin(np.abs(series["time"] - touch["start_s"])))
-        early = f", {1e3 * touch['early_s']:.0f} ms early" if "early_s" in touch else ""
         path = f"world/sim/touches/{touch['point']}"
         rec.set_time("time", duration=touch["start_s"])
         rec.log(path, rr.Points3D([series["contact_position"][k, j]], radii=0.02,
                                   colors=(230, 30, 30),
-                                  labels=[f"{touch['kind']}{early}, {touch['peak_n']:.0f} N"]))
+                                  labels=[f"{in_words(touch)}, {touch['peak_n']:.0f} N"]))
         rec.set_time("time", duration=touch["end_s"] + 0.02)
         rec.log(path, rr.Clear(recursive=False))
     rec.reset_time()

@@ -11,33 +11,32 @@ computes the command for t + delay from that state (a late command read ahead in
 the standard cure of a known dead time: O. J. M. Smith, "Closer control of loops with dead
 time", Chem. Eng. Prog. 53, 1957).
 
-Commands here are in `DelayedTorque`'s form: the joint torque plus kp q, so that each
-joint's own position term is taken out.
+The commands in flight are `DelayedTorque`'s own queue (in its form: the joint torque plus
+kp q, so that each joint's own position term is taken out), read, not copied.
 """
 
 from __future__ import annotations
 
-from collections import deque
-
 import numpy as np
+
+from gait_planner.walk.model_error import DelayedTorque
 
 __all__ = ["DelayPredictor"]
 
 
 class DelayPredictor:
-    """`__call__(data)`: the nominal walker's MjData `steps` simulation steps after the
-    measured state `data` (its kinematics current, `mj_step1`; its time advanced), the
-    commands in flight applied (before the first command is sent: `data`'s state, not
-    advanced); `sent(command)`: the command (na,) computed now, which
-    arrives `steps` steps later. kp: N m/rad, the joints' own position gain; dofs and qpos:
-    the MuJoCo addresses of the plan's joint angles."""
+    """`__call__(data)`: the nominal walker's MjData as many simulation steps after the
+    measured state `data` as `delayed` delays (its kinematics current, `mj_step1`; its time
+    advanced), the commands in flight of `delayed` applied (before the first command is
+    sent: `data`'s state, not advanced). kp: N m/rad, the joints' own position gain; dofs and qpos: the
+    MuJoCo addresses of the plan's joint angles."""
 
-    def __init__(self, model, steps: int, kp: float, dofs: np.ndarray, qpos: np.ndarray):
+    def __init__(self, model, delayed: DelayedTorque, kp: float, dofs: np.ndarray,
+                 qpos: np.ndarray):
         import mujoco
 
-        self.model, self.data = model, mujoco.MjData(model)
+        self.model, self.data, self.delayed = model, mujoco.MjData(model), delayed
         self.kp, self.dofs, self.qpos = kp, dofs, qpos
-        self.queue: deque[np.ndarray] = deque(maxlen=steps)
 
     def __call__(self, data):
         import mujoco
@@ -46,14 +45,10 @@ class DelayPredictor:
         d.time = data.time
         d.qpos[:], d.qvel[:] = data.qpos, data.qvel
         d.qacc_warmstart[:] = data.qacc_warmstart
-        for command in self.queue:
+        # the queue holds the commands of the last steps + 1 steps; the oldest was applied
+        for command in list(self.delayed.queue)[1:]:
             d.qfrc_applied[:] = 0.0
             d.qfrc_applied[self.dofs] = command - self.kp * d.qpos[self.qpos]
             mujoco.mj_step(model, d)
         mujoco.mj_step1(model, d)
         return d
-
-    def sent(self, command: np.ndarray) -> None:
-        if not self.queue:  # before the first command the joints hold it (DelayedTorque)
-            self.queue.extend([command.copy()] * self.queue.maxlen)
-        self.queue.append(command.copy())

@@ -116,19 +116,20 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         robot = RobotUrdf(rec.urdf, scene.robot.search_dirs(), dict(scene.robot.locked))
     half_width = float(rec.metadata.get("foot_half_width", 0.04575))
     sim = cfg["simulation"]
-    wm = build_model(rec, scene, half_width, sim["foot_sphere_radius"], sim["time_step"],
-                     sim["contact_time_constant"], cfg["joints"]["kd"], robot)
+
+    def walker():
+        return build_model(rec, scene, half_width, sim["foot_sphere_radius"], sim["time_step"],
+                           sim["contact_time_constant"], cfg["joints"]["kd"], robot)
+
+    wm = walker()
     factors = model_error.apply(wm.model) if model_error is not None else {}
     model, data = wm.model, mujoco.MjData(wm.model)
     delay_steps = (round(model_error.torque_delay / model.opt.timestep)
                    if model_error is not None else 0)
     delayed = DelayedTorque(delay_steps) if delay_steps else None
     predictor = None
-    if delay_steps and cfg["delay"]["predict"]:  # the nominal walker: no model error
-        nominal = build_model(rec, scene, half_width, sim["foot_sphere_radius"],
-                              sim["time_step"], sim["contact_time_constant"],
-                              cfg["joints"]["kd"], robot)
-        predictor = DelayPredictor(nominal.model, delay_steps, cfg["joints"]["kp"], wm.dof,
+    if delayed is not None and cfg["delay"]["predict"]:  # the nominal walker: no model error
+        predictor = DelayPredictor(walker().model, delayed, cfg["joints"]["kp"], wm.dof,
                                    wm.qpos)
     place = cfg["placement"]
     gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], cfg["torso"]["kp"], cfg["torso"]["kd"],
@@ -168,10 +169,8 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         # -kd v is MuJoCo's (implicit) joint damping (walk.mujoco_model)
         torque = ff + fb + gains.kd * state.qvel[wm.dof]
         if delayed is not None:  # the command late, the joint's own kp q now
-            command = torque + gains.kp * state.qpos[wm.qpos]
-            if predictor is not None:
-                predictor.sent(command)
-            torque = delayed(command, gains.kp * data.qpos[wm.qpos])
+            torque = delayed(torque + gains.kp * state.qpos[wm.qpos],
+                             gains.kp * data.qpos[wm.qpos])
         data.qfrc_applied[wm.dof] = torque
         errs.append(plan_angles - data.qpos[wm.qpos])
         ffs.append(ff)
@@ -249,12 +248,12 @@ def ground_forces(model, data, wm) -> np.ndarray:
     per_point = np.zeros((len(wm.contact_sites), 3))
     for c in range(data.ncon):
         geoms = (data.contact[c].geom1, data.contact[c].geom2)
-        on_foot = wm.geom_contact[geoms[0]] < 0  # geom1 is the ground (the plane or a tread)
-        foot = geoms[1] if on_foot else geoms[0]
+        ground_first = wm.geom_contact[geoms[0]] < 0  # geom1: the plane or a tread
+        foot = geoms[1] if ground_first else geoms[0]
         mujoco.mj_contactForce(model, data, c, force)
         # the contact frame's rows are its axes, the first the normal, from geom1 to geom2
         f = data.contact[c].frame.reshape(3, 3).T @ force[:3]
-        per_point[wm.geom_contact[foot]] += f if on_foot else -f
+        per_point[wm.geom_contact[foot]] += f if ground_first else -f
     return per_point
 
 

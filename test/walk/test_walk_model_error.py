@@ -103,7 +103,8 @@ def test_the_predictor_foresees_the_nominal_walker_exactly(walker2d_plan):
     data = mujoco.MjData(model)
     data.qpos[1] = 1.2  # the planar root's height: the walker falls onto its feet
     dofs = qpos = np.arange(3, model.nv)  # the planar root's 3 dofs come first
-    delayed, predictor = DelayedTorque(steps), DelayPredictor(model, steps, kp, dofs, qpos)
+    delayed = DelayedTorque(steps)
+    predictor = DelayPredictor(model, delayed, kp, dofs, qpos)
     rng = np.random.default_rng(5)
     states, predicted = [], []
     for _ in range(400):
@@ -111,7 +112,6 @@ def test_the_predictor_foresees_the_nominal_walker_exactly(walker2d_plan):
         predicted.append(predictor(data).qpos.copy())
         states.append(data.qpos.copy())
         command = rng.normal(0.0, 20.0, len(dofs)) + kp * data.qpos[qpos]
-        predictor.sent(command)
         data.qfrc_applied[:] = 0.0
         data.qfrc_applied[dofs] = delayed(command, kp * data.qpos[qpos])
         mujoco.mj_step2(model, data)
