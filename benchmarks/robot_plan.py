@@ -63,7 +63,8 @@ def draft(name: str):
 
     robot, folder = ROBOTS[name], robots_folder()
     path = folder / robot.urdf
-    return draft_scene(path.read_text(), package_dirs=[str(folder.parents[1])],
+    packages = [str(folder.parents[1])]
+    return draft_scene(path.read_text(), package_dirs=packages, robot_dirs=packages,
                        urdf_file=str(path), **robot.importer), path
 
 

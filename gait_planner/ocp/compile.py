@@ -7,7 +7,7 @@ it is formed: e.g. the serialisation of the Function it is derived from), the fl
 CasADi's version. Libraries already built are loaded straight away, without forming their
 Functions (walker3d's element derivatives take 2 s to form and generate), so a problem is
 compiled once per machine; the libraries missing are built in parallel, one compiler
-process per core. A library is written under a temporary name
+process per core, the largest first. A library is written under a temporary name
 and renamed when complete, so an interrupted build never leaves a half-written one.
 The compiler is needed only for libraries not yet in the cache: a cache filled elsewhere
 (`make setup`) serves a machine without one. Before building, `compile_sources` tells its
@@ -32,7 +32,9 @@ import re
 import shutil
 import subprocess
 import tempfile
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -198,19 +200,36 @@ def _library(src: Source, folder: Path) -> Path:
 
 
 def _build_all(compiler: str, jobs: list[tuple[Path, Path, tuple[str, ...]]], work: str) -> None:
-    """Build (library, source, flags) jobs, os.cpu_count() at a time."""
-    pending, running = list(jobs), []
-    while pending or running:
-        while pending and len(running) < (os.cpu_count() or 1):
-            library, source, flags = pending.pop(0)
-            partial = Path(work) / (library.name + ".partial")
-            cmd = [compiler, *flags, str(source), "-o", str(partial), "-lm"]
-            running.append((library, partial, subprocess.Popen(
-                cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)))
-        library, partial, proc = running.pop(0)
-        output, _ = proc.communicate()
-        if proc.returncode != 0:
-            for _, _, other in running:
-                other.kill()
-            raise CompileError(f"{compiler} failed on {library.stem}: {output.strip()[-500:]}")
+    """Build (library, source, flags) jobs, one compiler per usable core, the largest source
+    first; a core takes the next job as soon as its own is done. After a failure no new job
+    starts, and the first failure is raised. (Waiting for the jobs in the order they
+    started left a core idle behind the largest one: G1's 45 elements, 35 MB of C, took
+    174 s to build on 2 cores, 1.15 cores busy on average; 2026-11-29, HISTORY.)"""
+    failed = threading.Event()
+
+    def build(job: tuple[Path, Path, tuple[str, ...]]) -> str | None:
+        library, source, flags = job
+        if failed.is_set():
+            return None
+        partial = Path(work) / (library.name + ".partial")
+        done = subprocess.run([compiler, *flags, str(source), "-o", str(partial), "-lm"],
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        if done.returncode != 0:
+            failed.set()
+            return f"{compiler} failed on {library.stem}: {done.stdout.strip()[-500:]}"
         os.replace(partial, library)
+        return None
+
+    largest_first = sorted(jobs, key=lambda job: job[1].stat().st_size, reverse=True)
+    with ThreadPoolExecutor(max_workers=_cores()) as pool:
+        errors = [error for error in pool.map(build, largest_first) if error]
+    if errors:
+        raise CompileError(errors[0])
+
+
+def _cores() -> int:
+    """The cores this process may run on (its affinity where the OS tells it)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
