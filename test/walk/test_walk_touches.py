@@ -39,6 +39,16 @@ def test_a_load_in_mid_swing_is_a_scuff():
     assert touch["kind"] == "scuff" and "early_s" not in touch
 
 
+def test_a_chattering_point_is_one_touch_and_a_later_load_another():
+    touches = Touches(TIMES, ACTIVE, ["heel", "toe"], threshold=50.0)
+    for k, t in enumerate(np.arange(0.10, 0.23, 0.001)):  # mid-swing: loaded every other ms
+        touches.update(float(t), np.array([600.0 if k % 2 == 0 and t < 0.2 else 0.0, 500.0]))
+    touches.update(0.25, np.array([300.0, 500.0]))  # 50 ms after the chatter ended
+    first, second = touches.summary()
+    assert first["start_s"] == pytest.approx(0.10) and first["end_s"] == pytest.approx(0.198)
+    assert second["start_s"] == 0.25 and second["kind"] == "scuff"
+
+
 @pytest.mark.slow
 def test_a_walk_reports_its_touches(tmp_path):
     import subprocess
