@@ -8,7 +8,8 @@ step-length bounds times s, the base time step and the clearance ramp times sqrt
 speeds (strike speed, speed limit) times sqrt(s), joint speeds (deg/s) over sqrt(s); the
 twist regularisation's weights (units of the cost) by the energy scale m s (kinetic energy)
 and its square (torque squared). Angles (joint ranges, torso lean) and the scaling bounds
-keep their values. The other gaits (`gaits:`) are left out. The variant is built from the
+(sigma's, dimensionless) keep their values. The other gaits (`gaits:`) and the warm-start
+anchors (`gait-planner prepare`'s, not a cold plan's concern) are left out. The variant is built from the
 scaled YAML document by the loader (`scene_from_text`), so it is checked as any scene is;
 an option this module does not know is refused rather than left unscaled.
 """
@@ -28,7 +29,8 @@ LENGTH_OPTIONS = ("swing_clearance", "step_length_bounds")
 TIME_OPTIONS = ("swing_clearance_ramp",)
 SPEED_OPTIONS = ("strike_speed_max", "speed_max")
 RATE_OPTIONS = ("joint_speed_max",)
-ANGLE_OPTIONS = ("torso_lean_max", "joint_limits", "stairs_down_scaling_bounds")
+KEPT_OPTIONS = ("torso_lean_max", "joint_limits", "stairs_down_scaling_bounds",
+                "speed_scaling_bounds")
 
 
 def walker3d_document() -> dict:
@@ -61,6 +63,7 @@ def scaled_document(leg: float, mass: float) -> dict:
     gait["step_length"] *= s
     gait["base_time_step"] *= root
     options = gait["options"]
+    options.pop("warm_start_anchors", None)
     for key, value in options.items():
         if key in LENGTH_OPTIONS:
             options[key] = _times(value, s)
@@ -72,7 +75,7 @@ def scaled_document(leg: float, mass: float) -> dict:
             energy = m * s
             options[key] = {"kinetic_energy": value["kinetic_energy"] * energy,
                             "torque_squared": value["torque_squared"] * energy ** 2}
-        elif key not in ANGLE_OPTIONS:
+        elif key not in KEPT_OPTIONS:
             raise ValueError(f"walker3d's option {key!r} has no scaling rule in "
                              f"benchmarks/scaled_walker.py")
     return doc
