@@ -108,7 +108,10 @@ def plan_metadata(result: PlanResult) -> dict[str, str]:
     friction_coefficient, phase_scaling (comma-separated), solve_time_s, iterations, nodes),
     periodicity (result.settings["periodicity"] if given, else `DEFAULT_PERIODICITY`),
     success, message, solver_status, max_constraint_violation, max_dynamics_residual,
-    max_friction_violation, then every other entry of result.settings. Floats are written
+    max_friction_violation, robot_package_dirs (a scene drafted from a URDF: where its
+    ``package://`` paths resolved when it was planned, absolute, os.pathsep-separated; the
+    recording's scene names them relative to a scene file it no longer has), then every
+    other entry of result.settings. Floats are written
     with repr (they read back exactly with float()). A settings key equal to one of the
     fixed keys (other than periodicity) raises ValueError.
     """
@@ -132,6 +135,10 @@ def plan_metadata(result: PlanResult) -> dict[str, str]:
         "max_dynamics_residual": _number(stats.max_dynamics_residual),
         "max_friction_violation": _number(stats.max_friction_violation),
     }
+    robot = result.scene.robot
+    found = [d for d in (robot.search_dirs() if robot else ()) if os.path.isabs(d)]
+    if found:
+        data["robot_package_dirs"] = os.pathsep.join(found)
     for key, value in result.settings.items():
         if key in data and key != "periodicity":
             raise ValueError(f"result.settings key {key!r} would overwrite the metadata key of "

@@ -12,6 +12,7 @@ the ground touched where the plan has a foot in the air (`walk.touches`).
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 from typing import Any, Callable
 
@@ -83,6 +84,17 @@ def _rms(x) -> float:
     return float(np.sqrt(np.mean(x * x))) if x.size else 0.0
 
 
+def recorded_robot(rec, scene) -> RobotUrdf:
+    """The URDF a drafted scene's recording walks on: the recording's /robot_description
+    (rec.urdf), the scene's locked joints, and its mesh folders: the scene's own
+    (`RobotSource.search_dirs`) and the absolute ones its package:// paths resolved in when
+    it was planned (rec.metadata["robot_package_dirs"], `io.mcap_writer.plan_metadata`:
+    the recording's scene names its folders relative to a scene file it does not carry)."""
+    planned = [d for d in rec.metadata.get("robot_package_dirs", "").split(os.pathsep) if d]
+    return RobotUrdf(rec.urdf, scene.robot.search_dirs() + tuple(planned),
+                     dict(scene.robot.locked))
+
+
 def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
          config: dict[str, Any] | None = None, series: bool = False,
          progress: Callable[[int, int], None] | None = None,
@@ -92,9 +104,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     self-test); series adds the per-step trace (key "series"); progress(walked, steps) is
     called at every half cycle's end; robot: the robot's own URDF a drafted plan walks on
     (`walk.mujoco_model`); default: for a scene drafted from a URDF (its ``robot:``
-    section), the recording's /robot_description, which is that URDF, with the section's
-    locked joints, its package folders and the URDF's own folder and parents (for the foot
-    meshes only); model_error: how the simulated walker differs from the plan's model
+    section), the recording's own (`recorded_robot`); model_error: how the simulated walker differs from the plan's model
     (`walk.model_error`: masses, friction, contact stiffness, a torque delay, which with
     config delay.predict the controller predicts through, `walk.predictor`; the summary's
     "model_error" says what, with the mass factors drawn)."""
@@ -113,7 +123,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         raise ValueError(f"{rec.path}: scene {scene.name!r} has no foot with two contact "
                          f"points (heel and forefoot); walk needs feet")
     if robot is None and scene.robot is not None:  # drafted: the recording's own URDF
-        robot = RobotUrdf(rec.urdf, scene.robot.search_dirs(), dict(scene.robot.locked))
+        robot = recorded_robot(rec, scene)
     half_width = float(rec.metadata.get("foot_half_width", 0.04575))
     sim = cfg["simulation"]
 

@@ -15,6 +15,7 @@ plan on G1 and Bolt from the example-robot-data wheel:
 
 from __future__ import annotations
 
+import os
 import types
 from dataclasses import replace
 
@@ -113,3 +114,25 @@ def test_another_robot_and_a_missing_mesh_are_refused(example_robots):
                        ".FL_LOWER_LEG. is not found"):
         build_model(rec, bolt_scene, 0.03, 0.005, 5e-4, 0.005, 0.0,
                     replace(bolt, package_dirs=()))
+
+
+def test_a_recording_keeps_where_its_meshes_resolved(example_robots, make_result, tmp_path):
+    """A scene that names its URDF relative to itself: the recording's copy of that scene has
+    no folder, so the walk finds Talos's package:// foot meshes through the folders the
+    plan's metadata names (`robot_package_dirs`), and without them finds none."""
+    from gait_planner.io.mcap_writer import plan_metadata
+    from gait_planner.walk.walk_plan import recorded_robot
+
+    urdf = example_robots / "talos_data/robots/talos_reduced.urdf"
+    share, text = str(example_robots.parents[1]), urdf.read_text()
+    # as `gait-planner scene from-urdf` without --package-dir: the meshes resolve in the
+    # URDF's parents, and the scene names no folder
+    draft = draft_scene(text, package_dirs=[share], urdf_file=os.path.relpath(urdf, tmp_path),
+                        mirror_tolerance=0.06)
+    planned = scene_from_text(draft.yaml, "talos.yaml", tmp_path)  # as the planner loads it
+    meta = plan_metadata(make_result(scene=planned))
+    assert share in meta["robot_package_dirs"].split(os.pathsep)
+    recorded = scene_from_text(draft.yaml, "talos.yaml")  # the recording's attachment
+    assert recorded.robot.search_dirs() == ()
+    rec = types.SimpleNamespace(urdf=text, metadata=meta)
+    assert share in recorded_robot(rec, recorded).package_dirs
