@@ -142,14 +142,14 @@ fi
 # --- 7. compiled derivatives and default plans of the shipped scenes -----------------------
 # The planner compiles each scene's per-node derivative elements to C the first time they
 # are needed and caches them by source hash; doing it here, for every ground form a request
-# may take (level or ramp, a speed, stairs up, stairs down: 308 s for the three scenes on
-# the idle 2-core VM, 2026-11-28), keeps it off every request (`gait-planner
-# prepare`), which also plans each scene's default request into the warm-start store
-# (gait_planner/ocp/library.py) that the node re-plans from. A failure only costs speed
-# later.
+# may take (level or ramp, a speed, stairs up, stairs down; each gait a scene declares:
+# 308 s for the three scenes' walks on the idle 2-core VM, 2026-11-28), keeps it off every
+# request (`gait-planner prepare`), which also plans each scene's default request into the
+# warm-start store (gait_planner/ocp/warm_starts.py) that the node re-plans from. A
+# failure only costs speed later.
 prep_hash="$( { printf '%s\n' "$venv" "${GAIT_PLANNER_CACHE:-$HOME/.cache/gait_planner}";
   cat gait_planner/model/*.py gait_planner/dynamics/*.py gait_planner/ocp/*.py \
-      config/scenes/*.yaml; } | sha256sum | cut -d' ' -f1)"
+      gait_planner/cli/__init__.py config/scenes/*.yaml; } | sha256sum | cut -d' ' -f1)"
 if ! is_current prepare "$prep_hash"; then
   say "compiling the scenes' derivatives (about 5 minutes the first time; cached)"
   if "$venv/bin/gait-planner" prepare walker3d walker2d compass; then

@@ -312,7 +312,8 @@ def _add_prepare(commands: argparse._SubParsersAction) -> None:
         "prepare", help="compile the scenes' derivatives and plan their defaults now "
         "(make setup runs it)",
         description="Build each SCENE's problems with compiled derivatives (one per shape: "
-        "level or ramp, a requested speed, stairs up, stairs down), so that the C libraries "
+        "level or ramp, a requested speed, stairs up, stairs down; for each of its gaits), "
+        "so that the C libraries "
         "are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) and no request "
         "within the scene's ranges compiles, and plan its default request into the warm-start store "
         "(gait_planner/ocp/warm_starts.py), from which the node's first request re-plans warm. "
@@ -345,7 +346,7 @@ def _plan_anchors(planner, scene) -> list[bool]:
 
 
 def _prepare(args: argparse.Namespace) -> int:
-    from gait_planner.model.loader import SceneError, find_scene
+    from gait_planner.model.loader import SceneError, find_scene, with_gait
     from gait_planner.ocp.warm_starts import WarmStartStore
     from gait_planner.ocp.settings import SettingsError, form_requests, settings_for
     from gait_planner.ocp.solve import Planner
@@ -362,13 +363,18 @@ def _prepare(args: argparse.Namespace) -> int:
             for shape in form_requests(scene, settings)[1:]:  # the default's is built
                 planner.prepare(scene, shape)
             anchors = _plan_anchors(planner, scene) if result.success else []
+            for gait in scene.gaits:  # its other gaits: built for every shape, not planned
+                other = with_gait(scene, gait)
+                for shape in form_requests(other, settings_for(other, compiled=True)):
+                    planner.prepare(other, shape)
         except (SceneError, SettingsError) as error:
             raise CliError(str(error)) from None
         kept = ("its default plan" + (f" and {sum(anchors)} of {len(anchors)} warm-start "
                                       "anchors" if anchors else "")
                 + " kept in the warm-start store" if result.success
                 else f"its default plan failed: {result.message}")
-        print(f"{name}: {used}; {kept} ({time.perf_counter() - start:.1f} s)", flush=True)
+        gaits = f"; its gaits {', '.join(scene.gaits)} built" if scene.gaits else ""
+        print(f"{name}: {used}; {kept}{gaits} ({time.perf_counter() - start:.1f} s)", flush=True)
     return 0
 
 
