@@ -9,9 +9,9 @@ speeds (strike speed, speed limit) times sqrt(s), joint speeds (deg/s) over sqrt
 twist regularisation's weights (units of the cost) by the energy scale m s (kinetic energy)
 and its square (torque squared). Angles (joint ranges, torso lean) and the scaling bounds
 (sigma's, dimensionless) keep their values. The other gaits (`gaits:`) and the warm-start
-anchors (`gait-planner prepare`'s, not a cold plan's concern) are left out. The variant is built from the
-scaled YAML document by the loader (`scene_from_text`), so it is checked as any scene is;
-an option this module does not know is refused rather than left unscaled.
+anchors (`gait-planner prepare`'s, not a cold plan's concern) are left out. The variant is
+built from the scaled YAML document by the loader (`scene_from_text`), so it is checked as
+any scene is; an option this module does not know is refused rather than left unscaled.
 """
 
 from __future__ import annotations

@@ -312,12 +312,13 @@ def _add_prepare(commands: argparse._SubParsersAction) -> None:
         "prepare", help="compile the scenes' derivatives and plan their defaults now "
         "(make setup runs it)",
         description="Build each SCENE's problems with compiled derivatives (one per shape: "
-        "level or ramp, a requested speed, stairs up, stairs down; for each of its gaits), "
-        "so that the C libraries "
-        "are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) and no request "
-        "within the scene's ranges compiles, and plan its default request into the warm-start store "
-        "(gait_planner/ocp/warm_starts.py), from which the node's first request re-plans warm. "
-        "Takes about a minute for walker3d the first time, a few seconds when cached.")
+        "level or ramp, a requested speed, stairs up, stairs down; for each of its gaits), so "
+        "that the C libraries are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) "
+        "and no request within the scene's ranges compiles, and plan its default request and "
+        "its warm-start anchors into the warm-start store (gait_planner/ocp/warm_starts.py), "
+        "from which the node's first request re-plans warm. The first time it compiles for "
+        "minutes (walker3d's walk and anchors 6.3 min on 2 cores, its other gaits up to 4 "
+        "more); cached, planning the anchors takes most of its 1-4 minutes.")
     parser.add_argument("scenes", nargs="+", metavar="NAME|FILE.yaml",
                         help="scenes: names or paths to scene files (see plan --help)")
     parser.set_defaults(handler=_prepare)

@@ -8,11 +8,11 @@ ground's normal force on each planned contact point (`walk_plan.ground_forces`);
 a run of steps in which a point carries more than `threshold` N while the plan holds it at
 neither the node before nor the node after; a run that resumes within `REJOIN` s of its
 last loaded step is the same touch (a foot chattering on the ground: G1's dragging
-forefoot made 40 runs 0.5-3 ms apart in 0.2 s, 2026-11-29). `summary()` lists each touch: its start and
-end (s), the point, its peak force (N), what it was (an ``early strike`` if the plan
-strikes that point within `EARLY` s after the touch began (how early: the plan's strike
-time minus the touch's start), otherwise a ``scuff``: a swing foot dragging on the ground),
-and all that in words (`in_words`).
+forefoot made 40 runs 0.5-3 ms apart in 0.2 s, 2026-11-29). `summary()` lists each touch:
+its start and end (s), the point, its peak force (N), what it was (an ``early strike`` if
+the plan strikes that point within `EARLY` s after the touch began (how early: the plan's
+strike time minus the touch's start), otherwise a ``scuff``: a swing foot dragging on the
+ground), and all that in words (`in_words`).
 """
 
 from __future__ import annotations

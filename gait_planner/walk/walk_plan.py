@@ -104,10 +104,11 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     self-test); series adds the per-step trace (key "series"); progress(walked, steps) is
     called at every half cycle's end; robot: the robot's own URDF a drafted plan walks on
     (`walk.mujoco_model`); default: for a scene drafted from a URDF (its ``robot:``
-    section), the recording's own (`recorded_robot`); model_error: how the simulated walker differs from the plan's model
-    (`walk.model_error`: masses, friction, contact stiffness, a torque delay, which with
-    config delay.predict the controller predicts through, `walk.predictor`; the summary's
-    "model_error" says what, with the mass factors drawn)."""
+    section), the recording's own (`recorded_robot`); model_error: how the simulated
+    walker differs from the plan's model (`walk.model_error`: masses, friction, contact
+    stiffness, a torque delay, which with config delay.predict the controller predicts
+    through, `walk.predictor`; the summary's "model_error" says what, with the mass
+    factors drawn)."""
     import mujoco
 
     from gait_planner.walk.mujoco_model import build_model, plan_qpos, plan_root_qvel
