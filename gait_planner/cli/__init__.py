@@ -361,13 +361,12 @@ def _prepare(args: argparse.Namespace) -> int:
             planner = Planner(library=WarmStartStore(), stage=_compile_note, pin=True)
             used = planner.prepare(scene, settings)
             result = plan_once(planner, scene, settings, warm_start=False)
-            for shape in form_requests(scene, settings)[1:]:  # the default's is built
-                planner.prepare(scene, shape)
+            # every shape of the walk (the default's already built) and of its other gaits
+            # (built, not planned)
+            for gait in (scene, *(with_gait(scene, g) for g in scene.gaits)):
+                for shape in form_requests(gait, settings_for(gait, compiled=True)):
+                    planner.prepare(gait, shape)
             anchors = _plan_anchors(planner, scene) if result.success else []
-            for gait in scene.gaits:  # its other gaits: built for every shape, not planned
-                other = with_gait(scene, gait)
-                for shape in form_requests(other, settings_for(other, compiled=True)):
-                    planner.prepare(other, shape)
         except (SceneError, SettingsError) as error:
             raise CliError(str(error)) from None
         kept = ("its default plan" + (f" and {sum(anchors)} of {len(anchors)} warm-start "

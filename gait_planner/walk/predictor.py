@@ -28,8 +28,8 @@ class DelayPredictor:
     """`__call__(data)`: the nominal walker's MjData as many simulation steps after the
     measured state `data` as `delayed` delays (its kinematics current, `mj_step1`; its time
     advanced), the commands in flight of `delayed` applied (before the first command is
-    sent: `data`'s state, not advanced). kp: N m/rad, the joints' own position gain; dofs and qpos: the
-    MuJoCo addresses of the plan's joint angles."""
+    sent: `data`'s state, not advanced). kp: N m/rad, the joints' own position gain; dofs
+    and qpos: the MuJoCo addresses of the plan's joint angles."""
 
     def __init__(self, model, delayed: DelayedTorque, kp: float, dofs: np.ndarray,
                  qpos: np.ndarray):
