@@ -10,7 +10,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from gait_planner.cli.ros_commands import SPEED_HELP
+from gait_planner.cli.ros_commands import GAIT_HELP, SPEED_HELP
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for, speed_range
 from gait_planner.pipeline import plan_and_record
@@ -171,3 +171,10 @@ def test_a_speed_reaches_the_settings_and_0_leaves_the_durations_free():
 def test_the_help_shows_the_speeds_a_scene_reaches(scene):
     slow, fast = speed_range(settings_for(load_scene(scene), speed=2.0))  # sigma at a speed
     assert f"{slow:.3f} to {fast:.3f} m/s" in SPEED_HELP
+
+
+def test_the_help_names_the_shipped_scenes_gaits():
+    listed = GAIT_HELP.split("walker2d and walker3d:")[1]
+    for scene in ("walker2d", "walker3d"):
+        assert all(gait in listed for gait in load_scene(scene).gaits)
+        assert sorted(load_scene(scene).gaits) == ["run", "toe_first"]

@@ -29,8 +29,8 @@ STEP_HEIGHT_HELP = ("stairs: the rise per step, m, up (> 0) or down (< 0), tread
                     "the step length (default 0: none); refused beyond the legs' reach")
 
 
-GAIT_HELP = ("a gait the scene declares: walk (default) or one of its gaits: (walker2d, "
-             "walker3d: run)")
+GAIT_HELP = ("a gait the scene declares: walk (default) or one of its gaits (walker2d and "
+             "walker3d: toe_first, landing forefoot first; run)")
 
 
 def add_node_parser(commands: argparse._SubParsersAction) -> None:
