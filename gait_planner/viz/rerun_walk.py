@@ -2,8 +2,9 @@
 
 `save_walk_rrd(result, path, every)` writes, from `walk(..., series=True)` and the plan it
 walked (its recording read again, joined as `gait_planner.walk.reference` does), an .rrd
-with the layout of `walk_blueprint`. Timeline ``time``: s of simulated time, the plan's
-joined half cycles on the same clock. The simulation is drawn every `every`-th step (200 Hz
+with the layout of `walk_blueprint`. Timeline ``time``: s of the plan's time (`walk.clock`,
+paced by the walker's progress), the simulated walker drawn at the plan's time it tracked,
+beside the plan's joined half cycles. The simulation is drawn every `every`-th step (200 Hz
 at the default step of 0.5 ms), the plan at its nodes. Entities:
 
 * ``world``, ``world/ground``: z up, a grid along the walk (`gait_planner.viz.rerun_draw`);
@@ -264,7 +265,8 @@ def save_walk_rrd(result: dict[str, Any], path: str | os.PathLike, every: int = 
     """Write the walk `result` (with its "series") as an .rrd to `path` atomically (module
     docstring); the absolute path. ValueError if the folder does not exist."""
     target = output_path(path)
-    series = result["series"]
+    series = {**result["series"], "time": result["series"]["plan_time"]}  # module docstring
+    result = {**result, "series": series}
     plan = read_plan_mcap(result["recording"])
     ref = Reference.from_recording(plan, result["steps"])
     scene = ref.scene

@@ -5,8 +5,11 @@ angles and rates + two loops on what the joints do not control (the floating bas
 
 * Torso attitude: the torque the torso needs to return to the plan's pitch and roll,
   -kp e - kd (w - w_ref) (e the rotation vector of D D_ref^T, w the angular velocity, world;
-  its vertical part dropped), made by the hips of the legs in contact in the plan (the
-  reaction of a hip torque acts on the torso; split evenly between the stance legs). Yaw is
+  its vertical part dropped), made by the hips of the legs that stand on the ground (the
+  reaction of a hip torque acts on the torso; split evenly between them): the legs whose
+  contact points the walk last found loaded (`loaded`, set by the walk; before that, those
+  the plan holds). A leg the plan still swings but that has struck early carries the
+  torso; one the plan holds but that is still in the air does not. Yaw is
   left to the joint PD: the plan's point contacts carry no moment about the vertical in
   single support, and a foot asked for one spins on its sole (over 12 gain settings,
   walker3d lost a hip's yaw by 45 deg in 8 with yaw in the loop, in none without).
@@ -26,14 +29,15 @@ angles and rates + two loops on what the joints do not control (the floating bas
   early; on a 10 deg ramp the early strike threw the walker back, 10 cm behind the plan
   after its first half cycle.
 
-`ReferenceController(model, wm, ref, gains, max_shift, scale)(data)` evaluates all of it on
-a MuJoCo state whose kinematics are current (after `mj_step1`).
+`ReferenceController(model, wm, ref, gains, max_shift, scale, clock)(data)` evaluates all of
+it on a MuJoCo state whose kinematics are current (after `mj_step1`), against the plan at
+the plan's time clock(data.time) (`walk.clock`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -130,10 +134,14 @@ class ReferenceController:
 
     model, wm: the `walk.mujoco_model.WalkModel`'s MuJoCo model and layout; ref: the joined
     plan (`walk.reference.Reference`); gains; max_shift m, the largest foot shift; scale:
-    the factor on the plan's efforts (1; the self-test's 0 and 0.5)."""
+    the factor on the plan's efforts (1; the self-test's 0 and 0.5); clock: the plan's time
+    at a simulated time (`walk.clock.PlanClock`; default: the simulated time itself)."""
 
-    def __init__(self, model, wm, ref, gains: Gains, max_shift: float, scale: float = 1.0):
+    def __init__(self, model, wm, ref, gains: Gains, max_shift: float, scale: float = 1.0,
+                 clock: Callable[[float], float] = float):
         self.model, self.wm, self.ref, self.gains = model, wm, ref, gains
+        self.clock = clock
+        self.loaded: set[str] | None = None  # contact points on the ground (module docstring)
         self.max_shift, self.scale = max_shift, scale
         scene = ref.scene
         self.legs = hip_legs(scene, angle_names(scene))
@@ -151,11 +159,11 @@ class ReferenceController:
 
     def __call__(self, data) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(feed-forward, feedback, the plan's efforts, the plan's angles), each (na,), N m and
-        rad, at data.time; the feedback includes the joints' damping -kd v that MuJoCo
+        rad, at the plan's time clock(data.time); the feedback includes the joints' damping -kd v that MuJoCo
         applies (walk.mujoco_model), so the torque to apply is ff + fb + kd v."""
         import mujoco
 
-        model, wm, ref, g, t = self.model, self.wm, self.ref, self.gains, data.time
+        model, wm, ref, g, t = self.model, self.wm, self.ref, self.gains, self.clock(data.time)
         angles, rates, efforts, active = ref.at(t)
         target = angles.copy()
         swing = next((w for w in self.swings if w[0] <= t < w[1]), None)
@@ -171,7 +179,8 @@ class ReferenceController:
                                              shift)
         q, v = data.qpos[wm.qpos], data.qvel[wm.dof]
         fb = g.kp * (target - q) + g.kd * (rates - v)
-        stance = [leg.hip for leg in self.legs if leg.contacts & set(active)]
+        down = set(active) if self.loaded is None else self.loaded
+        stance = [leg.hip for leg in self.legs if leg.contacts & down]
         if stance:
             h = model.opt.timestep
             _, D_ref = ref.root_at(t)

@@ -5,8 +5,12 @@
 (the plan's positions and velocities) and runs the reference controller (`walk.controller`)
 with the parameters of config/walk.yaml until the last half cycle ends or the walker falls
 (torso centre of mass `height_drop` below the plan's, or its d3 `tilt` from the plan's) or
-loses tracking (a joint `joint_error` from the plan). Returns a JSON-ready summary, with
-the ground touched where the plan has a foot in the air (`walk.touches`).
+loses tracking (a joint `joint_error` from the plan). The plan is followed on its own clock,
+paced by the walker's progress (`walk.clock`): the plan's time tau, not the simulated time
+t, says which node is tracked, where the half cycles end and when the walk is done, and
+every comparison with the plan (tracking, falls, drift, placement, touches) is made at tau.
+Returns a JSON-ready summary, with the ground touched where the plan has a foot in the air
+(`walk.touches`).
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from typing import Any, Callable
 import numpy as np
 import yaml
 
+from gait_planner.walk.clock import PlanClock
 from gait_planner.walk.controller import Gains, ReferenceController
 from gait_planner.walk.model_error import DelayedTorque, ModelError
 from gait_planner.walk.predictor import DelayPredictor
@@ -34,6 +39,7 @@ TOUCH_SHARE = 0.1  # of the walker's weight: a contact point carrying more is to
 _KEYS = {"simulation": ("time_step", "foot_sphere_radius", "contact_time_constant"),
          "joints": ("kp", "kd"), "torso": ("kp", "kd"),
          "placement": ("kp", "kd", "max_shift", "height_kp"),
+         "clock": ("pace_gain", "rate_min", "rate_max"),
          "stop": ("height_drop", "tilt", "joint_error")}
 
 
@@ -53,6 +59,10 @@ def load_config(path: str | Path = CONFIG) -> dict[str, Any]:
                     or not math.isfinite(value) or value < 0 or (positive and value == 0):
                 raise ValueError(f"{path}: {section}.{key} must be a finite number "
                                  f"{'> 0' if positive else '>= 0'}, got {value!r}")
+    low, high = cfg["clock"]["rate_min"], cfg["clock"]["rate_max"]
+    if not 0 < low <= 1 <= high:
+        raise ValueError(f"{path}: clock.rate_min and clock.rate_max must satisfy 0 < rate_min "
+                         f"<= 1 <= rate_max, got {low!r} and {high!r}")
     predict = (cfg.get("delay") or {}).get("predict") if isinstance(cfg, dict) else None
     if not isinstance(predict, bool):
         raise ValueError(f"{path}: delay.predict must be true or false, got {predict!r}")
@@ -145,7 +155,9 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     place = cfg["placement"]
     gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], cfg["torso"]["kp"], cfg["torso"]["kd"],
                   place["kp"], place["kd"], place["height_kp"])
-    control = ReferenceController(model, wm, ref, gains, place["max_shift"], scale)
+    pace = cfg["clock"]
+    clock = PlanClock(pace["pace_gain"], pace["rate_min"], pace["rate_max"])
+    control = ReferenceController(model, wm, ref, gains, place["max_shift"], scale, clock)
     root_site = wm.root_site
 
     i_root = scene.body_index(scene.root.body)
@@ -161,16 +173,20 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
                       TOUCH_SHARE * weight)
     t_end = steps * ref.period
     errs, ffs, fbs, plans = [], [], [], []
-    trace: dict[str, list] = {k: [] for k in ("time", "position", "velocity", "torso",
+    trace: dict[str, list] = {k: [] for k in ("time", "plan_time", "position", "velocity", "torso",
                                               "torso_ref", "ground_force",
                                               "contact_position")}
     drift, placement, per_half, boundaries, start = [], [], [], 1, 0
     reason = "completed"
-    while data.time < t_end - 0.5 * h:
+    along = np.array([1.0, 0.0, 0.0]) - ref.normal[0] * ref.normal  # walking direction
+    along /= np.linalg.norm(along)  # on the ground (e_x, or up or down a ramp)
+    speed = ref.step_length / ref.period
+    root = model.body(wm.root).id
+    while clock(data.time) < t_end - 0.5 * h:
         # kinematics of the current state, the control on it, then the step (mj_step1/2):
         # what is recorded at a step is all of one state
         mujoco.mj_step1(model, data)
-        t = data.time
+        t_sim, t = data.time, clock(data.time)  # t: the plan's time (module docstring)
         # under a delay with prediction: the command for the state it will meet
         state = predictor(data) if predictor is not None else data
         ff, fb, plan_effort, plan_angles = control(state)
@@ -192,7 +208,8 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         tilt = math.degrees(math.acos(np.clip(
             data.site_xmat[root_site].reshape(3, 3)[:, 2] @ D_ref[:, 2], -1, 1)))
         if series:
-            trace["time"].append(t)
+            trace["time"].append(data.time)
+            trace["plan_time"].append(t)
             trace["position"].append(data.qpos[wm.qpos].copy())
             trace["velocity"].append(data.qvel[wm.dof].copy())
             trace["torso"].append(np.r_[com, data.site_xmat[root_site]])
@@ -200,25 +217,30 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
             trace["contact_position"].append(data.site_xpos[wm.contact_sites].copy())
         mujoco.mj_step2(model, data)
         forces = ground_forces(model, data, wm)  # of that state, solved in mj_step2
-        touches.update(t, forces @ ref.normal)  # the normal force on each point
+        normal = forces @ ref.normal  # the normal force on each point
+        touches.update(t, normal)
+        control.loaded = {name for name, f in zip(touches.names, normal)
+                          if f > touches.threshold}
+        clock.pace(h, float(along @ (data.subtree_com[root] - ref.com_at(t))), speed)
         if series:
             trace["ground_force"].append(forces)
         worst = int(np.argmax(np.abs(errs[-1])))
         if com[2] < phi_ref[2] - stop["height_drop"]:
             reason = (f"fall: torso centre of mass {com[2]:.3f} m high, "
-                      f"{phi_ref[2] - com[2]:.3f} m below the plan at t = {t:.3f} s")
+                      f"{phi_ref[2] - com[2]:.3f} m below the plan at t = {t_sim:.3f} s")
         elif tilt > stop["tilt"]:
-            reason = f"fall: torso tilted {tilt:.1f} deg from the plan at t = {t:.3f} s"
+            reason = f"fall: torso tilted {tilt:.1f} deg from the plan at t = {t_sim:.3f} s"
         elif abs(math.degrees(errs[-1][worst])) > stop["joint_error"]:
             reason = (f"lost tracking: {rec.joint_names[worst]} "
                       f"{math.degrees(errs[-1][worst]):+.1f} deg from the plan at t = "
-                      f"{t:.3f} s")
+                      f"{t_sim:.3f} s")
         if reason != "completed":
             break
-        if data.time >= boundaries * ref.period - 0.5 * h:
+        if clock(data.time) >= boundaries * ref.period - 0.5 * h:
             mujoco.mj_kinematics(model, data)
-            drift.append((data.site_xpos[root_site] - ref.root_at(data.time)[0]).tolist())
-            placement.append(_placement_error(ref, data, control))
+            tau = clock(data.time)
+            drift.append((data.site_xpos[root_site] - ref.root_at(tau)[0]).tolist())
+            placement.append(_placement_error(ref, data, control, tau))
             per_half.append(_rms(np.degrees(errs[start:])))
             start = len(errs)
             if progress is not None:
@@ -233,6 +255,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         "recording": str(rec.path), "scene": scene.name, "steps": steps,
         "torque_scale": scale,
         "half_cycles_walked": len(drift), "time_walked_s": round(float(data.time), 4),
+        "plan_time_walked_s": round(float(clock(data.time)), 4),
         "stopped": reason,
         "joint_rms_deg": _rms(errs_deg), "joint_max_deg": float(np.abs(errs_deg).max(initial=0)),
         "joint_rms_per_half_cycle_deg": per_half,
@@ -268,10 +291,10 @@ def ground_forces(model, data, wm) -> np.ndarray:
     return per_point
 
 
-def _placement_error(ref, data, control) -> float:
-    """m: the largest distance of a contact point the plan holds at the node nearest to
-    data.time from where the plan puts it."""
-    n = int(np.argmin(np.abs(ref.times - data.time)))
+def _placement_error(ref, data, control, tau: float) -> float:
+    """m: the largest distance of a contact point the plan holds at the node nearest to the
+    plan's time tau from where the plan puts it."""
+    n = int(np.argmin(np.abs(ref.times - tau)))
     q_n = ref.q[n]
     worst = 0.0
     for c in ref.active[n]:
