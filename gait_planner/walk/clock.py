@@ -4,7 +4,7 @@ A walk tracks its plan at the plan's time tau. Held at the simulated time (tau =
 plan runs on when the walker falls behind: in a phase on one forefoot or one heel the
 walker is an inverted pendulum the joints cannot push, and on a 10 deg ramp up it fell
 2 cm behind its plan in the first double support and 20 cm in the next single support
-with every joint within 6 deg of the plan (2026-11-30, benchmarks/HISTORY.md); the swing
+with every joint within 6 deg of the plan (2026-11-29, benchmarks/HISTORY.md); the swing
 leg, swung on time, then lands short. Walking controllers of underactuated walkers index
 their reference by the walker's progress instead of time (the phase variable of hybrid
 zero dynamics: Westervelt et al., "Feedback Control of Dynamic Bipedal Robot Locomotion",
