@@ -159,8 +159,9 @@ class ReferenceController:
 
     def __call__(self, data) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(feed-forward, feedback, the plan's efforts, the plan's angles), each (na,), N m and
-        rad, at the plan's time clock(data.time); the feedback includes the joints' damping -kd v that MuJoCo
-        applies (walk.mujoco_model), so the torque to apply is ff + fb + kd v."""
+        rad, at the plan's time clock(data.time); the feedback includes the joints' damping
+        -kd v that MuJoCo applies (walk.mujoco_model), so the torque to apply is ff + fb +
+        kd v."""
         import mujoco
 
         model, wm, ref, g, t = self.model, self.wm, self.ref, self.gains, self.clock(data.time)

@@ -173,8 +173,8 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
                       TOUCH_SHARE * weight)
     t_end = steps * ref.period
     errs, ffs, fbs, plans = [], [], [], []
-    trace: dict[str, list] = {k: [] for k in ("time", "plan_time", "position", "velocity", "torso",
-                                              "torso_ref", "ground_force",
+    trace: dict[str, list] = {k: [] for k in ("time", "plan_time", "position", "velocity",
+                                              "torso", "torso_ref", "ground_force",
                                               "contact_position")}
     drift, placement, per_half, boundaries, start = [], [], [], 1, 0
     reason = "completed"
