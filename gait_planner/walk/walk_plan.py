@@ -181,7 +181,6 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     along = np.array([1.0, 0.0, 0.0]) - ref.normal[0] * ref.normal  # walking direction
     along /= np.linalg.norm(along)  # on the ground (e_x, or up or down a ramp)
     speed = ref.step_length / ref.period
-    root = model.body(wm.root).id
     while clock(data.time) < t_end - 0.5 * h:
         # kinematics of the current state, the control on it, then the step (mj_step1/2):
         # what is recorded at a step is all of one state
@@ -221,7 +220,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         touches.update(t, normal)
         control.loaded = {name for name, f in zip(touches.names, normal)
                           if f > touches.threshold}
-        clock.pace(h, float(along @ (data.subtree_com[root] - ref.com_at(t))), speed)
+        clock.pace(h, float(along @ (data.subtree_com[control.root] - ref.com_at(t))), speed)
         if series:
             trace["ground_force"].append(forces)
         worst = int(np.argmax(np.abs(errs[-1])))
@@ -236,9 +235,9 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
                       f"{t_sim:.3f} s")
         if reason != "completed":
             break
-        if clock(data.time) >= boundaries * ref.period - 0.5 * h:
+        tau = clock(data.time)  # of the state after the step
+        if tau >= boundaries * ref.period - 0.5 * h:
             mujoco.mj_kinematics(model, data)
-            tau = clock(data.time)
             drift.append((data.site_xpos[root_site] - ref.root_at(tau)[0]).tolist())
             placement.append(_placement_error(ref, data, control, tau))
             per_half.append(_rms(np.degrees(errs[start:])))
