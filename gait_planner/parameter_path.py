@@ -25,7 +25,7 @@ step from the last step's optimum (`ocp.solve.VARIANTS["continued"]`: the barrie
 
 Measured on walker3d, 2026-11-29 (benchmarks/HISTORY.md, REPORT section 12): the 30 random
 requests of `benchmarks/any_request.py`, each from the nearest of the default plan, the 14
-anchors (the scene's `warm_start_anchors`, `ocp.settings.anchor_requests`) and the plans
+anchors (the scene's `warm_start_anchors`, `ocp.prepare_requests.anchor_requests`) and the plans
 of the requests before it, certified: 28 certified, median 2.7 s, 102 iterations; cold 27,
 3.4 s, 160 iterations. Faster than cold on 17 of the 28, slower where a path of 3-4 steps
 took 50-100 iterations a step or failed before the cold plan.

@@ -331,9 +331,10 @@ def _compile_note(stage: str) -> None:
 
 
 def _plan_anchors(planner, scene) -> list[bool]:
-    """Plan the scene's warm-start anchors (`ocp.settings.anchor_requests`), each from the
+    """Plan the scene's warm-start anchors (`ocp.prepare_requests.anchor_requests`), each from the
     nearest plan kept, into the planner's warm-start store; whether each converged."""
-    from gait_planner.ocp.settings import anchor_requests, settings_for
+    from gait_planner.ocp.prepare_requests import anchor_requests
+    from gait_planner.ocp.settings import settings_for
     from gait_planner.strategies import plan_once
 
     out = []
@@ -349,7 +350,8 @@ def _plan_anchors(planner, scene) -> list[bool]:
 def _prepare(args: argparse.Namespace) -> int:
     from gait_planner.model.loader import SceneError, find_scene, with_gait
     from gait_planner.ocp.warm_starts import WarmStartStore
-    from gait_planner.ocp.settings import SettingsError, form_requests, settings_for
+    from gait_planner.ocp.prepare_requests import form_requests
+    from gait_planner.ocp.settings import SettingsError, settings_for
     from gait_planner.ocp.solve import Planner
     from gait_planner.strategies import plan_once
 

@@ -303,29 +303,8 @@ _OPTION_NAMES = ({f.name for f in dataclasses.fields(GaitSettings)} - {
 
 
 # The gait option listing the requests `gait-planner prepare` plans into the warm-start
-# store besides the default (`anchor_requests`)
+# store besides the default (`ocp.prepare_requests.anchor_requests`)
 ANCHORS_OPTION = "warm_start_anchors"
-_ANCHOR_FIELDS = ("slope", "step_height", "speed", "step_length", "friction_coefficient")
-
-
-def anchor_requests(scene: Scene) -> list[dict]:
-    """The scene's warm-start anchors (gait option `warm_start_anchors`: a list of
-    requests, each a mapping of some of slope, step_height, speed, step_length and
-    friction_coefficient): planned by `gait-planner prepare` so that a request is continued
-    from a near plan (`gait_planner.parameter_path`). [] if the scene declares none;
-    SettingsError naming what is wrong with the list."""
-    anchors = (scene.gait.options.get(ANCHORS_OPTION) or []) if scene.gait else []
-    if not isinstance(anchors, (list, tuple)):
-        raise SettingsError(f"{ANCHORS_OPTION} must be a list of requests, got {anchors!r}")
-    for anchor in anchors:
-        if not isinstance(anchor, Mapping) or not anchor or set(anchor) - set(_ANCHOR_FIELDS) \
-                or not all(isinstance(v, (int, float)) and math.isfinite(v)
-                           for v in anchor.values()):
-            raise SettingsError(f"{ANCHORS_OPTION}: {anchor!r} is not a request (a mapping "
-                                f"of numbers, its keys among {', '.join(_ANCHOR_FIELDS)})")
-    return [dict(anchor) for anchor in anchors]
-
-
 def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | None = None,
                  friction_coefficient: float | None = None,
                  intervals_per_phase: int | None = None,
@@ -400,34 +379,6 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
     check_speed(settings, scene.name)
     check_ground(settings, scene)
     return settings
-
-
-# A small stair (m) standing for every stair height of its sign in `form_requests`
-FORM_STAIR = 0.02
-
-
-def form_requests(scene: Scene, s: GaitSettings) -> list[GaitSettings]:
-    """One request of each problem shape that requests like `s` on `scene` may take
-    (`ocp.transcription.shape_of`): level ground with free durations, at a speed (the
-    middle of `speed_range`), on stairs up, on stairs down, and the stairs-down start with
-    the edge margin instead of the segment rows (`gait_planner.strategies.stair_start`); the
-    shapes `scene` refuses (`check_ground`, `check_speed`) left out. Building these
-    compiles everything any request of the scene within its ranges needs
-    (`gait-planner prepare`)."""
-    out = [dataclasses.replace(s, slope=0.0, step_height=0.0, speed=0.0)]
-    slow, fast = speed_range(out[0])
-    candidates = [dataclasses.replace(out[0], speed=0.5 * (slow + fast))]
-    candidates += [dataclasses.replace(out[0], step_height=h) for h in (FORM_STAIR, -FORM_STAIR)]
-    candidates.append(dataclasses.replace(out[0], step_height=-FORM_STAIR,
-                                          stair_segment_rows=False))
-    for candidate in candidates:
-        try:
-            check_ground(candidate, scene)
-            check_speed(candidate, scene.name)
-        except SettingsError:
-            continue
-        out.append(candidate)
-    return out
 
 
 def ground_of(scene: Scene, s: GaitSettings) -> Ground:

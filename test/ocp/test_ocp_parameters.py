@@ -68,7 +68,7 @@ def test_make_setup_built_every_gait_of_the_shipped_scenes(monkeypatch):
     needs no compiler. (Before, walker3d's first run at 3 m/s on a fresh machine compiled
     its elements during the request: 17 s against 2 s.)"""
     from gait_planner.model.loader import with_gait
-    from gait_planner.ocp.settings import form_requests
+    from gait_planner.ocp.prepare_requests import form_requests
 
     def refuse(*args, **kwargs):
         raise AssertionError("the C compiler was called: run make setup")

@@ -12,7 +12,8 @@ import pytest
 from hypothesis import given, settings as hyp_settings, strategies as st
 
 from gait_planner.model.loader import load_scene
-from gait_planner.ocp.settings import SettingsError, anchor_requests, settings_for
+from gait_planner.ocp.prepare_requests import anchor_requests
+from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.parameter_path import (PATH_STEP, _between, distance, nearest, point_of,
                                          start_point)
