@@ -4,7 +4,9 @@ Configuration enters here once: `load_scene(name)` (a bare name, looked up in
 `scene_dirs()`), `find_scene(name_or_path)` (also a path to a .yaml file: the command
 line's --scene) or `load_scene_file(path)` returns a `gait_planner.model.scene.Scene` whose
 every field has been checked, or raises `SceneError` naming the file, the key path and the
-reason, e.g. ``walker3d.yaml: bodies[2].mass: must be a positive number, got -1.0``.
+reason, e.g. ``walker3d.yaml: bodies[2].mass: must be a positive number, got -1.0``. The
+bodies, joints, contacts and initial pose are parsed in `gait_planner.model.scene_parts`,
+the gait block in `gait_planner.model._validate`.
 A scene's warnings are logged once per process; what the file itself acknowledges (a
 non-physical inertia under ``allow_nonphysical_inertia: true``) is logged at INFO level only,
 so that commands do not repeat it to a user who chose it.
