@@ -306,7 +306,10 @@ def walk(doc) -> list[str]:
             "point from the plan's at a half cycle's end; unplanned touches: a contact point "
             "carrying over a tenth of the weight where the plan holds it at neither "
             "neighbouring node (`gait_planner.walk.touches`: an early strike if the plan "
-            "strikes it within 0.1 s, else a scuff), how many and the first. The hard "
+            "strikes it within 0.1 s, else a scuff), how many and the first; largest foot "
+            "slide: how far a contact point moved along the ground while it carried over a "
+            "tenth of the weight (`gait_planner.walk.slides`), the point and its mean "
+            "tangential / normal force. The hard "
             "requests are `hard_cases.py`'s a user can ask for (plan options or a changed "
             "scene file).", ""]
     rows = [dict(r, planned=(f"{r['plan'].get('nodes')} nodes, {r['plan']['wall_s']:.0f} s"
@@ -317,7 +320,8 @@ def walk(doc) -> list[str]:
                  drift=" ".join(f"{x:+.3f}" for x in r.get("torso_drift_last_m") or []),
                  selftest=", ".join(f"×{t['torque_scale']:g}: {t['half_cycles_walked']} "
                                     f"({t['feedback_share']:.0%})" for t in r["self_test"]),
-                 touches=_touches(r.get("unplanned_touches"), r.get("unplanned_touch_count")))
+                 touches=_touches(r.get("unplanned_touches"), r.get("unplanned_touch_count")),
+                 slide=_slide(r.get("foot_slide")))
             for r in doc["rows"]]
     return out + table(rows, [
         ("scene", "scene", ""), ("case", "case", ""), ("plan", "planned", ""),
@@ -326,6 +330,7 @@ def walk(doc) -> list[str]:
         ("joint max deg", "joint_max_deg", ".1f"), ("drift m", "drift", ""),
         ("placement m", "foot_placement_error_max_m", ".3f"),
         ("unplanned touches (first)", "touches", ""),
+        ("largest foot slide", "slide", ""),
         ("self-test: walked (feedback)", "selftest", ""), ("why it stopped", "stopped", "")]) + [""]
 
 
@@ -335,6 +340,14 @@ def _touches(touches: list[dict] | None, count: int | None) -> str:
     from gait_planner.walk.touches import described
 
     return "–" if touches is None else described(touches, count)
+
+
+def _slide(slide: dict | None) -> str:
+    """A walk's largest foot slide: mm (point, tangential / normal force); – if the run
+    did not record it or no point stood."""
+    if not slide:
+        return "–"
+    return f"{slide['slide_mm']:.0f} mm ({slide['point']}, {slide['friction_used']:.2f})"
 
 
 def model_error(doc) -> list[str]:

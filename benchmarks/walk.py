@@ -163,6 +163,7 @@ def walk_row(recording: Path, steps: int) -> dict:
                                                 3),
             "unplanned_touches": r["unplanned_touches"][:3],
             "unplanned_touch_count": len(r["unplanned_touches"]),
+            "foot_slide": r["foot_slide"],
             "self_test": [{k: _rounded(v) for k, v in t.items()} for t in tests]}
 
 

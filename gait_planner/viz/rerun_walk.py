@@ -51,6 +51,7 @@ from gait_planner.model.scene import InitialPose
 from gait_planner.ocp.mirror import contact_partners
 from gait_planner.walk.recording import output_path
 from gait_planner.walk.reference import Reference
+from gait_planner.walk.summary import slid
 from gait_planner.walk.touches import described, in_words
 
 __all__ = ["save_walk_rrd", "walk_blueprint"]
@@ -195,6 +196,7 @@ def _summary(result: dict[str, Any]) -> str:
             f"joint RMS {result['joint_rms_deg']:.2f} deg (max {result['joint_max_deg']:.2f}), "
             f"feedback share {100 * result['feedback_share']:.0f} %\n\n"
             f"unplanned touches: {described(result['unplanned_touches'])}\n\n"
+            f"largest foot slide: {slid(result['foot_slide'])}\n\n"
             "3D: the simulated walker solid, the plan faint (grey skeleton); ground forces "
             "green (plan light), 1.5 mm per N. Plots: the plan light, the simulation full.\n\n"
             "| half cycle | joint RMS (deg) | torso drift x y z (m) | foot placement (m) |\n"

@@ -8,7 +8,7 @@ from typing import Any
 
 from gait_planner.walk.touches import described
 
-__all__ = ["format_summary", "half_cycles_done"]
+__all__ = ["format_summary", "half_cycles_done", "slid"]
 
 
 def half_cycles_done(walked: int, steps: int) -> str:
@@ -32,7 +32,8 @@ def format_summary(r: dict[str, Any]) -> str:
              + "; ".join(" ".join(f"{v:+.3f}" for v in d) for d in r["torso_drift_m"]),
              "  foot placement error per half cycle (m): "
              + " ".join(f"{v:.3f}" for v in r["foot_placement_error_m"]),
-             f"  unplanned touches     {described(r['unplanned_touches'])}"]
+             f"  unplanned touches     {described(r['unplanned_touches'])}",
+             f"  largest foot slide    {slid(r['foot_slide'])}"]
     if "out" in r:
         lines.append(f"  recorded in {r['out']}")
     if "rrd" in r:
@@ -43,3 +44,11 @@ def format_summary(r: dict[str, Any]) -> str:
                      f"{100 * row['feedback_share']:.0f} %: "
                      f"{'worse (the check can fail)' if row['worse'] else 'NOT worse'}")
     return "\n".join(lines)
+
+
+def slid(slide: dict[str, Any] | None) -> str:
+    """The walk's largest foot slide (`walk.slides.Slides.summary`) in words."""
+    if slide is None:
+        return "none (no point stood)"
+    return (f"{slide['slide_mm']:.1f} mm ({slide['point']} standing {slide['start_s']:.3f}-"
+            f"{slide['end_s']:.3f} s, tangential / normal force {slide['friction_used']:.2f})")

@@ -10,7 +10,7 @@ paced by the walker's progress (`walk.clock`): the plan's time tau, not the simu
 t, says which node is tracked, where the half cycles end and when the walk is done, and
 every comparison with the plan (tracking, falls, drift, placement, touches) is made at tau.
 Returns a JSON-ready summary, with the ground touched where the plan has a foot in the air
-(`walk.touches`).
+(`walk.touches`) and the largest slide of a foot on the ground (`walk.slides`).
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from gait_planner.walk.controller import Gains, ReferenceController
 from gait_planner.walk.model_error import DelayedTorque, ModelError
 from gait_planner.walk.predictor import DelayPredictor
 from gait_planner.walk.robot_urdf import RobotUrdf
+from gait_planner.walk.slides import Slides
 from gait_planner.walk.touches import Touches
 
 __all__ = ["CONFIG", "ground_forces", "load_config", "walk"]
@@ -171,6 +172,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     weight = float(np.sum(model.body_mass)) * float(-model.opt.gravity[2])
     touches = Touches(ref.times, ref.active, [c.name for c in scene.contacts],
                       TOUCH_SHARE * weight)
+    slides = Slides(touches.names, touches.threshold, ref.normal)
     t_end = steps * ref.period
     errs, ffs, fbs, plans = [], [], [], []
     trace: dict[str, list] = {k: [] for k in ("time", "plan_time", "position", "velocity",
@@ -218,6 +220,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         forces = ground_forces(model, data, wm)  # of that state, solved in mj_step2
         normal = forces @ ref.normal  # the normal force on each point
         touches.update(t, normal)
+        slides.update(t_sim, forces, data.site_xpos[wm.contact_sites])
         control.loaded = {name for name, f in zip(touches.names, normal)
                           if f > touches.threshold}
         clock.pace(h, float(along @ (data.subtree_com[control.root] - ref.com_at(t))), speed)
@@ -262,6 +265,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         "feedforward_rms_nm": _rms(ffs), "feedback_rms_nm": _rms(fbs), "plan_rms_nm": _rms(plans),
         "torso_drift_m": drift, "foot_placement_error_m": placement,
         "unplanned_touches": touches.summary(),
+        "foot_slide": slides.summary(),
         "controller": {"joints": cfg["joints"], "torso": cfg["torso"], "placement": place,
                        "delay": cfg["delay"],
                        "simulation": sim, "foot_half_width": half_width},

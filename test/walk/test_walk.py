@@ -79,6 +79,9 @@ def test_one_half_cycle_of_walker2d_is_walked_and_recorded(walker2d_plan, tmp_pa
     assert main(["walk", str(walker2d_plan), "--steps", "1", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "walked 1 of 1 half cycles" in text and "completed" in text
+    # the stance forefoot creeps in MuJoCo's soft friction (`walk.slides`): 7.7 mm here
+    # on 2026-11-30, at a tenth of its cone
+    assert "largest foot slide" in text and "foot_r_forefoot standing" in text
     with out.open("rb") as stream:
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
         decoded = [(c.topic, m) for _, c, _, m in reader.iter_decoded_messages()]
