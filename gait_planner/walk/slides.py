@@ -40,8 +40,9 @@ class Slides:
             normal = float(force @ n)
             if normal > self.threshold:
                 tangential = float(np.linalg.norm(force - normal * n))
-                stance = self.open.setdefault(i, {"start_s": t, "from": position.copy(),
-                                                  "ratios": []})
+                stance = self.open.get(i)
+                if stance is None:
+                    stance = self.open[i] = {"start_s": t, "from": position.copy(), "ratios": []}
                 stance.update(end_s=t, to=position.copy())
                 stance["ratios"].append(tangential / normal)
             elif i in self.open:
