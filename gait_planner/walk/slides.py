@@ -5,9 +5,10 @@ it may: the soft-constraint friction lets a loaded point drift even deep inside 
 friction cone, and a point past its cone slides. On 2026-11-30 walker3d's loaded forefoot
 drifted 30 mm over a level stance and 65-80 mm on a 10 deg ramp, with a tangential force
 6-11 % of the normal against a friction coefficient of 0.6-0.8 (benchmarks/HISTORY.md); the
-walker then fell behind its plan. `Slides(names, threshold)` is fed, step by step, the
-ground's force on each planned contact point (world, N) and the point's position (world,
-m); a stance is a run of steps in which the point's normal force exceeds `threshold` N.
+walker then fell behind its plan. `Slides(names, threshold, normal)` is fed, step by step
+at the simulated time, the ground's force on each planned contact point (world, N), its
+part along the ground's normal and the point's position (world, m); a stance is a run of
+steps in which the point's normal force exceeds `threshold` N.
 Its slide is the point's displacement along the ground (the normal part removed) from the
 stance's first step to its last; the ~5 mm foot spheres' rolling adds a few mm to it.
 `summary()` gives the largest slide of the walk: the point, its stance (s), the slide (mm)
@@ -33,18 +34,20 @@ class Slides:
         self.open: dict[int, dict[str, Any]] = {}
         self.largest: dict[str, Any] | None = None
 
-    def update(self, t: float, forces: np.ndarray, positions: np.ndarray) -> None:
-        """forces (n_contacts, 3) N and positions (n_contacts, 3) m, world, at time t s."""
+    def update(self, t: float, forces: np.ndarray, normal_forces: np.ndarray,
+               positions: np.ndarray) -> None:
+        """forces (n_contacts, 3) N, their normal parts normal_forces (n_contacts,) N
+        (forces @ normal) and positions (n_contacts, 3) m, world, at time t s."""
         n = self.normal
-        for i, (force, position) in enumerate(zip(forces, positions)):
-            normal = float(force @ n)
+        for i, (force, normal, position) in enumerate(zip(forces, normal_forces, positions)):
             if normal > self.threshold:
-                tangential = float(np.linalg.norm(force - normal * n))
                 stance = self.open.get(i)
                 if stance is None:
-                    stance = self.open[i] = {"start_s": t, "from": position.copy(), "ratios": []}
+                    stance = self.open[i] = {"start_s": t, "from": position.copy(),
+                                             "friction_sum": 0.0, "steps": 0}
                 stance.update(end_s=t, to=position.copy())
-                stance["ratios"].append(tangential / normal)
+                stance["friction_sum"] += float(np.linalg.norm(force - normal * n)) / normal
+                stance["steps"] += 1
             elif i in self.open:
                 self._close(i)
 
@@ -67,4 +70,4 @@ class Slides:
         if self.largest is None or slide > self.largest["slide_mm"]:
             self.largest = {"point": self.names[i], "start_s": stance["start_s"],
                             "end_s": stance["end_s"], "slide_mm": slide,
-                            "friction_used": float(np.mean(stance["ratios"]))}
+                            "friction_used": float(stance["friction_sum"] / stance["steps"])}

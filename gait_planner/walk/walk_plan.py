@@ -220,7 +220,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         forces = ground_forces(model, data, wm)  # of that state, solved in mj_step2
         normal = forces @ ref.normal  # the normal force on each point
         touches.update(t, normal)
-        slides.update(t_sim, forces, data.site_xpos[wm.contact_sites])
+        slides.update(t_sim, forces, normal, data.site_xpos[wm.contact_sites])
         control.loaded = {name for name, f in zip(touches.names, normal)
                           if f > touches.threshold}
         clock.pace(h, float(along @ (data.subtree_com[control.root] - ref.com_at(t))), speed)

@@ -22,7 +22,8 @@ def _feed(slides: Slides, loads, positions, dt: float = 0.001) -> None:
     side /= np.linalg.norm(side)
     for k, (load, position) in enumerate(zip(loads, positions)):
         force = load * n + 0.1 * load * side
-        slides.update(k * dt, force[None, :], np.asarray(position, dtype=float)[None, :])
+        slides.update(k * dt, force[None, :], np.array([force @ n]),
+                      np.asarray(position, dtype=float)[None, :])
 
 
 @settings(max_examples=60, deadline=None)
