@@ -384,6 +384,44 @@ def _monotone(values: list[float]) -> str:
     return "rises" if np.all(d > 0) else "falls" if np.all(d < 0) else "not monotone"
 
 
+def smoothness(doc) -> list[str]:
+    """Section 7's table of the terminal swing's torques (`smoothness.py`)."""
+    out = ["### A terminal swing without a burst", ""]
+    if doc is None:
+        return out + ["Not measured (`smoothness.py`).", ""]
+    h = doc["header"]
+    out += [provenance(doc), "",
+            "`smoothness.py`: the default plans as shipped and with the swing braked over its "
+            f"swing (`{h.get('option', 'strike_deceleration_max')}`, m/s², a gait option in a "
+            "copy of the scene file), each made by `gait-planner plan`, checked by the "
+            "verifier and walked "
+            f"{h.get('steps', '?')} half cycles with the self-test. Away from contact "
+            "switches, the largest second difference of a joint torque between nodes: over the "
+            f"largest joint peak (target ≤ {h.get('target_of_peak', 0.2):.0%}), and over its "
+            "own joint's peak for joints above a fifth of the largest "
+            f"(target ≤ {h.get('target_of_own_peak', 0.25):.0%}).", ""]
+    rows = [dict(r, J=r["plan"].get("cost_value"), it=r["plan"].get("iterations"),
+                 nodes=r["plan"].get("nodes"),
+                 own=(f"{r['roughest_own_peak']:.1%} ({r['roughest_joint']}, node "
+                      f"{r['roughest_node']})" if "roughest_own_peak" in r else "–"),
+                 checks="pass" if r.get("checks_pass") else "fail",
+                 target="yes" if r.get("meets_target") else "no",
+                 walked=("–" if r.get("half_cycles_walked") is None
+                         else f"{r['half_cycles_walked']} of {r['steps']}"),
+                 selftest=", ".join(f"×{t['torque_scale']:g}: {t['half_cycles_walked']} "
+                                    f"({t['feedback_share']:.0%})"
+                                    for t in r.get("self_test", [])))
+            for r in doc["rows"]]
+    return out + table(rows, [
+        ("scene", "scene", ""), ("plan", "case", ""), ("J", "J", ".4f"),
+        ("iterations", "it", ""), ("nodes", "nodes", ""),
+        ("second difference / largest peak", "second_difference_of_peak", ".1%"),
+        ("/ own peak (joint, node)", "own", ""), ("targets met", "target", ""),
+        ("checks", "checks", ""), ("half cycles walked", "walked", ""),
+        ("feedback share", "feedback_share", ".0%"),
+        ("self-test: walked (feedback)", "selftest", "")]) + [""]
+
+
 def gait_trends(doc) -> list[str]:
     out = ["## 8. Work, torques and powers over slope and speed, against human trends", ""]
     if doc is None:
@@ -809,7 +847,7 @@ def main() -> None:
                                          "gait_trends", "gait_library", "robots",
                                          "any_request", "any_request_cold",
                                          "any_request_library",
-                                         "model_error")}
+                                         "model_error", "smoothness")}
     lines = ["# Benchmark report", "",
              "Written by `make bench` (`benchmarks/bench.py`, then `benchmarks/report.py`) from "
              "`benchmarks/results/*.json`; every number below is in those files with the "
@@ -825,6 +863,7 @@ def main() -> None:
     lines += request_sweep(docs["request_sweep"])
     lines += walk(docs["walk"])
     lines += model_error(docs["model_error"])
+    lines += smoothness(docs["smoothness"])
     lines += gait_trends(docs["gait_trends"])
     lines += gait_library(docs["gait_library"])
     lines += peers({scene: doc for scene in ("walker2d", "walker3d")

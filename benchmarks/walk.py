@@ -102,7 +102,7 @@ def scene_file(row: Row, path: Path) -> str:
 def plan(row: Row, stem: Path, time_limit: float) -> tuple[Path | None, dict]:
     """Make the row's plan with `gait-planner plan` into stem.mcap (stem.yaml its scene file
     if changed): (the recording, or None if the plan failed; {success, wall_s, message,
-    cost_value, nodes, refinement, continuous_dynamics: the certificate's sentence,
+    cost_value, iterations, nodes, refinement, continuous_dynamics: the certificate's sentence,
     certified: whether it holds})."""
     exe = Path(sys.executable).with_name("gait-planner")
     out = stem.with_suffix(".mcap")
@@ -119,8 +119,8 @@ def plan(row: Row, stem: Path, time_limit: float) -> tuple[Path | None, dict]:
         return None, {"success": False, "wall_s": wall,
                       "message": lines[-1] if lines else f"exit {done.returncode}"}
     summary = {"success": bool(data["success"]) and done.returncode == 0, "wall_s": wall,
-               **{k: data.get(k) for k in ("message", "cost_value", "nodes", "refinement",
-                                           "continuous_dynamics")},
+               **{k: data.get(k) for k in ("message", "cost_value", "iterations", "nodes",
+                                           "refinement", "continuous_dynamics")},
                "certified": str(data.get("continuous_dynamics", "")).endswith(": OK")}
     return (out if summary["success"] else None), summary
 
