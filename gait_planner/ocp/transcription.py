@@ -51,9 +51,9 @@ import numpy as np
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.ground import PARAMETERS, ParametricGround
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, phase_rows, stacked_rows
+from gait_planner.ocp.cost_terms import CostTerms
 from gait_planner.ocp.elements import ElementGroup, Layout
 from gait_planner.ocp.mirror import increment_mirror, mirror_parts, torque_mirror
-from gait_planner.ocp.posture import twist_squares
 from gait_planner.ocp.path_rows import FORCE_SCALE, PathRows
 from gait_planner.ocp.settings import GaitSettings, ground_of
 
@@ -66,7 +66,7 @@ TORQUE_SCALE = 100.0  # N m
 ROTATION_INCREMENT_MAX = np.pi
 
 
-class Transcription(PathRows):
+class Transcription(PathRows, CostTerms):
     """The NLP of one (scene, settings) pair: variables, constraints and their meaning."""
 
     def __init__(self, mech: DiscreteMechanics, settings: GaitSettings):
@@ -309,53 +309,6 @@ class Transcription(PathRows):
                 np.stack([self.layout.interval_p_index(n) for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1),
                 np.array([self.settings.base_time_step, 0.0])))
-
-    def _cost(self):
-        """J over the half cycle t_0..t_{N-1} (intervals 0..N-2), plus the torque
-        regulariser; returns the MX cost and stores the named parts. The kinetic energy is
-        also declared as elements (`_interval_terms`), for `ocp.derivatives`."""
-        N, s = self.N, self.settings
-        h = self.h[0 : N - 1].T
-        squares = ca.sum1(self.TAU[:, 0:N] ** 2)  # nodes 0..N-1
-        torque = ca.sum2(0.5 * (squares[0 : N - 1] + squares[1:N]) * h)  # trapezoidal
-        kinetic = ca.sum2(self._interval_terms(self._kinetic_energy(), 0.0, None
-                                               if s.cost == "kinetic_energy" else False))
-        self.cost_parts = {"kinetic_energy": kinetic, "torque_squared": torque}
-        # The along-line shares of full contacts (`ocp.contacts`) move no equation: without
-        # curvature of their own IPOPT's steps in them were unbounded (constraint violation
-        # 1e5 and more, walker3d's inertia-free attempt failed). The regulariser's weight,
-        # times sum h_n s^2, picks the smallest shares that keep every point in its cone.
-        shares = s.torque_regularisation * self._share_squares()
-        twist = 0.0
-        if s.twist_regularisation > 0:
-            twist = ca.sum2(self._interval_terms(twist_squares(self.mb), s.twist_regularisation,
-                                                 None))
-        if s.cost == "torque_squared":
-            self.cost_without_elements = torque + shares
-            return self.cost_without_elements + twist
-        self.cost_without_elements = s.torque_regularisation * torque + shares
-        return kinetic + self.cost_without_elements + twist
-
-    def _share_squares(self):
-        """sum over nodes of w_n s^2 (N^2 s) of the full contacts' along-line shares s."""
-        terms = []
-        for n in self.lam_nodes:
-            lam, offset = self.lam_of_node[n], 0
-            w = 0.5 * (self.h[n - 1] + self.h[n])
-            for bc in self.contacts[self.phase_of_interval[n]]:
-                offset += bc.n_multipliers
-                if bc.full:
-                    terms.append(w * lam[offset - 1] ** 2)
-        return ca.sum1(ca.vertcat(*terms)) if terms else 0.0
-
-    def _kinetic_energy(self) -> ca.Function:
-        """(q_n, q_{n+1}, h_n, c) -> h_n times the discrete kinetic energy of interval n,
-        0.5 (q_{n+1} - q_n)^T M (q_{n+1} - q_n) / h_n (J s); c unused."""
-        q0, q1 = ca.SX.sym("q", self.mb.k), ca.SX.sym("q_next", self.mb.k)
-        h, c = ca.SX.sym("h"), ca.SX.sym("c", 2)
-        dq = q1 - q0
-        kinetic = 0.5 * ca.dot(dq, ca.DM(self.mb.mass_diagonal) * dq) / h
-        return ca.Function("kinetic", [q0, q1, h, c], [kinetic], ["q", "q_next", "h", "c"], ["J"])
 
     def _interval_terms(self, fn: ca.Function, constant: float, first_row):
         """fn(q_n, q_{n+1}, h_n, c) (r,) of intervals 0..N-2 as an MX (r, N-1), with

@@ -1,0 +1,69 @@
+"""The transcription's cost (paper section 7; docs/design.md section 8): J over the half
+cycle t_0..t_{N-1}, the discrete kinetic energy of its intervals (the paper's) or the
+trapezoidal integral of the squared node torques, and the regularisers that give the
+unknowns the equations leave free some curvature: the squared torques (a small weight under
+the kinetic energy), the full contacts' along-line shares and the feet's twist about the
+shank (`ocp.posture.twist_squares`).
+
+`CostTerms` is a part of `ocp.transcription.Transcription` (a mixin, as `ocp.path_rows.
+PathRows`: it reads the transcription's unknowns and declares the kinetic energy as
+elements through its `_interval_terms`); `cost_parts` keeps the named terms for the result
+(`ocp.solution`).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from gait_planner.ocp.posture import twist_squares
+
+
+class CostTerms:
+    """The cost of a `Transcription` (its `_cost` step)."""
+
+    def _cost(self):
+        """J over the half cycle t_0..t_{N-1} (intervals 0..N-2), plus the torque
+        regulariser; returns the MX cost and stores the named parts. The kinetic energy is
+        also declared as elements (`_interval_terms`), for `ocp.derivatives`."""
+        N, s = self.N, self.settings
+        h = self.h[0 : N - 1].T
+        squares = ca.sum1(self.TAU[:, 0:N] ** 2)  # nodes 0..N-1
+        torque = ca.sum2(0.5 * (squares[0 : N - 1] + squares[1:N]) * h)  # trapezoidal
+        kinetic = ca.sum2(self._interval_terms(self._kinetic_energy(), 0.0, None
+                                               if s.cost == "kinetic_energy" else False))
+        self.cost_parts = {"kinetic_energy": kinetic, "torque_squared": torque}
+        # The along-line shares of full contacts (`ocp.contacts`) move no equation: without
+        # curvature of their own IPOPT's steps in them were unbounded (constraint violation
+        # 1e5 and more, walker3d's inertia-free attempt failed). The regulariser's weight,
+        # times sum h_n s^2, picks the smallest shares that keep every point in its cone.
+        shares = s.torque_regularisation * self._share_squares()
+        twist = 0.0
+        if s.twist_regularisation > 0:
+            twist = ca.sum2(self._interval_terms(twist_squares(self.mb), s.twist_regularisation,
+                                                 None))
+        if s.cost == "torque_squared":
+            self.cost_without_elements = torque + shares
+            return self.cost_without_elements + twist
+        self.cost_without_elements = s.torque_regularisation * torque + shares
+        return kinetic + self.cost_without_elements + twist
+
+    def _share_squares(self):
+        """sum over nodes of w_n s^2 (N^2 s) of the full contacts' along-line shares s."""
+        terms = []
+        for n in self.lam_nodes:
+            lam, offset = self.lam_of_node[n], 0
+            w = 0.5 * (self.h[n - 1] + self.h[n])
+            for bc in self.contacts[self.phase_of_interval[n]]:
+                offset += bc.n_multipliers
+                if bc.full:
+                    terms.append(w * lam[offset - 1] ** 2)
+        return ca.sum1(ca.vertcat(*terms)) if terms else 0.0
+
+    def _kinetic_energy(self) -> ca.Function:
+        """(q_n, q_{n+1}, h_n, c) -> h_n times the discrete kinetic energy of interval n,
+        0.5 (q_{n+1} - q_n)^T M (q_{n+1} - q_n) / h_n (J s); c unused."""
+        q0, q1 = ca.SX.sym("q", self.mb.k), ca.SX.sym("q_next", self.mb.k)
+        h, c = ca.SX.sym("h"), ca.SX.sym("c", 2)
+        dq = q1 - q0
+        kinetic = 0.5 * ca.dot(dq, ca.DM(self.mb.mass_diagonal) * dq) / h
+        return ca.Function("kinetic", [q0, q1, h, c], [kinetic], ["q", "q_next", "h", "c"], ["J"])
