@@ -1,4 +1,4 @@
-"""The transcription's cost (paper section 7; docs/design.md section 8): J over the half
+"""The transcription's cost (paper section 7; docs/design.md sections 5 and 8): J over the half
 cycle t_0..t_{N-1}, the discrete kinetic energy of its intervals (the paper's) or the
 trapezoidal integral of the squared node torques, and the regularisers that give the
 unknowns the equations leave free some curvature: the squared torques (a small weight under
