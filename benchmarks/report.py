@@ -318,8 +318,7 @@ def walk(doc) -> list[str]:
                  walked=("–" if r["half_cycles_walked"] is None
                             else f"{r['half_cycles_walked']} of {r['steps']}"),
                  drift=" ".join(f"{x:+.3f}" for x in r.get("torso_drift_last_m") or []),
-                 selftest=", ".join(f"×{t['torque_scale']:g}: {t['half_cycles_walked']} "
-                                    f"({t['feedback_share']:.0%})" for t in r["self_test"]),
+                 selftest=_self_test(r["self_test"]),
                  touches=_touches(r.get("unplanned_touches"), r.get("unplanned_touch_count")),
                  slide=_slide(r.get("foot_slide")))
             for r in doc["rows"]]
@@ -332,6 +331,12 @@ def walk(doc) -> list[str]:
         ("unplanned touches (first)", "touches", ""),
         ("largest foot slide", "slide", ""),
         ("self-test: walked (feedback)", "selftest", ""), ("why it stopped", "stopped", "")]) + [""]
+
+
+def _self_test(tests: list[dict]) -> str:
+    """A walk's self-test in words: each torque scale's half cycles walked (feedback)."""
+    return ", ".join(f"×{t['torque_scale']:g}: {t['half_cycles_walked']} "
+                     f"({t['feedback_share']:.0%})" for t in tests)
 
 
 def _touches(touches: list[dict] | None, count: int | None) -> str:
@@ -408,9 +413,7 @@ def smoothness(doc) -> list[str]:
                  target="yes" if r.get("meets_target") else "no",
                  walked=("–" if r.get("half_cycles_walked") is None
                          else f"{r['half_cycles_walked']} of {r['steps']}"),
-                 selftest=", ".join(f"×{t['torque_scale']:g}: {t['half_cycles_walked']} "
-                                    f"({t['feedback_share']:.0%})"
-                                    for t in r.get("self_test", [])))
+                 selftest=_self_test(r.get("self_test", [])))
             for r in doc["rows"]]
     return out + table(rows, [
         ("scene", "scene", ""), ("plan", "case", ""), ("J", "J", ".4f"),
