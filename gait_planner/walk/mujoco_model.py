@@ -73,11 +73,13 @@ class WalkModel:
 
 def build_model(rec: RecordedPlan, scene: Scene, half_width: float, radius: float,
                 time_step: float, time_constant: float, damping: float,
-                robot: RobotUrdf | None = None) -> WalkModel:
+                robot: RobotUrdf | None = None, noslip_iterations: int = 0) -> WalkModel:
     """The walker of the module docstring: from /robot_description (robot None) or from the
     drafted robot's own URDF (`robot`); half_width and radius (m) place the added spheres
     (not used for a robot's own URDF), time_step s, time_constant s (the contacts' solref),
-    damping N m s/rad on the plan's joints. ValueError naming what does not fit."""
+    damping N m s/rad on the plan's joints; noslip_iterations: passes of MuJoCo's no-slip
+    solver after each step (0: none; the soft contacts' friction then lets a loaded foot
+    creep). ValueError naming what does not fit."""
     import mujoco
 
     mu = float(rec.metadata.get("friction_coefficient", 0.8))
@@ -103,6 +105,7 @@ def build_model(rec: RecordedPlan, scene: Scene, half_width: float, radius: floa
     planar = scene.root.type.name.lower() == "planar"
     _add_root_joint(spec.body(scene.root.body), planar)
     spec.option.timestep = time_step
+    spec.option.noslip_iterations = noslip_iterations
     _add_ground(spec, recorded_ground(rec), dict(friction=[mu, 0.005, 0.0001],
                                                  solref=[time_constant, 1.0], contype=0,
                                                  conaffinity=1))

@@ -37,8 +37,9 @@ CONFIG = Path(__file__).resolve().parents[2] / "config" / "walk.yaml"
 TOUCH_SHARE = 0.1  # of the walker's weight: a contact point carrying more is touching
 
 
-_KEYS = {"simulation": ("time_step", "foot_sphere_radius", "contact_time_constant"),
-         "joints": ("kp", "kd"), "torso": ("kp", "kd"),
+_KEYS = {"simulation": ("time_step", "foot_sphere_radius", "contact_time_constant",
+                        "noslip_iterations"),
+         "joints": ("kp", "kd"), "torso": ("kp", "kd", "position_kp", "position_kd"),
          "placement": ("kp", "kd", "max_shift", "height_kp"),
          "clock": ("pace_gain", "rate_min", "rate_max"),
          "stop": ("height_drop", "tilt", "joint_error")}
@@ -60,6 +61,10 @@ def load_config(path: str | Path = CONFIG) -> dict[str, Any]:
                     or not math.isfinite(value) or value < 0 or (positive and value == 0):
                 raise ValueError(f"{path}: {section}.{key} must be a finite number "
                                  f"{'> 0' if positive else '>= 0'}, got {value!r}")
+    passes = cfg["simulation"]["noslip_iterations"]
+    if passes != int(passes):
+        raise ValueError(f"{path}: simulation.noslip_iterations must be a whole number, "
+                         f"got {passes!r}")
     low, high = cfg["clock"]["rate_min"], cfg["clock"]["rate_max"]
     if not 0 < low <= 1 <= high:
         raise ValueError(f"{path}: clock.rate_min and clock.rate_max must satisfy 0 < rate_min "
@@ -141,7 +146,8 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
 
     def walker():
         return build_model(rec, scene, half_width, sim["foot_sphere_radius"], sim["time_step"],
-                           sim["contact_time_constant"], cfg["joints"]["kd"], robot)
+                           sim["contact_time_constant"], cfg["joints"]["kd"], robot,
+                           int(sim["noslip_iterations"]))
 
     wm = walker()
     factors = model_error.apply(wm.model) if model_error is not None else {}
@@ -154,8 +160,10 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         predictor = DelayPredictor(walker().model, delayed, cfg["joints"]["kp"], wm.dof,
                                    wm.qpos)
     place = cfg["placement"]
-    gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], cfg["torso"]["kp"], cfg["torso"]["kd"],
-                  place["kp"], place["kd"], place["height_kp"])
+    torso = cfg["torso"]
+    gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], torso["kp"], torso["kd"],
+                  place["kp"], place["kd"], place["height_kp"], torso["position_kp"],
+                  torso["position_kd"])
     pace = cfg["clock"]
     clock = PlanClock(pace["pace_gain"], pace["rate_min"], pace["rate_max"])
     control = ReferenceController(model, wm, ref, gains, place["max_shift"], scale, clock)

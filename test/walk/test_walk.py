@@ -133,6 +133,9 @@ def test_a_bad_controller_config_names_the_key(tmp_path):
     bad.write_text(CONFIG.read_text().replace("kd: 100.0", "kd: -1"))
     with pytest.raises(ValueError, match=r"walk.yaml: torso.kd must be a finite number >= 0"):
         load_config(bad)
+    bad.write_text(CONFIG.read_text().replace("noslip_iterations: 10", "noslip_iterations: 2.5"))
+    with pytest.raises(ValueError, match=r"simulation.noslip_iterations must be a whole number"):
+        load_config(bad)
     bad.write_text(CONFIG.read_text().replace("rate_max: 1.5", "rate_max: 0.9"))
     with pytest.raises(ValueError, match=r"walk.yaml: clock.rate_min and clock.rate_max must"):
         load_config(bad)
