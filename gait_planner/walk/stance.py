@@ -20,7 +20,8 @@ torso's attitude has its own loop, and a lean is the cheapest way to move a cent
 mass that the legs would otherwise be asked to carry). The velocity-product terms (J_dot v)
 are left out: the correction is a change of acceleration at the walker's state. Where the
 legs cannot give a_task (on one point: the torso is a pendulum about it), the least-squares
-solution gives what they can; in the air, nothing.
+solution gives what they can; in the air, nothing; on a state that is not finite (a
+simulation that diverged, which the walk then stops on), nothing.
 
 The walk asks for a_task = kp (p_ref - p) + kd (v_ref - v) of the torso's centre of mass
 (config/walk.yaml `torso.position_kp`, `position_kd`; `walk.controller`). Measured on
@@ -50,8 +51,8 @@ def position_torques(M: np.ndarray, J: np.ndarray, J_task: np.ndarray, a_task: n
     rad/s^2; base and joints:
     the dof indices of the floating base and of the joints (together every dof)."""
     nv, nf = M.shape[0], J.shape[0]
-    if nf == 0:
-        return np.zeros(len(joints))
+    if nf == 0 or not all(np.isfinite(x).all() for x in (M, J, J_task, a_task)):
+        return np.zeros(len(joints))  # in the air; or a diverged state, which the walk stops on
     rows = [np.hstack([W_DYNAMICS * M[base], -W_DYNAMICS * J.T[base]]),
             np.hstack([W_CONTACT * J, np.zeros((nf, nf))]),
             np.hstack([J_task, np.zeros((len(J_task), nf))]),

@@ -5,7 +5,8 @@
 (the plan's positions and velocities) and runs the reference controller (`walk.controller`)
 with the parameters of config/walk.yaml until the last half cycle ends or the walker falls
 (torso centre of mass `height_drop` below the plan's, or its d3 `tilt` from the plan's) or
-loses tracking (a joint `joint_error` from the plan). The plan is followed on its own clock,
+loses tracking (a joint `joint_error` from the plan) or the simulation diverges (a state
+that is not finite). The plan is followed on its own clock,
 paced by the walker's progress (`walk.clock`): the plan's time tau, not the simulated time
 t, says which node is tracked, where the half cycles end and when the walk is done, and
 every comparison with the plan (tracking, falls, drift, placement, touches) is made at tau.
@@ -235,7 +236,9 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         if series:
             trace["ground_force"].append(forces)
         worst = int(np.argmax(np.abs(errs[-1])))
-        if com[2] < phi_ref[2] - stop["height_drop"]:
+        if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
+            reason = f"diverged: the simulated state is not finite at t = {t_sim:.3f} s"
+        elif com[2] < phi_ref[2] - stop["height_drop"]:
             reason = (f"fall: torso centre of mass {com[2]:.3f} m high, "
                       f"{phi_ref[2] - com[2]:.3f} m below the plan at t = {t_sim:.3f} s")
         elif tilt > stop["tilt"]:

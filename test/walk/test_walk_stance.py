@@ -95,3 +95,15 @@ def test_nothing_on_the_ground_asks_nothing():
     dtau = position_torques(M, np.zeros((0, 8)), np.eye(6, 8), np.ones(6), np.arange(6),
                             np.arange(6, 8))
     assert np.array_equal(dtau, np.zeros(2))
+
+
+def test_a_state_that_is_not_finite_asks_nothing():
+    """A diverged simulation (NaN in the state) gets no correction, not an error from the
+    least squares: the walk stops on the state itself."""
+    from gait_planner.walk.stance import position_torques
+
+    M = np.diag([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 0.5, 0.5])
+    J = np.eye(3, 8)
+    M[6, 6] = np.nan
+    dtau = position_torques(M, J, np.eye(6, 8), np.ones(6), np.arange(6), np.arange(6, 8))
+    assert np.array_equal(dtau, np.zeros(2))
