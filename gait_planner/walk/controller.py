@@ -1,7 +1,7 @@
 """The reference stabilising controller of a walk.
 
 Joint torques = scale x the plan's efforts (feed-forward) + joint PD against the plan's
-angles and rates + two loops on what the joints do not control (the floating base):
+angles and rates + three loops on what the joints do not control (the floating base):
 
 * Torso attitude: the torque the torso needs to return to the plan's pitch and roll,
   -kp e - kd (w - w_ref) (e the rotation vector of D D_ref^T, w the angular velocity, world;
