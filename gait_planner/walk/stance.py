@@ -59,6 +59,9 @@ def position_torques(M: np.ndarray, J: np.ndarray, J_task: np.ndarray, a_task: n
             np.hstack([W_JOINT * np.eye(nv)[joints], np.zeros((len(joints), nf))]),
             np.hstack([np.zeros((nf, nv)), W_FORCE * np.eye(nf)])]
     rhs = np.concatenate([np.zeros(len(base) + nf), a_task, np.zeros(len(joints) + nf)])
-    x = np.linalg.lstsq(np.vstack(rows), rhs, rcond=None)[0]
+    try:
+        x = np.linalg.lstsq(np.vstack(rows), rhs, rcond=None)[0]
+    except np.linalg.LinAlgError:  # a state far off any walk (huge values): no correction
+        return np.zeros(len(joints))
     a, df = x[:nv], x[nv:]
     return (M @ a - J.T @ df)[joints]
