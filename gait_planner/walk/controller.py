@@ -52,7 +52,7 @@ from gait_planner.model.scene import Scene
 from gait_planner.walk.stance import position_torques
 
 __all__ = ["Gains", "Leg", "ReferenceController", "hip_legs", "torso_torque", "rotation_error",
-           "placement_shift", "placement_offsets", "smoothstep"]
+           "placement_shift", "placement_offsets", "smoothstep", "stance_jacobians"]
 
 
 @dataclass(frozen=True)
@@ -138,6 +138,24 @@ def smoothstep(s: float) -> float:
     return s * s * (3.0 - 2.0 * s)
 
 
+def stance_jacobians(model, data, wm) -> tuple[np.ndarray, np.ndarray]:
+    """(J (3 k, nv), J_task (6, nv)) for `walk.stance.position_torques` on a MuJoCo state
+    whose kinematics are current: the translation Jacobians of the k contacts MuJoCo found
+    between a foot (`wm.geom_contact`) and the ground, each at its contact position, and the
+    translation and rotation Jacobians of the torso's centre of mass (`wm.root_site`)."""
+    import mujoco
+
+    feet = [(c.pos, max(c.geom1, c.geom2, key=lambda geom: wm.geom_contact[geom]))
+            for c in data.contact[:data.ncon]]
+    feet = [(point, geom) for point, geom in feet if wm.geom_contact[geom] >= 0]
+    J = np.zeros((3 * len(feet), model.nv))
+    for i, (point, geom) in enumerate(feet):
+        mujoco.mj_jac(model, data, J[3 * i:3 * i + 3], None, point, model.geom_bodyid[geom])
+    J_task = np.zeros((6, model.nv))
+    mujoco.mj_jacSite(model, data, J_task[:3], J_task[3:], wm.root_site)
+    return J, J_task
+
+
 class ReferenceController:
     """The controller of the module docstring for one walk.
 
@@ -213,15 +231,7 @@ class ReferenceController:
         import mujoco
 
         model, wm, g, h = self.model, self.wm, self.gains, self.model.opt.timestep
-        feet = [(c.pos, max(c.geom1, c.geom2, key=lambda geom: wm.geom_contact[geom]))
-                for c in data.contact[:data.ncon]]
-        feet = [(point, geom) for point, geom in feet if wm.geom_contact[geom] >= 0]
-        J = np.zeros((3 * len(feet), model.nv))
-        for i, (point, geom) in enumerate(feet):
-            mujoco.mj_jac(model, data, self._jacp, self._jacr, point, model.geom_bodyid[geom])
-            J[3 * i:3 * i + 3] = self._jacp
-        J_task = np.zeros((6, model.nv))  # the torso's: translation, rotation
-        mujoco.mj_jacSite(model, data, J_task[:3], J_task[3:], wm.root_site)
+        J, J_task = stance_jacobians(model, data, wm)
         ref_now = self.ref.root_at(t)[0]
         v_ref = (self.ref.root_at(t + h)[0] - self.ref.root_at(t - h)[0]) / (2 * h)
         a_task = (g.position_kp * (ref_now - data.site_xpos[wm.root_site])

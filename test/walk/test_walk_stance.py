@@ -41,6 +41,7 @@ def _rigid_response(recording, node: int, a_task: np.ndarray):
     """(the torso's acceleration change (6,) under rigid contacts, the contacts held)."""
     import mujoco
 
+    from gait_planner.walk.controller import stance_jacobians
     from gait_planner.walk.mujoco_model import build_model, plan_qpos
     from gait_planner.walk.reference import Reference
     from gait_planner.walk.stance import position_torques
@@ -56,14 +57,8 @@ def _rigid_response(recording, node: int, a_task: np.ndarray):
     mujoco.mj_forward(model, data)
     M = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, M)
-    rows, jacp = [], np.zeros((3, model.nv))
-    for c in data.contact[:data.ncon]:
-        foot = max(c.geom1, c.geom2, key=lambda g: wm.geom_contact[g])
-        mujoco.mj_jac(model, data, jacp, None, c.pos, model.geom_bodyid[foot])
-        rows.append(jacp.copy())
-    J = np.vstack(rows)
-    J_task = np.zeros((6, model.nv))
-    mujoco.mj_jacSite(model, data, J_task[:3], J_task[3:], wm.root_site)
+    J, J_task = stance_jacobians(model, data, wm)
+    assert len(J) > 0
     base = np.setdiff1d(np.arange(model.nv), wm.dof)
     dtau = position_torques(M, J, J_task, a_task, base, wm.dof)
     nf = len(J)
