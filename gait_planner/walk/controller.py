@@ -233,7 +233,7 @@ class ReferenceController:
         model, wm, g, h = self.model, self.wm, self.gains, self.model.opt.timestep
         J, J_task = stance_jacobians(model, data, wm)
         ref_now = self.ref.root_at(t)[0]
-        v_ref = (self.ref.root_at(t + h)[0] - self.ref.root_at(t - h)[0]) / (2 * h)
+        v_ref = self.ref.root_velocity_at(t, h)
         a_task = (g.position_kp * (ref_now - data.site_xpos[wm.root_site])
                   + g.position_kd * (v_ref - J_task[:3] @ data.qvel))
         mujoco.mj_fullM(model, data, self._M)
@@ -254,7 +254,7 @@ class ReferenceController:
         mujoco.mj_subtreeVel(self.model, data)
         planned = np.mean([self.planned_point(q_ref, c) for c in active], axis=0)
         support = np.mean([data.site_xpos[self.contact_site[c]] for c in active], axis=0)
-        com_rate = (ref.com_at(t + h) - ref.com_at(t - h)) / (2 * h)
+        com_rate = ref.com_velocity_at(t, h)
         return placement_shift(self.gains,
                                data.subtree_com[self.root] - support - (ref.com_at(t) - planned),
                                data.subtree_linvel[self.root] - com_rate, self.max_shift)
