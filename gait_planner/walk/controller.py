@@ -145,12 +145,14 @@ def stance_jacobians(model, data, wm) -> tuple[np.ndarray, np.ndarray]:
     translation and rotation Jacobians of the torso's centre of mass (`wm.root_site`)."""
     import mujoco
 
-    feet = [(c.pos, max(c.geom1, c.geom2, key=lambda geom: wm.geom_contact[geom]))
-            for c in data.contact[:data.ncon]]
-    feet = [(point, geom) for point, geom in feet if wm.geom_contact[geom] >= 0]
-    J = np.zeros((3 * len(feet), model.nv))
-    for i, (point, geom) in enumerate(feet):
-        mujoco.mj_jac(model, data, J[3 * i:3 * i + 3], None, point, model.geom_bodyid[geom])
+    geoms = data.contact.geom  # (ncon, 2): of each contact the foot's is the one of a contact
+    rank = wm.geom_contact[geoms]  # point (>= 0; the first of two feet), the ground's is -1
+    foot = np.where(rank[:, 1] > rank[:, 0], geoms[:, 1], geoms[:, 0])
+    on_foot = wm.geom_contact[foot] >= 0
+    points, bodies = data.contact.pos[on_foot], model.geom_bodyid[foot[on_foot]]
+    J = np.zeros((3 * len(points), model.nv))
+    for i, (point, body) in enumerate(zip(points, bodies)):
+        mujoco.mj_jac(model, data, J[3 * i:3 * i + 3], None, point, body)
     J_task = np.zeros((6, model.nv))
     mujoco.mj_jacSite(model, data, J_task[:3], J_task[3:], wm.root_site)
     return J, J_task
