@@ -145,8 +145,10 @@ def stance_jacobians(model, data, wm) -> tuple[np.ndarray, np.ndarray]:
     translation and rotation Jacobians of the torso's centre of mass (`wm.root_site`)."""
     import mujoco
 
-    geoms = data.contact.geom  # (ncon, 2): of each contact the foot's is the one of a contact
-    rank = wm.geom_contact[geoms]  # point (>= 0; the first of two feet), the ground's is -1
+    # each contact's two geometries (ncon, 2); the foot's is the one that belongs to a contact
+    # point (geom_contact >= 0; of two feet that touch, the first), the ground's has -1
+    geoms = data.contact.geom
+    rank = wm.geom_contact[geoms]
     foot = np.where(rank[:, 1] > rank[:, 0], geoms[:, 1], geoms[:, 0])
     on_foot = wm.geom_contact[foot] >= 0
     points, bodies = data.contact.pos[on_foot], model.geom_bodyid[foot[on_foot]]

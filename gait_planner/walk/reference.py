@@ -31,7 +31,7 @@ from gait_planner.ocp.mirror import configuration_mirror, contact_partners
 from gait_planner.verify.joined import half_cycle
 from gait_planner.walk.mujoco_model import recorded_ground
 
-__all__ = ["Reference", "central_difference", "scene_of"]
+__all__ = ["Reference", "scene_of"]
 
 
 def scene_of(rec: RecordedPlan) -> Scene:
@@ -201,20 +201,20 @@ class Reference:
 
     def root_rate_at(self, t: float, h: float) -> np.ndarray:
         """The root's angular velocity (world) at t: central difference over +-h."""
-        D_dot = central_difference(lambda s: self.root_at(s)[1], t, h)
+        D_dot = _central_difference(lambda s: self.root_at(s)[1], t, h)
         return _omega(self.root_at(t)[1], D_dot)
 
     def root_velocity_at(self, t: float, h: float) -> np.ndarray:
         """The root's centre-of-mass velocity (3,) m/s, world, at t: central difference
         over +-h."""
-        return central_difference(lambda s: self.root_at(s)[0], t, h)
+        return _central_difference(lambda s: self.root_at(s)[0], t, h)
 
     def com_velocity_at(self, t: float, h: float) -> np.ndarray:
         """The whole body's centre-of-mass velocity (3,) m/s, world, at t: central
         difference over +-h."""
-        return central_difference(self.com_at, t, h)
+        return _central_difference(self.com_at, t, h)
 
 
-def central_difference(f: Callable[[float], np.ndarray], t: float, h: float) -> np.ndarray:
+def _central_difference(f: Callable[[float], np.ndarray], t: float, h: float) -> np.ndarray:
     """(f(t + h) - f(t - h)) / 2 h: the rate of a planned quantity at t (s)."""
     return (f(t + h) - f(t - h)) / (2 * h)

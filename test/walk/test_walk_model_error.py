@@ -131,8 +131,8 @@ def test_a_50_ms_delay_is_walked_with_the_predictor_and_not_without(walker2d_pla
     # The delay costs feedback, and issue #40 item 2 sets it no bound (item 1's 40 % is
     # for prompt commands): walker2d's default walked with 26.9 % of the plan's torque
     # promptly and 41.5 % 50 ms late (2026-11-30; 39.2 % before the torso's place was
-    # tracked). A bound at 1.5 x item 1's target catches a predictor gone wrong (blind,
-    # the walk falls).
+    # tracked). Bounded at 1.5 x item 1's target: a walk that completes only by far more
+    # feedback fails.
     assert predicted["feedback_share"] <= 0.60
     blind = load_config()
     blind["delay"]["predict"] = False
