@@ -146,7 +146,7 @@ def stance_jacobians(model, data, wm) -> tuple[np.ndarray, np.ndarray]:
     import mujoco
 
     # each contact's two geometries (ncon, 2); the foot's is the one that belongs to a contact
-    # point (geom_contact >= 0; of two feet that touch, the first), the ground's has -1
+    # point (geom_contact >= 0, the ground's -1; of two feet that touch, the later point's)
     geoms = data.contact.geom
     rank = wm.geom_contact[geoms]
     foot = np.where(rank[:, 1] > rank[:, 0], geoms[:, 1], geoms[:, 0])
