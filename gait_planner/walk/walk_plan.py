@@ -41,7 +41,7 @@ TOUCH_SHARE = 0.1  # of the walker's weight: a contact point carrying more is to
 _KEYS = {"simulation": ("time_step", "foot_sphere_radius", "contact_time_constant",
                         "noslip_iterations"),
          "joints": ("kp", "kd"), "torso": ("kp", "kd", "position_kp", "position_kd"),
-         "placement": ("kp", "kd", "max_shift", "height_kp"),
+         "placement": ("kp", "kd", "max_shift", "height_kp", "swing_margin"),
          "clock": ("pace_gain", "rate_min", "rate_max"),
          "stop": ("height_drop", "tilt", "joint_error")}
 
@@ -164,7 +164,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     torso = cfg["torso"]
     gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], torso["kp"], torso["kd"],
                   place["kp"], place["kd"], place["height_kp"], torso["position_kp"],
-                  torso["position_kd"])
+                  torso["position_kd"], place["swing_margin"])
     pace = cfg["clock"]
     clock = PlanClock(pace["pace_gain"], pace["rate_min"], pace["rate_max"])
     control = ReferenceController(model, wm, ref, gains, place["max_shift"], scale, clock)

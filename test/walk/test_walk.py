@@ -30,12 +30,14 @@ def walker2d_plan(tmp_path_factory) -> Path:
     return out
 
 
-def _walks_ten_and_the_self_test_does_worse(plan: Path, share: float):
+def _walks_ten_and_the_self_test_does_worse(plan: Path, share: float, touches: bool = True):
     from gait_planner.cli.walk import self_test
     from gait_planner.walk.walk_plan import walk
 
     full = walk(plan, 10)
     assert full["half_cycles_walked"] == 10 and full["stopped"] == "completed", full["stopped"]
+    if not touches:
+        assert full["unplanned_touches"] == [], full["unplanned_touches"]
     assert full["feedback_share"] < share and full["joint_rms_deg"] < 2.0
     assert len(full["torso_drift_m"]) == len(full["joint_rms_per_half_cycle_deg"]) == 10
     rows = self_test(str(plan), 10, full)
@@ -63,12 +65,15 @@ def test_walker3d_human_posture_plan_walks_and_the_self_test_does_worse(tmp_path
 
 @pytest.mark.slow
 def test_walker3d_default_plan_walks_and_the_self_test_does_worse(tmp_path):
-    """The issue's target: ten half cycles with the feedback adding at most 40 %."""
+    """The issue's target: ten half cycles with the feedback adding at most 40 %; and the
+    feet touch the ground nowhere the plan does not (the heel struck 15 ms early four times
+    in ten half cycles until the swing height aimed 1 cm above the plan's mid-swing,
+    config/walk.yaml placement.swing_margin; no touch with 0.5-2 cm)."""
     out = tmp_path / "w3.mcap"
     exe = Path(sys.executable).with_name("gait-planner")
     subprocess.run([str(exe), "plan", "--scene", "walker3d", "--out", str(out)], check=True,
                    capture_output=True)
-    _walks_ten_and_the_self_test_does_worse(out, 0.4)
+    _walks_ten_and_the_self_test_does_worse(out, 0.4, touches=False)
 
 
 def test_one_half_cycle_of_walker2d_is_walked_and_recorded(walker2d_plan, tmp_path, capsys):
@@ -172,11 +177,11 @@ def test_walk_takes_a_controller_file_and_names_what_is_wrong(walker2d_plan, tmp
     from gait_planner.walk.walk_plan import CONFIG
 
     mine = tmp_path / "mine.yaml"
-    mine.write_text(CONFIG.read_text().replace("tilt: 35.0", "tilt: 0.5"))
+    mine.write_text(CONFIG.read_text().replace("tilt: 35.0", "tilt: 0.05"))
     assert main(["walk", str(walker2d_plan), "--steps", "2", "--config", str(mine),
                  "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
-    assert result["stopped"].startswith("fall: torso tilted")  # 0.5 deg: at once
+    assert result["stopped"].startswith("fall: torso tilted")  # 0.05 deg: in the first 0.2 s
     broken = tmp_path / "broken.yaml"
     broken.write_text("joints: [kp: 1")
     assert main(["walk", str(walker2d_plan), "--config", str(broken)]) == 2
