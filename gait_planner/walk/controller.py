@@ -36,11 +36,10 @@ angles and rates + three loops on what the joints do not control (the floating b
   after its first half cycle. The height aimed at is the plan's plus a margin that rises
   and falls over the swing (swing_margin x sin(pi s), s the swing's progress from release
   to strike): the plans keep a swing point only 1 cm above the ground, within the swing
-  foot's tracking error. Without the margin walker3d's default walk struck its heel 15 ms
+  foot's tracking error. Without the margin walker3d's default walk struck its heel 15-16 ms
   early four times in ten half cycles and the run scuffed its forefoot after every toe-off;
   with 1 cm the default walk touches nowhere unplanned, and the run and the torque-squared
-  plan walk 10 half cycles instead of 8 and 9
-  (benchmarks/HISTORY.md, 2026-11-30 evening).
+  plan walk 10 half cycles instead of 8 and 9 (benchmarks/HISTORY.md, 2026-11-30 evening).
 
 `ReferenceController(model, wm, ref, gains, max_shift, scale, clock)(data)` evaluates all of
 it on a MuJoCo state whose kinematics are current (after `mj_step1`), against the plan at
