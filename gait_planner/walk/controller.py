@@ -48,6 +48,7 @@ the plan's time clock(data.time) (`walk.clock`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable, NamedTuple
 
@@ -274,11 +275,11 @@ class ReferenceController:
     def _lift(self, data, q_ref: np.ndarray, contacts, s: float) -> np.ndarray:
         """(3,) m: height_kp x the contact points' mean height error along the ground's
         normal (the plan's configuration q_ref, raised by `swing_margin` sin(pi s) at the
-        swing's progress s in [0, 1], minus the walker's)."""
+        swing's progress s in [0, 1) (inside its window), minus the walker's)."""
         n = self.ref.normal
         error = np.mean([n @ (self.planned_point(q_ref, c) - data.site_xpos[self.contact_site[c]])
                          for c in sorted(contacts)])
-        margin = self.gains.swing_margin * np.sin(np.pi * min(max(s, 0.0), 1.0))
+        margin = self.gains.swing_margin * math.sin(math.pi * s)
         return self.gains.height_kp * (error + margin) * n
 
     def _foot_jacobians(self, data, leg: int, dofs) -> tuple[np.ndarray, np.ndarray]:

@@ -66,7 +66,7 @@ def test_walker3d_human_posture_plan_walks_and_the_self_test_does_worse(tmp_path
 @pytest.mark.slow
 def test_walker3d_default_plan_walks_and_the_self_test_does_worse(tmp_path):
     """The issue's target: ten half cycles with the feedback adding at most 40 %; and the
-    feet touch the ground nowhere the plan does not (the heel struck 15 ms early four times
+    feet touch the ground nowhere the plan does not (the heel struck 15-16 ms early four times
     in ten half cycles until the swing height aimed 1 cm above the plan's mid-swing,
     config/walk.yaml placement.swing_margin; no touch with 0.5-2 cm)."""
     out = tmp_path / "w3.mcap"
