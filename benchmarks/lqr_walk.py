@@ -43,13 +43,14 @@ class Linearised:
     def __init__(self, path: Path, steps: int, block: int, sink: float):
         import mujoco
 
+        from gait_planner.io.mcap_reader import read_plan_mcap
         from gait_planner.walk.mujoco_model import build_model
         from gait_planner.walk.reference import Reference, planned_joints
-        from gait_planner.walk.walk_plan import _read, load_config
+        from gait_planner.walk.walk_plan import load_config
 
         self.cfg = load_config()
         sim = self.cfg["simulation"]
-        rec = planned_joints(_read(path))
+        rec = planned_joints(read_plan_mcap(path))
         self.ref = Reference.from_recording(rec, steps)
         self.kd = self.cfg["joints"]["kd"]
         self.wm = build_model(rec, self.ref.scene, float(rec.metadata.get("foot_half_width",
