@@ -22,7 +22,9 @@ on the root's position and orientation, 1/v^2 on every velocity) and R = 1/r^2, 
 the block's length; the feedback -K dx is held over each block. The plan's time is paced as
 the walk paces it (`walk.clock.PlanClock`, gain --clock-gain). The walk stops on the walk's
 own fall rules (config/walk.yaml `stop`); feedback share = RMS of everything beyond the
-plan's efforts over RMS of the plan's efforts, as `gait-planner walk` reports it. Results
+plan's efforts over RMS of the plan's efforts, as `gait-planner walk` reports it;
+--torque-scale 0 or 0.5 walks with the plan's efforts scaled, the walk's self-test (the
+gains stay those designed about the full efforts). Results
 and their dates: benchmarks/HISTORY.md (2026-11-30, night).
 """
 
@@ -64,8 +66,10 @@ class Linearised:
         self.nv, self.nu = self.m.nv, len(self.wm.dof)
         self.i_root = self.ref.scene.body_index(self.ref.scene.root.body)
 
-    def reference(self, tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(qpos, qvel, u, plan efforts) at the plan's time tau; u = efforts + kd rates."""
+    def reference(self, tau: float, scale: float = 1.0
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(qpos, qvel, u, plan efforts) at the plan's time tau; u = scale x efforts + kd
+        rates (scale: the self-test's factor on the plan's efforts)."""
         from gait_planner.walk.mujoco_model import plan_qpos, plan_root_qvel
 
         ref, h = self.ref, self.h
@@ -77,7 +81,7 @@ class Linearised:
         qvel = np.zeros(self.nv)
         qvel[:len(root)], qvel[self.wm.dof] = root, rates
         return (plan_qpos(self.wm, self.i_root, ref.q_at(tau), angles), qvel,
-                efforts + self.kd * rates, efforts)
+                scale * efforts + self.kd * rates, efforts)
 
     def difference(self, qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
         """qb - qa in the tangent space (nv,)."""
@@ -177,14 +181,14 @@ def walk_lqr(path: Path, steps: int, args) -> dict:
     end, reason, extra, plan, fb, steps_done = steps * ref.period, "completed", [], [], None, 0
     while clock(d.time) < end - 0.5 * h:
         tau = clock(d.time)
-        q_ref, v_ref, u, efforts = lin.reference(tau)
+        q_ref, v_ref, u, efforts = lin.reference(tau, args.torque_scale)
         if steps_done % lin.block == 0:
             dx = np.r_[lin.difference(q_ref, d.qpos), d.qvel - v_ref]
             fb = -K[min(int(tau / (lin.block * h)), len(K) - 1)] @ dx
         d.qfrc_applied[:] = 0.0
         d.qfrc_applied[wm.dof] = u + fb
         # beyond the plan's efforts: the LQR's and the damping's difference from the plan's
-        extra.append(fb + lin.kd * (v_ref[wm.dof] - d.qvel[wm.dof]))
+        extra.append(u + fb - lin.kd * d.qvel[wm.dof] - efforts)
         plan.append(efforts)
         mujoco.mj_step(m, d)
         steps_done += 1
@@ -221,6 +225,8 @@ def main() -> int:
     parser.add_argument("--block", type=int, default=4, help="simulation steps per gain")
     parser.add_argument("--sink", type=float, default=5e-4, help="m: reference lowered by")
     parser.add_argument("--clock-gain", type=float, default=1.0, help="1/s: the plan's pace")
+    parser.add_argument("--torque-scale", type=float, default=1.0,
+                        help="the plan's efforts times this (the self-test: 0, 0.5)")
     args = parser.parse_args()
     for path in args.plans:
         r = walk_lqr(path, args.steps, args)
