@@ -6,7 +6,7 @@ controller.
     .venv/bin/python benchmarks/lqr_walk.py DIR/plan_*.mcap  # walk them with the LQR
     .venv/bin/python benchmarks/lqr_walk.py PLAN.mcap --r 5 --steps 4
 
-The walker is `gait-planner walk`'s (`walk.mujoco_model.build_model` with config/walk.yaml:
+The walker is `gait-planner walk`'s (`walk.walk_plan.walk_model` with config/walk.yaml:
 0.5 ms steps, the joints' damping, the no-slip passes), started on the plan's node 0. The
 reference state at the plan's time tau: the plan's configuration in MuJoCo's coordinates
 (`plan_qpos`), its joint rates and the root's velocity (`plan_root_qvel`; at tau = 0 the
@@ -20,12 +20,12 @@ transition is the step's composed `block` times (zero-order hold); the Riccati r
 runs backward over the whole walk with Q = diag(1/q_joint^2 on the joint angles, 1/q_root^2
 on the root's position and orientation, 1/v^2 on every velocity) and R = 1/r^2, both times
 the block's length; the feedback -K dx is held over each block. The plan's time is paced as
-the walk paces it (`walk.clock.PlanClock`, gain --clock-gain). The walk stops on the walk's
-own fall rules (config/walk.yaml `stop`); feedback share = RMS of everything beyond the
-plan's efforts over RMS of the plan's efforts, as `gait-planner walk` reports it;
---torque-scale 0 or 0.5 walks with the plan's efforts scaled, the walk's self-test (the
-gains stay those designed about the full efforts). Results
-and their dates: benchmarks/HISTORY.md (2026-11-30, night).
+the walk paces it (`walk.clock.PlanClock`, gain --clock-gain). The walk stops by the
+walk's own rules (`walk.walk_plan.stop_reason`, config/walk.yaml `stop`); feedback share =
+RMS of everything beyond the plan's efforts over RMS of the plan's efforts, as `gait-planner
+walk` reports it; --torque-scale 0 or 0.5 walks with the plan's efforts scaled, the walk's
+self-test (the gains stay those designed about the full efforts). Results and their
+dates: benchmarks/HISTORY.md (2026-11-30, night).
 """
 
 from __future__ import annotations
@@ -46,20 +46,15 @@ class Linearised:
         import mujoco
 
         from gait_planner.io.mcap_reader import read_plan_mcap
-        from gait_planner.walk.mujoco_model import build_model
         from gait_planner.walk.reference import Reference, planned_joints
-        from gait_planner.walk.walk_plan import load_config
+        from gait_planner.walk.walk_plan import load_config, walk_model
 
         self.cfg = load_config()
-        sim = self.cfg["simulation"]
         rec = planned_joints(read_plan_mcap(path))
         self.ref = Reference.from_recording(rec, steps)
+        self.joint_names = rec.joint_names
         self.kd = self.cfg["joints"]["kd"]
-        self.wm = build_model(rec, self.ref.scene, float(rec.metadata.get("foot_half_width",
-                                                                           0.04575)),
-                              sim["foot_sphere_radius"], sim["time_step"],
-                              sim["contact_time_constant"], self.kd, None,
-                              int(sim["noslip_iterations"]))
+        self.wm = walk_model(rec, self.ref.scene, self.cfg)
         self.m, self.block, self.sink = self.wm.model, block, sink
         self.d = mujoco.MjData(self.m)
         self.h = self.m.opt.timestep
@@ -168,6 +163,7 @@ def walk_lqr(path: Path, steps: int, args) -> dict:
     import mujoco
 
     from gait_planner.walk.clock import PlanClock
+    from gait_planner.walk.walk_plan import stop_reason
 
     start = time.perf_counter()
     lin = Linearised(path, steps, args.block, args.sink)
@@ -196,15 +192,8 @@ def walk_lqr(path: Path, steps: int, args) -> dict:
         com, (phi, D) = d.site_xpos[wm.root_site], ref.root_at(clock(d.time))
         tilt = math.degrees(math.acos(np.clip(
             d.site_xmat[wm.root_site].reshape(3, 3)[:, 2] @ D[:, 2], -1.0, 1.0)))
-        if not np.isfinite(d.qpos).all():
-            reason = f"diverged at t = {d.time:.3f} s"
-        elif com[2] < phi[2] - stop["height_drop"]:
-            reason = f"fall: torso {phi[2] - com[2]:.3f} m below the plan at t = {d.time:.3f} s"
-        elif tilt > stop["tilt"]:
-            reason = f"fall: torso tilted {tilt:.1f} deg at t = {d.time:.3f} s"
-        elif np.abs(ref.at(clock(d.time))[0] - d.qpos[wm.qpos]).max() > math.radians(
-                stop["joint_error"]):
-            reason = f"lost tracking at t = {d.time:.3f} s"
+        reason = stop_reason(stop, d, com[2], phi[2], tilt,
+                             ref.at(clock(d.time))[0] - d.qpos[wm.qpos], lin.joint_names, d.time)
         if reason != "completed":
             break
     rms = lambda x: float(np.sqrt(np.mean(np.square(x))))  # noqa: E731

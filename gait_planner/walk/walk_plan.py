@@ -32,7 +32,8 @@ from gait_planner.walk.robot_urdf import RobotUrdf
 from gait_planner.walk.slides import Slides
 from gait_planner.walk.touches import Touches
 
-__all__ = ["CONFIG", "ground_forces", "load_config", "walk"]
+__all__ = ["CONFIG", "foot_half_width", "ground_forces", "load_config", "stop_reason", "walk",
+           "walk_model"]
 
 CONFIG = Path(__file__).resolve().parents[2] / "config" / "walk.yaml"
 TOUCH_SHARE = 0.1  # of the walker's weight: a contact point carrying more is touching
@@ -128,7 +129,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     factors drawn)."""
     import mujoco
 
-    from gait_planner.walk.mujoco_model import build_model, plan_qpos, plan_root_qvel
+    from gait_planner.walk.mujoco_model import plan_qpos, plan_root_qvel
     from gait_planner.walk.reference import Reference, planned_joints
 
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
@@ -142,15 +143,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
                          f"points (heel and forefoot); walk needs feet")
     if robot is None and scene.robot is not None:  # drafted: the recording's own URDF
         robot = recorded_robot(rec, scene)
-    half_width = float(rec.metadata.get("foot_half_width", 0.04575))
-    sim = cfg["simulation"]
-
-    def walker():
-        return build_model(rec, scene, half_width, sim["foot_sphere_radius"], sim["time_step"],
-                           sim["contact_time_constant"], cfg["joints"]["kd"], robot,
-                           int(sim["noslip_iterations"]))
-
-    wm = walker()
+    wm = walk_model(rec, scene, cfg, robot)
     factors = model_error.apply(wm.model) if model_error is not None else {}
     model, data = wm.model, mujoco.MjData(wm.model)
     delay_steps = (round(model_error.torque_delay / model.opt.timestep)
@@ -158,8 +151,8 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     delayed = DelayedTorque(delay_steps) if delay_steps else None
     predictor = None
     if delayed is not None and cfg["delay"]["predict"]:  # the nominal walker: no model error
-        predictor = DelayPredictor(walker().model, delayed, cfg["joints"]["kp"], wm.dof,
-                                   wm.qpos)
+        predictor = DelayPredictor(walk_model(rec, scene, cfg, robot).model, delayed,
+                                   cfg["joints"]["kp"], wm.dof, wm.qpos)
     place = cfg["placement"]
     torso = cfg["torso"]
     gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], torso["kp"], torso["kd"],
@@ -235,18 +228,8 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         clock.pace(h, float(along @ (data.subtree_com[control.root] - ref.com_at(t))), speed)
         if series:
             trace["ground_force"].append(forces)
-        worst = int(np.argmax(np.abs(errs[-1])))
-        if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
-            reason = f"diverged: the simulated state is not finite at t = {t_sim:.3f} s"
-        elif com[2] < phi_ref[2] - stop["height_drop"]:
-            reason = (f"fall: torso centre of mass {com[2]:.3f} m high, "
-                      f"{phi_ref[2] - com[2]:.3f} m below the plan at t = {t_sim:.3f} s")
-        elif tilt > stop["tilt"]:
-            reason = f"fall: torso tilted {tilt:.1f} deg from the plan at t = {t_sim:.3f} s"
-        elif abs(math.degrees(errs[-1][worst])) > stop["joint_error"]:
-            reason = (f"lost tracking: {rec.joint_names[worst]} "
-                      f"{math.degrees(errs[-1][worst]):+.1f} deg from the plan at t = "
-                      f"{t_sim:.3f} s")
+        reason = stop_reason(stop, data, com[2], phi_ref[2], tilt, errs[-1], rec.joint_names,
+                             t_sim)
         if reason != "completed":
             break
         tau = clock(data.time)  # of the state after the step
@@ -279,11 +262,49 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         "foot_slide": slides.summary(),
         "controller": {"joints": cfg["joints"], "torso": cfg["torso"], "placement": place,
                        "delay": cfg["delay"],
-                       "simulation": sim, "foot_half_width": half_width},
+                       "simulation": cfg["simulation"], "foot_half_width": foot_half_width(rec)},
         **({"model_error": {"differences": model_error.describe(), "mass_factors": factors}}
            if model_error is not None else {}),
         **({"series": extra} if series else {}),
     }
+
+
+def foot_half_width(rec) -> float:
+    """m: the half width of the feet the recording's plan assumes (its metadata; the
+    planner's default for a recording without it)."""
+    return float(rec.metadata.get("foot_half_width", 0.04575))
+
+
+def walk_model(rec, scene, cfg: dict[str, Any], robot: RobotUrdf | None = None):
+    """The MuJoCo walker (`walk.mujoco_model.WalkModel`) of the recording `rec` of `scene`
+    with the simulation and joint damping of the controller's parameters `cfg`
+    (`load_config`), on the robot's own URDF if given."""
+    from gait_planner.walk.mujoco_model import build_model
+
+    sim = cfg["simulation"]
+    return build_model(rec, scene, foot_half_width(rec), sim["foot_sphere_radius"],
+                       sim["time_step"], sim["contact_time_constant"], cfg["joints"]["kd"],
+                       robot, int(sim["noslip_iterations"]))
+
+
+def stop_reason(stop: dict[str, float], data, height: float, planned_height: float,
+                tilt: float, error: np.ndarray, joint_names, t: float) -> str:
+    """Why a walk stops at simulated time t (s), or "completed" while it goes on, by the
+    rules of config/walk.yaml `stop`: a state that is not finite (MuJoCo's `data`), the
+    torso's centre of mass `height` (m) height_drop below the plan's, its axis `tilt` deg
+    from the plan's, a joint angle `error` (rad, per joint_names) beyond joint_error."""
+    worst = int(np.argmax(np.abs(error)))
+    if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
+        return f"diverged: the simulated state is not finite at t = {t:.3f} s"
+    if height < planned_height - stop["height_drop"]:
+        return (f"fall: torso centre of mass {height:.3f} m high, "
+                f"{planned_height - height:.3f} m below the plan at t = {t:.3f} s")
+    if tilt > stop["tilt"]:
+        return f"fall: torso tilted {tilt:.1f} deg from the plan at t = {t:.3f} s"
+    if abs(math.degrees(error[worst])) > stop["joint_error"]:
+        return (f"lost tracking: {joint_names[worst]} {math.degrees(error[worst]):+.1f} deg "
+                f"from the plan at t = {t:.3f} s")
+    return "completed"
 
 
 def ground_forces(model, data, wm) -> np.ndarray:
