@@ -297,7 +297,7 @@ def walk(doc) -> list[str]:
         return out + ["Not measured.", ""]
     steps = doc["header"].get("steps", "?")
     out += [provenance(doc), "",
-            f"`walk.py`: each plan made by `gait-planner plan` (time limit "
+            f"`walk.py`: each plan made by `gait-planner plan --cold-start` (time limit "
             f"{doc['header'].get('time_limit_s', '?')} s), then walked {steps} half cycles by "
             "`gait-planner walk` (config/walk.yaml) and again with the plan's torques scaled "
             "down (the self-test: the feedback must not do the plan's work). Feedback share: "
@@ -398,7 +398,7 @@ def smoothness(doc) -> list[str]:
     out += [provenance(doc), "",
             "`smoothness.py`: the default plans as shipped and with the swing braked over its "
             f"swing (`{h.get('option', 'strike_deceleration_max')}`, m/s², a gait option in a "
-            "copy of the scene file), each made by `gait-planner plan`, checked by the "
+            "copy of the scene file), each made by `gait-planner plan --cold-start`, checked by the "
             "verifier and walked "
             f"{h.get('steps', '?')} half cycles with the self-test. Away from contact "
             "switches, the largest second difference of a joint torque between nodes: over the "

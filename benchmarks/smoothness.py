@@ -1,8 +1,8 @@
 """A terminal swing without a burst (issue #40 items 3 and 5): the default plans of walker2d
 and walker3d as shipped and with the swing braked over its swing (the gait option
 `strike_deceleration_max`, m/s^2, in a copy of the scene file, as a user sets it), each
-made by `gait-planner plan --json` (`walk.plan`), checked by the verifier and walked 10 half
-cycles in MuJoCo with the self-test (`walk.walk_row`).
+made by `gait-planner plan --json --cold-start` (`walk.plan`), checked by the verifier and
+walked 10 half cycles in MuJoCo with the self-test (`walk.walk_row`).
 
     .venv/bin/python benchmarks/smoothness.py              # both scenes: off, 30, 40, 50 (~8 min)
     .venv/bin/python benchmarks/smoothness.py --quick      # walker2d only

@@ -10,7 +10,8 @@ config/walk.yaml).
                                                      # walks those it finds there again
 
 Each plan is made as a user makes it: `gait-planner plan --json` in a subprocess, in a
-temporary folder. The hard requests are those of `hard_cases.py` a user can ask for: its
+temporary folder, with --cold-start (the warm-start store's later plans would make a row
+depend on what the machine planned before; the hard requests plan cold). The hard requests are those of `hard_cases.py` a user can ask for: its
 plan options (step length, mu, grid, cost) as `plan` options, its scene changes (the sigma
 bounds, the knee ranges) in a copy of walker3d.yaml; its solver starts (cold from standing,
 a poor guess) are no request and are left out. A plan that fails is a row without a walk.
@@ -109,7 +110,7 @@ def plan(row: Row, stem: Path, time_limit: float) -> tuple[Path | None, dict]:
     start = time.perf_counter()
     done = subprocess.run([str(exe), "plan", "--scene",
                            scene_file(row, stem.with_suffix(".yaml")), *row.args,
-                           "--max-time", str(time_limit), "--no-rrd", "--json",
+                           "--max-time", str(time_limit), "--no-rrd", "--json", "--cold-start",
                            "--out", str(out)], capture_output=True, text=True)
     wall = time.perf_counter() - start
     try:

@@ -10,7 +10,10 @@ and the ROS node do (`gait_planner.pipeline`), from a script or a notebook:
     print(summary(result))
 
 `plan` keeps one `Planner` per process (its built problems and its warm starts: a second
-request of the same form reuses the first's problem); pass your own to keep several apart.
+request of the same form reuses the first's problem), and starts, as the node and
+`gait-planner plan` do, from the nearest plan in the warm-start store (`ocp.warm_starts`:
+`make setup`'s default plans and anchors, earlier processes' plans); a request with
+cold_start=True ignores both. Pass your own `Planner` to keep several apart.
 `compiled=True` evaluates the derivatives with the per-node elements compiled to C, as the
 node and the command line do by default (`make setup` compiles the shipped scenes' once);
 without it CasADi builds them for the process (walker3d: about 20 s).
@@ -22,6 +25,7 @@ from pathlib import Path
 
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.solve import Planner
+from gait_planner.ocp.warm_starts import WarmStartStore
 from gait_planner.pipeline import plan_problem, summary
 from gait_planner.problem import SceneLookup, resolve
 from gait_planner.request import PlanRequest, RequestError
@@ -44,7 +48,7 @@ def plan(request: PlanRequest | str, planner: Planner | None = None,
     scenes: finds a scene by its name (`model.loader.load_scene`: the shipped scenes)."""
     global _planner
     if planner is None:
-        _planner = planner = _planner or Planner()
+        _planner = planner = _planner or Planner(library=WarmStartStore())
     if isinstance(request, str):
         request = PlanRequest(request, compiled=True)
     return plan_problem(planner, resolve(request, scenes))

@@ -183,6 +183,34 @@ def test_a_scene_that_cannot_be_used_is_named_with_the_rule(tmp_path, capsys, mo
     assert not (tmp_path / "x.mcap").exists()
 
 
+def test_plan_starts_from_the_warm_start_store_unless_told_cold(tmp_path, capsys,
+                                                               monkeypatch):
+    """`plan` reads and adds to the warm-start store as the node does: a second process's
+    plan of the same request starts at the first's optimum and ends there; --cold-start
+    solves from the guess again and leaves the store as it was."""
+    monkeypatch.setenv("GAIT_PLANNER_CACHE", str(tmp_path / "cache"))
+    store = tmp_path / "cache" / "plans"
+
+    def plan(*options: str) -> dict:
+        out = tmp_path / f"c{len(list(tmp_path.glob('*.mcap')))}.mcap"
+        assert main(["plan", "--scene", "compass", "--no-compile", "--out", str(out),
+                     "--json", "--no-rrd", *options]) == 0
+        return json.loads(capsys.readouterr().out)
+
+    first = plan()
+    (kept,) = store.glob("*.npz")
+    written = kept.stat().st_mtime_ns
+    second = plan()
+    assert kept.stat().st_mtime_ns != written  # the second plan was added ...
+    written = kept.stat().st_mtime_ns
+    cold = plan("--cold-start")
+    assert kept.stat().st_mtime_ns == written  # ... a cold one is not
+    assert first["iterations"] > 3 and second["iterations"] <= 3
+    assert second["cost_value"] == pytest.approx(first["cost_value"], rel=1e-6)
+    assert cold["iterations"] == first["iterations"]
+    assert cold["cost_value"] == pytest.approx(first["cost_value"], rel=1e-9)
+
+
 @pytest.mark.slow  # compiles the compass into an empty cache: about 16 s on 2 cores
 def test_plan_compiles_by_default_and_says_so_only_when_it_builds(tmp_path, capsys,
                                                                   monkeypatch):

@@ -106,6 +106,12 @@ def _add_plan(commands: argparse._SubParsersAction) -> None:
         "write OUT (MCAP, ROS 2 profile) and OUT with .rrd.")
     _add_plan_options(parser, None)
     parser.add_argument("--out", required=True, help="the recording, e.g. runs/walk.mcap")
+    parser.add_argument("--cold-start", action="store_true",
+                        help="plan from the scene's guess, without the warm-start store "
+                        "(default: as the node, from the nearest plan kept in "
+                        "~/.cache/gait_planner/plans: `make setup`'s default plans and "
+                        "warm-start anchors, and earlier plans of the same problem; the "
+                        "plan is kept there for later ones)")
     parser.add_argument("--urdf", metavar="ROBOT.urdf", help=URDF_HELP + "; the drafted "
                         "scene is written beside --out as NAME.yaml and planned")
     add_urdf_options(parser)
@@ -131,6 +137,7 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
 
     from gait_planner.model.loader import find_scene
     from gait_planner.ocp.solve import Planner
+    from gait_planner.ocp.warm_starts import WarmStartStore
     from gait_planner.pipeline import plan_and_record, summary
     from gait_planner.problem import resolve
     from gait_planner.request import PlanRequest, RequestError
@@ -152,10 +159,14 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
                           max_solve_time=args.max_time, output_name=target.stem,
                           compiled=args.compile, steps=args.steps, posture=args.posture,
                           speed=args.speed, slope=args.slope, step_height=args.step_height,
-                          gait=args.gait)
+                          gait=args.gait, cold_start=args.cold_start)
+    # `plan` starts, as the node does, from the store's nearest plan (a request planned cold
+    # can stall where the store's anchors plan it in seconds: walker3d's stairs at 0.10 m,
+    # benchmarks/HISTORY.md 2026-11-30); --cold-start and `run` neither read nor write it
+    store = None if args.cold_start else WarmStartStore()
     print(f"planning {args.scene} ...", file=sys.stderr, flush=True)
     try:  # a compile cache miss is announced by the stage "compiling (...)"
-        outcome = plan_and_record(Planner(progress=_progress, stage=_stage),
+        outcome = plan_and_record(Planner(progress=_progress, stage=_stage, library=store),
                                   resolve(request, find_scene),
                                   target.parent if str(target.parent) else ".",
                                   rrd=not args.no_rrd)
@@ -204,7 +215,8 @@ def _add_run(commands: argparse._SubParsersAction) -> None:
     _add_plan_options(parser, "walker3d")
     parser.add_argument("--out", default="runs/walker3d.mcap", help="the recording")
     parser.add_argument("--no-viewer", action="store_true", help="do not open rerun")
-    parser.set_defaults(handler=_run)
+    # the paper's gait solved from the scene's guess, not re-planned from the store's optimum
+    parser.set_defaults(handler=_run, cold_start=True)
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -63,3 +63,22 @@ def test_walker3d_walks_a_ramp_plan_ten_half_cycles(tmp_path, slope):
     summary = walk(_plan(tmp_path, "--slope", slope, scene="walker3d"), 10)
     assert summary["half_cycles_walked"] == 10, summary["stopped"]
     assert summary["feedback_share"] <= 0.40
+
+
+# walker3d's stairs planned as `gait-planner plan` and the node plan them (from the warm-start
+# store's anchors) and walked with config/walk.yaml (2026-11-30, benchmarks/HISTORY.md): down
+# 0.10 m walks 10 of 10 (feedback 44.5 %; 41-45 % under five controller changes tried), its
+# x0 self-test 2 and x0.5 3; up 0.05 m 10 (39 %), up 0.10 m 3, up 0.15 m 5, down 0.15 m 6.
+# Issue #40 asks +-0.15 m at <= 40 %: not met; this holds the stairs plan that walks.
+@pytest.mark.slow
+def test_walker3d_walks_a_stairs_down_plan_ten_half_cycles_and_not_without_its_torques(
+        tmp_path):
+    from gait_planner.cli.walk import self_test
+    from gait_planner.walk.walk_plan import walk
+
+    plan = _plan(tmp_path, "--step-height", "-0.10", scene="walker3d")
+    full = walk(plan, 10)
+    assert full["half_cycles_walked"] == 10, full["stopped"]
+    assert full["feedback_share"] <= 0.5
+    zero = next(r for r in self_test(str(plan), 10, full) if r["torque_scale"] == 0)
+    assert zero["half_cycles_walked"] < 10
