@@ -200,21 +200,24 @@ class Reference:
         return out
 
     def root_rate_at(self, t: float, h: float) -> np.ndarray:
-        """The root's angular velocity (world) at t: central difference over +-h."""
-        D_dot = _central_difference(lambda s: self.root_at(s)[1], t, h)
+        """The root's angular velocity (world) at t (`rate_at` over +-h)."""
+        D_dot = self.rate_at(lambda s: self.root_at(s)[1], t, h)
         return _omega(self.root_at(t)[1], D_dot)
 
     def root_velocity_at(self, t: float, h: float) -> np.ndarray:
-        """The root's centre-of-mass velocity (3,) m/s, world, at t: central difference
-        over +-h."""
-        return _central_difference(lambda s: self.root_at(s)[0], t, h)
+        """The root's centre-of-mass velocity (3,) m/s, world, at t (`rate_at` over +-h)."""
+        return self.rate_at(lambda s: self.root_at(s)[0], t, h)
 
     def com_velocity_at(self, t: float, h: float) -> np.ndarray:
-        """The whole body's centre-of-mass velocity (3,) m/s, world, at t: central
-        difference over +-h."""
-        return _central_difference(self.com_at, t, h)
+        """The whole body's centre-of-mass velocity (3,) m/s, world, at t (`rate_at` over
+        +-h)."""
+        return self.rate_at(self.com_at, t, h)
 
-
-def _central_difference(f: Callable[[float], np.ndarray], t: float, h: float) -> np.ndarray:
-    """(f(t + h) - f(t - h)) / 2 h: the rate of a planned quantity at t (s)."""
-    return (f(t + h) - f(t - h)) / (2 * h)
+    def rate_at(self, f: Callable[[float], np.ndarray], t: float, h: float) -> np.ndarray:
+        """The rate of a planned quantity f at t (s): (f(t + h) - f(t - h)) / 2 h, one-sided
+        where t -+ h leaves the plan's span. The interpolated plan is constant beyond its
+        ends, so the central difference at t = 0 gave half the speed: the walk's first
+        step then asked the torso's loops for a jump of half the walking speed (walker2d's
+        default, with contacts at t = 0: 213 N m at a hip for one step, 2026-11-30)."""
+        lo, hi = max(t - h, float(self.times[0])), min(t + h, float(self.times[-1]))
+        return (f(hi) - f(lo)) / (hi - lo)

@@ -171,3 +171,20 @@ def test_a_legs_offsets_move_its_foot_by_the_shift_without_turning_it(recording,
     moved = data.xpos[foot] - before
     assert np.linalg.norm(moved - shift) <= 0.25 * np.linalg.norm(shift) + 1e-4, (moved, shift)
     assert np.linalg.norm(rotation_error(data.xmat[foot].reshape(3, 3), turned)) < 2e-3
+
+
+def test_the_plans_rates_at_its_start_are_its_speed_not_half_of_it(recording):
+    """The torso loops' references at the walk's first step: the root's and the whole
+    body's velocities and the root's angular velocity at t = 0 are those just after and
+    those the walk starts with (`Reference.root_rate0`), not the central difference over
+    the plan's clipped start (half the speed: a 213 N m kick at a hip in walker2d's first
+    step, which decided whether its 50 ms-delayed walk completed)."""
+    from gait_planner.walk.reference import Reference
+
+    ref, h = Reference.from_recording(recording, 2), 5e-4
+    v0, w0 = ref.root_rate0
+    speed = np.linalg.norm(v0)
+    for rate in (ref.root_velocity_at, ref.com_velocity_at):
+        assert np.linalg.norm(rate(0.0, h) - rate(2 * h, h)) < 0.02 * speed
+    assert np.linalg.norm(ref.root_velocity_at(0.0, h) - v0) < 0.05 * speed
+    assert np.linalg.norm(ref.root_rate_at(0.0, h) - w0) < 0.05 * max(np.linalg.norm(w0), 1.0)
