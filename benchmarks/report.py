@@ -398,8 +398,8 @@ def smoothness(doc) -> list[str]:
     out += [provenance(doc), "",
             "`smoothness.py`: the default plans as shipped and with the swing braked over its "
             f"swing (`{h.get('option', 'strike_deceleration_max')}`, m/s², a gait option in a "
-            "copy of the scene file), each made by `gait-planner plan --cold-start`, checked by the "
-            "verifier and walked "
+            "copy of the scene file), each made by `gait-planner plan --cold-start`, checked "
+            "by the verifier and walked "
             f"{h.get('steps', '?')} half cycles with the self-test. Away from contact "
             "switches, the largest second difference of a joint torque between nodes: over the "
             f"largest joint peak (target ≤ {h.get('target_of_peak', 0.2):.0%}), and over its "

@@ -11,9 +11,10 @@ config/walk.yaml).
 
 Each plan is made as a user makes it: `gait-planner plan --json` in a subprocess, in a
 temporary folder, with --cold-start (the warm-start store's later plans would make a row
-depend on what the machine planned before; the hard requests plan cold). The hard requests are those of `hard_cases.py` a user can ask for: its
-plan options (step length, mu, grid, cost) as `plan` options, its scene changes (the sigma
-bounds, the knee ranges) in a copy of walker3d.yaml; its solver starts (cold from standing,
+depend on what the machine planned before; the hard requests plan cold). The hard
+requests are those of `hard_cases.py` a user can ask for: its plan options (step length,
+mu, grid, cost) as `plan` options, its scene changes (the sigma bounds, the knee ranges) in
+a copy of walker3d.yaml; its solver starts (cold from standing,
 a poor guess) are no request and are left out. A plan that fails is a row without a walk.
 Rows go to benchmarks/results/walk.json: half cycles walked (of --steps), why the walk
 stopped (walk's own sentence), feedback share (RMS feedback / RMS plan torque), joint RMS
