@@ -149,7 +149,7 @@ fi
 # failure only costs speed later.
 prep_hash="$( { printf '%s\n' "$venv" "${GAIT_PLANNER_CACHE:-$HOME/.cache/gait_planner}";
   cat gait_planner/model/*.py gait_planner/dynamics/*.py gait_planner/ocp/*.py \
-      gait_planner/cli/__init__.py config/scenes/*.yaml; } | sha256sum | cut -d' ' -f1)"
+      gait_planner/cli/prepare.py config/scenes/*.yaml; } | sha256sum | cut -d' ' -f1)"
 if ! is_current prepare "$prep_hash"; then
   say "compiling the scenes' derivatives and planning their defaults (10-15 minutes the first time on 2 cores; cached)"
   if "$venv/bin/gait-planner" prepare walker3d walker2d compass; then

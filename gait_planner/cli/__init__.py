@@ -6,8 +6,9 @@ Adding a command takes two small functions and one line:
   (``parser.set_defaults(handler=_<name>)``);
 * ``_<name>(args) -> int`` does the work and returns the exit code; it raises `CliError`
   with one sentence for anything the user has to fix;
-* ``_add_<name>`` is appended to `COMMANDS` (the ROS commands and `simulate` live in
-  modules of their own: `ros_commands`, `simulate`).
+* ``_add_<name>`` is appended to `COMMANDS` (larger commands live in modules of their
+  own: `ros_commands`, `simulate`, `walk`, `robot`, `library`, `prepare`; `terminal` prints
+  a plan's progress).
 
 Every error reaches the user as one line ``gait-planner: error: ...`` on stderr with exit
 code 2, never as a traceback (``--traceback`` shows it, for debugging).
@@ -17,16 +18,17 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from importlib import metadata
 from typing import Callable, NoReturn, Sequence
 
 from gait_planner.cli.errors import CliError
 from gait_planner.cli.library import add_library_parser
+from gait_planner.cli.prepare import add_prepare_parser
 from gait_planner.cli.robot import URDF_HELP, add_scene_parser, add_urdf_options
 from gait_planner.cli.ros_commands import (GAIT_HELP, SLOPE_HELP, SPEED_HELP, STEP_HEIGHT_HELP,
                                           add_call_parser, add_node_parser)
 from gait_planner.cli.simulate import add_simulate_parser
+from gait_planner.cli.terminal import print_iteration, print_stage
 from gait_planner.cli.walk import add_walk_parser
 
 PROG = "gait-planner"
@@ -118,19 +120,6 @@ def _add_plan(commands: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=_plan)
 
 
-def _progress(iteration: int, cost: float, violation: float, seconds: float) -> None:
-    if iteration % 10 == 0:
-        if iteration == 0:
-            print(f"{'iter':>6} {'cost':>14} {'violation':>10} {'time s':>8}", file=sys.stderr)
-        print(f"{iteration:6d} {cost:14.6g} {violation:10.2e} {seconds:8.1f}", file=sys.stderr,
-              flush=True)
-
-
-def _stage(name: str) -> None:
-    """The phase a plan enters (building, cold stage 1, refining the grid, ...)."""
-    print(f"-- {name}", file=sys.stderr, flush=True)
-
-
 def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     import json
     from pathlib import Path
@@ -166,7 +155,7 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     store = None if args.cold_start else WarmStartStore()
     print(f"planning {args.scene} ...", file=sys.stderr, flush=True)
     try:  # a compile cache miss is announced by the stage "compiling (...)"
-        outcome = plan_and_record(Planner(progress=_progress, stage=_stage, library=store),
+        outcome = plan_and_record(Planner(progress=print_iteration, stage=print_stage, library=store),
                                   resolve(request, find_scene),
                                   target.parent if str(target.parent) else ".",
                                   rrd=not args.no_rrd)
@@ -319,83 +308,10 @@ def _urdf(args: argparse.Namespace) -> int:
     return 0
 
 
-def _add_prepare(commands: argparse._SubParsersAction) -> None:
-    parser = commands.add_parser(
-        "prepare", help="compile the scenes' derivatives and plan their defaults now "
-        "(make setup runs it)",
-        description="Build each SCENE's problems with compiled derivatives (one per shape: "
-        "level or ramp, a requested speed, stairs up, stairs down; for each of its gaits), so "
-        "that the C libraries are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) "
-        "and no request within the scene's ranges compiles, and plan its default request and "
-        "its warm-start anchors into the warm-start store (gait_planner/ocp/warm_starts.py), "
-        "from which the node's first request re-plans warm. The first time it compiles for "
-        "minutes (walker3d's walk and anchors 6.3 min on 2 cores, its other gaits up to 4 "
-        "more); cached, planning the anchors takes most of its 1-4 minutes.")
-    parser.add_argument("scenes", nargs="+", metavar="NAME|FILE.yaml",
-                        help="scenes: names or paths to scene files (see plan --help)")
-    parser.set_defaults(handler=_prepare)
-
-
-def _compile_note(stage: str) -> None:
-    """`prepare`'s stage callback: only a compilation, or why there is none, is news."""
-    if stage.startswith(("building: compiling", "building with")):
-        _stage(stage)
-
-
-def _plan_anchors(planner, scene) -> list[bool]:
-    """Plan the scene's warm-start anchors (`ocp.prepare_requests.anchor_requests`), each from the
-    nearest plan kept, into the planner's warm-start store; whether each converged."""
-    from gait_planner.ocp.prepare_requests import anchor_requests
-    from gait_planner.ocp.settings import settings_for
-    from gait_planner.strategies import plan_once
-
-    out = []
-    for anchor in anchor_requests(scene):
-        result = plan_once(planner, scene, settings_for(scene, compiled=True, **anchor))
-        out.append(result.success)
-        if not result.success:
-            print(f"{scene.name}: the warm-start anchor {anchor} failed: {result.message}",
-                  flush=True)
-    return out
-
-
-def _prepare(args: argparse.Namespace) -> int:
-    from gait_planner.model.loader import SceneError, find_scene, with_gait
-    from gait_planner.ocp.warm_starts import WarmStartStore
-    from gait_planner.ocp.prepare_requests import form_requests
-    from gait_planner.ocp.settings import SettingsError, settings_for
-    from gait_planner.ocp.solve import Planner
-    from gait_planner.strategies import plan_once
-
-    for name in args.scenes:
-        start = time.perf_counter()
-        try:
-            scene = find_scene(name)
-            settings = settings_for(scene, compiled=True)
-            planner = Planner(library=WarmStartStore(), stage=_compile_note, pin=True)
-            used = planner.prepare(scene, settings)
-            result = plan_once(planner, scene, settings, warm_start=False)
-            # every shape of the walk (the default's already built) and of its other gaits
-            # (built, not planned)
-            for gait in (scene, *(with_gait(scene, g) for g in scene.gaits)):
-                for shape in form_requests(gait, settings_for(gait, compiled=True)):
-                    planner.prepare(gait, shape)
-            anchors = _plan_anchors(planner, scene) if result.success else []
-        except (SceneError, SettingsError) as error:
-            raise CliError(str(error)) from None
-        kept = ("its default plan" + (f" and {sum(anchors)} of {len(anchors)} warm-start "
-                                      "anchors" if anchors else "")
-                + " kept in the warm-start store" if result.success
-                else f"its default plan failed: {result.message}")
-        gaits = f"; its gaits {', '.join(scene.gaits)} built" if scene.gaits else ""
-        print(f"{name}: {used}; {kept}{gaits} ({time.perf_counter() - start:.1f} s)", flush=True)
-    return 0
-
-
 COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
     _add_run, _add_plan, _add_report, add_node_parser, add_call_parser, add_simulate_parser,
     add_walk_parser,
-    _add_urdf, add_scene_parser, _add_prepare, add_library_parser)
+    _add_urdf, add_scene_parser, add_prepare_parser, add_library_parser)
 
 
 # --- entry point -------------------------------------------------------------------------
