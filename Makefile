@@ -10,7 +10,7 @@ PYTHON := $(VENV)/bin/python
 PYTEST_ARGS ?=
 FUZZ_EXAMPLES ?= 1000
 
-.PHONY: setup test test-slow test-all fuzz run docs bench bench-quick bench-peers clean distclean
+.PHONY: setup test test-slow test-all fuzz run docs bench bench-quick bench-peers chromium clean distclean
 
 setup:
 	@tools/setup.sh $(VENV)
@@ -33,7 +33,7 @@ run: setup
 # chromium (`SCREENSHOT=` keeps the old one) and rewrites every generated number in README.md
 # and docs/ from benchmarks/results/*.json (tools/docs.py; 1 to 3 min on 2 cores).
 SCREENSHOT ?= --screenshot
-docs: setup
+docs: setup chromium
 	$(PYTHON) tools/docs.py --plan $(SCREENSHOT)
 
 # Benchmarks (benchmarks/README.md): `bench` rewrites benchmarks/REPORT.md and
@@ -42,7 +42,7 @@ docs: setup
 # benchmarks/walk.py; robots drafted from their URDF, Bolt and G1, an estimated 15-25 min:
 # benchmarks/robots.py); `bench-quick` is a smoke run (~5 min)
 # writing to build/bench-quick/ instead.
-bench: setup
+bench: setup chromium
 	$(PYTHON) benchmarks/bench.py
 
 bench-quick: setup
@@ -62,6 +62,13 @@ PEERS_ARGS ?=
 bench-peers: setup
 	@for peer in $(PEERS); do benchmarks/peers/setup_env.sh $$peer || true; done
 	$(PYTHON) -m benchmarks.peers.run --peers $(PEERS) --threads $(PEERS_THREADS) $(PEERS_ARGS)
+
+# Debian's chromium takes the pictures of `docs` and `bench` (the README's screenshot,
+# benchmarks/robots.png); installed here if missing, and without it they are skipped.
+chromium:
+	@command -v chromium >/dev/null || { echo "installing Debian's chromium for screenshots"; \
+	  apt-get install -y --no-install-recommends chromium >/dev/null \
+	  || echo "chromium could not be installed: pictures are skipped"; }
 
 # Build outputs and caches; keeps .venv/ (and forgets its msg_defs build, so the next
 # `make setup` rebuilds and reinstalls gait_planner_msgs) and keeps runs/.
