@@ -155,8 +155,8 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     store = None if args.cold_start else WarmStartStore()
     print(f"planning {args.scene} ...", file=sys.stderr, flush=True)
     try:  # a compile cache miss is announced by the stage "compiling (...)"
-        outcome = plan_and_record(Planner(progress=print_iteration, stage=print_stage, library=store),
-                                  resolve(request, find_scene),
+        planner = Planner(progress=print_iteration, stage=print_stage, library=store)
+        outcome = plan_and_record(planner, resolve(request, find_scene),
                                   target.parent if str(target.parent) else ".",
                                   rrd=not args.no_rrd)
     except RequestError as err:
