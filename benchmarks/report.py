@@ -396,10 +396,12 @@ def smoothness(doc) -> list[str]:
         return out + ["Not measured (`smoothness.py`).", ""]
     h = doc["header"]
     out += [provenance(doc), "",
-            "`smoothness.py`: the default plans as shipped and with the swing braked over its "
-            f"swing (`{h.get('option', 'strike_deceleration_max')}`, m/s², a gait option in a "
-            "copy of the scene file), each made by `gait-planner plan --cold-start`, checked "
-            "by the verifier and walked "
+            "`smoothness.py`: the default plans as shipped, with the swing braked over its "
+            "swing (`strike_deceleration_max`, m/s²) and with the torques' second differences "
+            "in the cost (`torque_smoothness`, per (N m)², the J reported without it), each a "
+            "gait option in a copy of the scene file, each plan made by `gait-planner plan "
+            "--cold-start` (time limit "
+            f"{h.get('time_limit_s', 300):g} s), checked by the verifier and walked "
             f"{h.get('steps', '?')} half cycles with the self-test. Away from contact "
             "switches, the largest second difference of a joint torque between nodes: over the "
             f"largest joint peak (target ≤ {h.get('target_of_peak', 0.2):.0%}), and over its "

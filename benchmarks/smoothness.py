@@ -1,12 +1,14 @@
 """A terminal swing without a burst (issue #40 items 3 and 5): the default plans of walker2d
-and walker3d as shipped and with the swing braked over its swing (the gait option
-`strike_deceleration_max`, m/s^2, in a copy of the scene file, as a user sets it), each
-made by `gait-planner plan --json --cold-start` (`walk.plan`), checked by the verifier and
-walked 10 half cycles in MuJoCo with the self-test (`walk.walk_row`).
+and walker3d as shipped, with the swing braked over its swing (the gait option
+`strike_deceleration_max`, m/s^2) and with the torques' second differences in the cost (the
+gait option `torque_smoothness`, per (N m)^2), each option in a copy of the scene file as a
+user sets it, each plan made by `gait-planner plan --json --cold-start` (`walk.plan`),
+checked by the verifier and walked 10 half cycles in MuJoCo with the self-test
+(`walk.walk_row`).
 
-    .venv/bin/python benchmarks/smoothness.py              # both scenes: off, 30, 40, 50 (~8 min)
+    .venv/bin/python benchmarks/smoothness.py              # both scenes, every value (~15 min)
     .venv/bin/python benchmarks/smoothness.py --quick      # walker2d only
-    .venv/bin/python benchmarks/smoothness.py --values 40
+    .venv/bin/python benchmarks/smoothness.py --deceleration 40 --smoothness
 
 The smoothness figures are the verifier's (`gait_planner.verify.physical`), away from
 contact switches: the largest second difference of any joint torque between nodes over the
@@ -26,15 +28,15 @@ from pathlib import Path
 
 from walk import Row, plan, walk_row
 
-OPTION = "strike_deceleration_max"
+DECELERATION, SMOOTHNESS = "strike_deceleration_max", "torque_smoothness"
 TARGET_PEAK, TARGET_OWN = 0.20, 0.25  # issue #40 item 3
 
 
-def rows(scenes: list[str], values: list[float]) -> list[Row]:
-    """Each scene's default plan as shipped, then with `OPTION` at each value."""
-    return [Row(scene, "as shipped" if v == 0 else f"{OPTION} {v:g}",
-                options={} if v == 0 else {OPTION: float(v)})
-            for scene in scenes for v in [0.0, *values]]
+def rows(scenes: list[str], options: dict[str, list[float]]) -> list[Row]:
+    """Each scene's default plan as shipped, then with each gait option at each value."""
+    return [row for scene in scenes for row in
+            [Row(scene, "as shipped"), *(Row(scene, f"{name} {v:g}", options={name: float(v)})
+                                         for name, values in options.items() for v in values)]]
 
 
 def measure(row: Row, folder: Path, steps: int, time_limit: float) -> dict:
@@ -66,8 +68,10 @@ def measure(row: Row, folder: Path, steps: int, time_limit: float) -> dict:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--values", type=float, nargs="+", default=[30.0, 40.0, 50.0],
-                        help=f"{OPTION} values, m/s^2 (besides the shipped plan)")
+    parser.add_argument("--deceleration", type=float, nargs="*", default=[30.0, 40.0, 50.0],
+                        help=f"{DECELERATION} values, m/s^2 (besides the shipped plan)")
+    parser.add_argument("--smoothness", type=float, nargs="*", default=[1e-5, 1e-4],
+                        help=f"{SMOOTHNESS} values, per (N m)^2")
     parser.add_argument("--quick", action="store_true", help="walker2d only")
     parser.add_argument("--steps", type=int, default=10, help="half cycles to walk")
     parser.add_argument("--time-limit", type=float, default=300.0, help="s per plan")
@@ -75,9 +79,10 @@ def main() -> int:
     from results_io import write_results
 
     scenes = ["walker2d"] if args.quick else ["walker2d", "walker3d"]
+    options = {DECELERATION: args.deceleration, SMOOTHNESS: args.smoothness}
     out = []
     with tempfile.TemporaryDirectory() as tmp:
-        for row in rows(scenes, args.values):
+        for row in rows(scenes, options):
             r = measure(row, Path(tmp), args.steps, args.time_limit)
             out.append(r)
             if r["half_cycles_walked"] is None:
@@ -90,8 +95,8 @@ def main() -> int:
                   f"{r['roughest_node']}); checks {'pass' if r['checks_pass'] else 'fail'}; "
                   f"walks {r['half_cycles_walked']}/{args.steps} "
                   f"({r['feedback_share']:.0%})", flush=True)
-    print(write_results("smoothness", out, {"option": OPTION, "values": args.values,
-                                            "steps": args.steps,
+    print(write_results("smoothness", out, {"options": options, "steps": args.steps,
+                                            "time_limit_s": args.time_limit,
                                             "target_of_peak": TARGET_PEAK,
                                             "target_of_own_peak": TARGET_OWN}))
     return 0

@@ -114,6 +114,10 @@ class GaitSettings:
     the cost (sin^2 of a joint's roll or yaw; the J reported excludes it); the option may
     be a number or a weight per cost, ``{kinetic_energy: 1, torque_squared: 50}`` (the
     costs differ in size by ~60 on walker3d; a cost it does not name gets 0);
+    torque_smoothness (units of the cost per (N m)^2; 0 = off): weight w of w sum_n |tau_{n+1}
+    - 2 tau_n + tau_{n-1}|^2 over the node torques, across the mirrored join, added to the
+    cost (the J reported excludes it; `ocp.cost_terms`): no torque jumps at one node and
+    back, where an inequality row touches its bound for one node (walker2d's strike rows);
     refinements: how many times a converged plan that misses the continuous-dynamics
     certificate is planned again on a grid twice as fine, from itself
     (`gait_planner.strategies.plan_certified`, `gait_planner.ocp.refine`; 0 = never);
@@ -149,6 +153,7 @@ class GaitSettings:
     stairs_down_scaling_bounds: tuple[float, ...] = ()
     speed_scaling_bounds: tuple[float, ...] = ()
     twist_regularisation: float = 0.0
+    torque_smoothness: float = 0.0
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
     refinements: int = 2
@@ -202,7 +207,7 @@ class GaitSettings:
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
                      "strike_deceleration_max", "joint_speed_max", "speed", "speed_max",
-                     "twist_regularisation"):
+                     "twist_regularisation", "torque_smoothness"):
             if getattr(self, name) < 0:
                 bad(name, f"must be >= 0, got {getattr(self, name)}")
 

@@ -184,6 +184,8 @@ def build_result(tr: Transcription, settings: GaitSettings, x: np.ndarray, p: np
             "strike_speed_max": repr(s.strike_speed_max),
             **({"strike_deceleration_max": repr(s.strike_deceleration_max)}
                if s.strike_deceleration_max > 0 else {}),
+            **({"torque_smoothness": repr(s.torque_smoothness)}
+               if s.torque_smoothness > 0 else {}),
             "speed": repr(s.speed),
             **ground.metadata(),
             "joint_limits_deg": ",".join(f"{name}:{np.degrees(lo):.6g}:{np.degrees(hi):.6g}"
