@@ -208,8 +208,11 @@ class GaitSettings:
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
                      "strike_deceleration_max", "joint_speed_max", "speed", "speed_max",
                      "twist_regularisation", "torque_smoothness"):
-            if getattr(self, name) < 0:
-                bad(name, f"must be >= 0, got {getattr(self, name)}")
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                bad(name, f"must be a number, got {value!r}")
+            if value < 0:
+                bad(name, f"must be >= 0, got {value}")
 
 
 def check_effort_limits(scene: Scene, limits) -> tuple[tuple[str, float], ...]:

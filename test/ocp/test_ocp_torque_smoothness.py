@@ -53,6 +53,11 @@ def test_the_reported_cost_is_the_kinetic_energy_without_the_penalty(smooth):
     assert penalty > 1e-3 * result.cost_value  # a penalty the optimum felt, left out of J
 
 
-def test_a_negative_weight_is_refused():
-    with pytest.raises(SettingsError, match="torque_smoothness"):
-        settings_for(load_scene("walker2d"), torque_smoothness=-1.0)
+@pytest.mark.parametrize("option, value, why", [
+    ("torque_smoothness", -1.0, "torque_smoothness: must be >= 0, got -1.0"),
+    ("torque_smoothness", "high", "torque_smoothness: must be a number, got 'high'"),
+    ("swing_clearance", True, "swing_clearance: must be a number, got True"),
+])
+def test_a_weight_that_is_not_a_non_negative_number_is_refused_by_name(option, value, why):
+    with pytest.raises(SettingsError, match=why):
+        settings_for(load_scene("walker2d"), **{option: value})
