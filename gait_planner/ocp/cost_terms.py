@@ -41,23 +41,25 @@ class CostTerms:
         if s.twist_regularisation > 0:
             twist = ca.sum2(self._interval_terms(twist_squares(self.mb), s.twist_regularisation,
                                                  None))
-        smooth = s.torque_smoothness * self._torque_second_differences()
+        smooth = self._torque_smoothness()
         if s.cost == "torque_squared":
             self.cost_without_elements = torque + shares + smooth
             return self.cost_without_elements + twist
         self.cost_without_elements = s.torque_regularisation * torque + shares + smooth
         return kinetic + self.cost_without_elements + twist
 
-    def _torque_second_differences(self):
-        """sum over nodes n = 1..N-1 of |tau_{n+1} - 2 tau_n + tau_{n-1}|^2 ((N m)^2): the
-        node torques' second differences, across the half cycle's mirrored join (nodes N-1
-        and N are the images of 0 and 1), so a torque that jumps at one node and back costs
-        what it costs anywhere; 0 if `torque_smoothness` is off."""
-        if self.settings.torque_smoothness <= 0:
+    def _torque_smoothness(self):
+        """w sum over nodes n = 1..N-1 of |tau_{n+1} - 2 tau_n + tau_{n-1}|^2, w the setting
+        `torque_smoothness` (units of the cost per (N m)^2): the node torques' second
+        differences, across the half cycle's mirrored join (nodes N-1 and N are the images
+        of 0 and 1), so a torque that jumps at one node and back costs what it costs
+        anywhere; 0 if the setting is off."""
+        w = self.settings.torque_smoothness
+        if w <= 0:
             return 0.0
         tau = self.TAU
         second = tau[:, 2:] - 2 * tau[:, 1:-1] + tau[:, :-2]  # (nt, N-1): nodes 1..N-1
-        return ca.sum1(ca.sum2(second**2))
+        return w * ca.sum1(ca.sum2(second**2))
 
     def _share_squares(self):
         """sum over nodes of w_n s^2 (N^2 s) of the full contacts' along-line shares s."""
