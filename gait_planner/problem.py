@@ -22,6 +22,7 @@ from typing import Callable
 
 from gait_planner.model.loader import SceneError, available_scenes, load_scene, with_gait
 from gait_planner.model.scene import Scene
+from gait_planner.ocp.held_efforts import check_holds
 from gait_planner.ocp.request_ranges import RangeError, check_request
 from gait_planner.ocp.settings import GaitSettings, SettingsError, settings_for
 from gait_planner.request import PlanRequest, RequestError, checked
@@ -65,6 +66,7 @@ def resolve(request: PlanRequest, scenes: SceneLookup = load_scene) -> Problem:
                       friction_coefficient=request.friction_coefficient,
                       intervals_per_phase=request.intervals_per_phase,
                       max_solve_time=request.max_solve_time)
+        check_holds(scene)
         settings = settings_for(
             scene, step_length=request.step_length, cost=request.cost or None,
             friction_coefficient=request.friction_coefficient,

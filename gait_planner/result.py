@@ -79,7 +79,11 @@ class PlanResult:
         cost_value: J of `cost_name` over the half cycle (J s for kinetic_energy).
         held_efforts: a scene drafted from a URDF: locked joint -> (N+1,) N m, what holds
             it (inverse dynamics on the URDF, `gait_planner.verify.robot`); set with the
-            certificate, published in the JointTrajectory beside the planned joints.
+            certificate, published in the JointTrajectory beside the planned joints; at a
+            node where a contact is established, its neighbours' mean.
+        held_impulses: locked joint -> (N+1,) N m s, the impact's impulse on it at a node
+            where a contact is established (zero elsewhere; MultibodyState's
+            held_joint_impulses), kept out of the efforts (`gait_planner.verify.robot`).
     """
 
     success: bool
@@ -109,6 +113,7 @@ class PlanResult:
     settings: dict[str, str] = field(default_factory=dict)  # extra metadata, strings
     ground: Ground = LEVEL  # what the plan stands on (`gait_planner.model.ground`)
     held_efforts: dict[str, np.ndarray] = field(default_factory=dict)
+    held_impulses: dict[str, np.ndarray] = field(default_factory=dict)
     status: PlanStatus | None = None  # None: CONVERGED if success else FAILED
 
     def __post_init__(self) -> None:

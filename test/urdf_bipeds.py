@@ -14,9 +14,12 @@ def _inertial(mass: float, rpy: str, xyz: str,
 
 def biped(tilt: float = 0.2, knee_axis: str = "y", foot_geometry: str | None = None,
           knee_type: str = "revolute", knee_mass: float = 1.0, base_y: float = 0.0,
-          right_knee_mass: float | None = None) -> str:
+          right_knee_mass: float | None = None, waist_axis: str = "z",
+          arm_com: str = "0 0 0.2", waist_effort: float = 10.0) -> str:
     """A three-joint-per-leg biped whose hip-roll frame is pitched by `tilt` (as G1's) and
-    whose feet carry `foot_geometry` (default: four small spheres at the sole's corners)."""
+    whose feet carry `foot_geometry` (default: four small spheres at the sole's corners);
+    its waist (locked by a draft) turns about `waist_axis`, its arm's centre of mass at
+    `arm_com` from it."""
     sphere = '<collision><origin xyz="{x} {y} -0.06"/><geometry><sphere radius="0.005"/>' \
              '</geometry></collision>'
     feet = foot_geometry if foot_geometry is not None else "".join(
@@ -48,8 +51,8 @@ def biped(tilt: float = 0.2, knee_axis: str = "y", foot_geometry: str | None = N
     return f"""<?xml version="1.0"?>
 <robot name="biped">
   <link name="base_link">{_inertial(10.0, xyz=f"0 {base_y} 0.1", rpy="0 0 0", moments=(0.3, 0.2, 0.15))}</link>
-  <link name="arm_link">{_inertial(1.0, xyz="0 0 0.2", rpy="0 0 0")}</link>
+  <link name="arm_link">{_inertial(1.0, xyz=arm_com, rpy="0 0 0")}</link>
   <joint name="waist_joint" type="revolute"><parent link="base_link"/><child link="arm_link"/>
-    <origin xyz="0 0 0.2"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="10" velocity="5"/></joint>
+    <origin xyz="0 0 0.2"/><axis xyz="{AXES[waist_axis]}"/><limit lower="-1" upper="1" effort="{waist_effort}" velocity="5"/></joint>
   {"".join(legs)}
 </robot>"""

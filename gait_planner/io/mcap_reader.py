@@ -69,7 +69,8 @@ class RecordedPlan:
 
     State (/gait_planner/state): nodes, times (s from the start), stamps_ns (header),
     phases, active_contacts, body_names, q (N+1, k), generalized_force (N+1, k),
-    kinetic_energy, potential_energy (N+1,).
+    kinetic_energy, potential_energy (N+1,); held_joint_names and held_joint_impulses
+    (N+1, m) N m s (a robot's locked joints; empty in recordings made before them).
     Contacts (/gait_planner/contact_forces), per node: contact_names, contact_points and
     contact_force_vectors ((m_n, 3) arrays, m_n active contacts); `contact_force(name)`
     gives the dense (N+1, 3) series, zero where inactive. Per foot in contact:
@@ -117,6 +118,8 @@ class RecordedPlan:
     positions: np.ndarray
     velocities: np.ndarray
     accelerations: np.ndarray  # (N+1, na); (N+1, 0) in recordings made before they were published
+    held_joint_names: tuple[str, ...]
+    held_joint_impulses: np.ndarray  # (N+1, m) N m s
     effort: np.ndarray
     joint_state_position: np.ndarray
     joint_state_velocity: np.ndarray
@@ -253,6 +256,9 @@ def read_plan_mcap(path: str | Path) -> RecordedPlan:
         positions=_stack([p.positions for p in points], "positions", path),
         velocities=_stack([p.velocities for p in points], "velocities", path),
         accelerations=np.array([list(p.accelerations) for p in points], dtype=float),
+        held_joint_names=tuple(getattr(states[0], "held_joint_names", ())),
+        held_joint_impulses=np.array([list(getattr(m, "held_joint_impulses", ()))
+                                      for m in states], dtype=float).reshape(len(states), -1),
         effort=_stack([p.effort for p in points], "effort", path),
         joint_state_position=_stack([m.position for m in joints], "position", path),
         joint_state_velocity=_stack([m.velocity for m in joints], "velocity", path),

@@ -245,6 +245,9 @@ def multibody_states(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
     stamps = node_stamps_ns(result, start_ns)
     t = np.asarray(result.times, dtype=float)
     bodies = list(result.body_names)
+    held = list(result.held_impulses)
+    impulses = np.column_stack([np.asarray(result.held_impulses[name], dtype=float)
+                                for name in held]) if held else np.zeros((result.n_nodes, 0))
     return [
         {
             "header": header(stamps[n], WORLD_FRAME),
@@ -257,6 +260,8 @@ def multibody_states(result: PlanResult, start_ns: int) -> list[dict[str, Any]]:
             "generalized_force": _floats(result.generalized_force[n]),
             "kinetic_energy": float(result.kinetic_energy[n]),
             "potential_energy": float(result.potential_energy[n]),
+            "held_joint_names": held,
+            "held_joint_impulses": _floats(impulses[n]),
         }
         for n in range(result.n_nodes)
     ]

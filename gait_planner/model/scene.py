@@ -199,6 +199,35 @@ class Gait:
 
 
 @dataclass(frozen=True)
+class Hold:
+    """A locked URDF joint whose holding effort the plan bounds (`gait_planner.model.
+    urdf_holds`, the scene's ``robot.holds``): its held part, one side of the joint that
+    only gravity and the joint act on, rigid in drafted body `body`.
+
+    Attributes:
+        name: the URDF joint.
+        body: the drafted body the joint is merged into.
+        side: +1 the held part is the joint's subtree (the effort acts on it), -1 it is
+            the rest of the body (the effort is the reaction).
+        effort: the URDF's effort limit, N m (|effort| <= it at every smooth node).
+        axis: unit axis, the body's director components (the URDF's positive sense).
+        point: the joint's origin, m, director components from the body's centre of mass.
+        mass: the held part's mass, kg; com: its centre of mass (as `point`), m;
+        inertia: (ixx, iyy, izz, ixy, ixz, iyz) kg m^2 at its centre of mass, directors.
+    """
+
+    name: str
+    body: str
+    side: int
+    effort: float
+    axis: Vec3
+    point: Vec3
+    mass: float
+    com: Vec3
+    inertia: tuple[float, float, float, float, float, float]
+
+
+@dataclass(frozen=True)
 class RobotSource:
     """The URDF a scene was drafted from (`gait_planner.model.urdf_import`, the scene file's
     ``robot:`` section): what the outputs publish as the robot's own description.
@@ -214,6 +243,7 @@ class RobotSource:
             scene file).
         urdf_path: the URDF's absolute path: where it was read, or as the scene names it
             ("" for a relative name not read), for mesh paths relative to it.
+        holds: the locked joints whose holding efforts the plan keeps within their limit.
     """
 
     urdf_file: str
@@ -222,6 +252,7 @@ class RobotSource:
     locked: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
     package_dirs: tuple[str, ...] = ()
     urdf_path: str = ""
+    holds: tuple[Hold, ...] = ()
 
     def search_dirs(self) -> tuple[str, ...]:
         """Where ``package://PKG/...`` paths are looked for: `package_dirs`, then the URDF's

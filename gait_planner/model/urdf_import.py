@@ -66,6 +66,7 @@ from gait_planner.model.rotations import matrix_rpy
 from gait_planner.model.urdf_contacts import foot_contacts
 from gait_planner.model.urdf_errors import UrdfError
 from gait_planner.model.urdf_fuse import ball_points, find_balls
+from gait_planner.model.urdf_holds import locked_holds
 from gait_planner.model.urdf_mirror import (MIRROR_TOLERANCE, S, mirror_geometry,
                                             mirrored_inertias)
 
@@ -313,15 +314,18 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     q0 = pin.neutral(model)
     pin.forwardKinematics(model, data, q0)
     contacts, half_widths = foot_contacts(model, geometry, data, foot_ids, links)
+    owner = {full.getJointId(model.names[j]) if j > 1 else 1: (b.name, b.com, b.R)
+             for j, b in bodies.items()}
+    holds, unheld = locked_holds(full, q_lock, legs, owner)
     source = {"urdf": urdf_file, **({"package_dirs": list(robot_dirs)} if robot_dirs else {}),
-              "locked": lock_angles}
+              "locked": lock_angles, **({"holds": holds} if holds else {})}
     return _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
                   left_of, name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
-                  changes, source, mirror_tolerance)
+                  changes, source, mirror_tolerance, unheld)
 
 
 def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-           left_of, name, changes, source, mirror_tolerance) -> UrdfDraft:
+           left_of, name, changes, source, mirror_tolerance, unheld) -> UrdfDraft:
     order = [1] + [j for j in ids.values() if j in bodies]
     for foot, points in contacts.items():
         bodies[foot].points.update(points)
@@ -417,6 +421,10 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
     if lock_angles:
         header += "# Locked joints (merged into their parent): " + ", ".join(
             f"{k} = {v:g} rad" for k, v in lock_angles.items()) + "\n"
+    if source.get("holds"):
+        header += ("# robot.holds: the locked joints whose holding effort the plan keeps "
+                   "within the URDF's\n# effort limit (gait_planner.model.urdf_holds)"
+                   + "".join(f"; not bounded: {reason}" for reason in unheld) + "\n")
     if changes:
         asked = (f"; --mirror-tolerance {mirror_tolerance:g}"
                  if mirror_tolerance != MIRROR_TOLERANCE else "")

@@ -7,6 +7,7 @@ import numpy as np
 
 from gait_planner.model.angles import angle_names, joint_angles
 from gait_planner.model.scene import Scene
+from gait_planner.ocp.held_efforts import held_effort_excess, impact_nodes
 from gait_planner.ocp.mirror import configuration_mirror, contact_partners
 from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
@@ -155,6 +156,9 @@ def build_result(tr: Transcription, settings: GaitSettings, x: np.ndarray, p: np
     message = f"IPOPT: {words} ({status}) after {iterations} iterations"
     if not success:
         message += f"; most violated: {worst} ({viol.get(worst, 0.0):.3e})"
+        if worst == "held_effort":
+            message += ": " + held_effort_excess(
+                mb, q, h, impact_nodes(tr.contacts, tr.phase_of_interval))
     cost_value = float((kinetic if s.cost == "kinetic_energy" else torque).item())
     stats = SolverStats(
         status=status, iterations=iterations, solve_time=solve_time, build_time=build_time,

@@ -53,6 +53,7 @@ from gait_planner.model.ground import PARAMETERS, ParametricGround
 from gait_planner.ocp.contacts import body_contacts, establishing_rows, phase_rows, stacked_rows
 from gait_planner.ocp.cost_terms import CostTerms
 from gait_planner.ocp.elements import ElementGroup, Layout
+from gait_planner.ocp.held_efforts import HeldRows
 from gait_planner.ocp.mirror import increment_mirror, mirror_parts, torque_mirror
 from gait_planner.ocp.path_rows import FORCE_SCALE, PathRows
 from gait_planner.ocp.settings import GaitSettings, ground_of
@@ -66,7 +67,7 @@ TORQUE_SCALE = 100.0  # N m
 ROTATION_INCREMENT_MAX = np.pi
 
 
-class Transcription(PathRows, CostTerms):
+class Transcription(PathRows, HeldRows, CostTerms):
     """The NLP of one (scene, settings) pair: variables, constraints and their meaning."""
 
     def __init__(self, mech: DiscreteMechanics, settings: GaitSettings):
@@ -132,6 +133,7 @@ class Transcription(PathRows, CostTerms):
         self._dynamics()
         self._contacts()
         self._path()
+        self._held()
         self.cost = self._cost()
         self._node_rows()
 
@@ -205,11 +207,12 @@ class Transcription(PathRows, CostTerms):
                             self.layout.mirrored(n + 1 >= self.N - 1)), []).append(n)
         return out
 
-    def _dynamics_element(self, mirrored: bool, next_mirrored: bool) -> ca.Function:
-        """The phase-independent part of a node's dynamics row (ndof,) as an SX Function
-        of z = (u_{n-1}, u_n, u_{n+1}, T_n, sigma_{n-1}, sigma_n) (scaled unknowns, a
-        mirrored node given by the u and T of its source node), pz = (qref_{n-1}, qref_n,
-        qref_{n+1}, step length, ground) and c = (base time step)."""
+    def _element_configurations(self, mirrored: bool, next_mirrored: bool):
+        """(z, pz, c, [q_{n-1}, q_n, q_{n+1}], h_{n-1}, h_n) of a node's three-node
+        element: SX inputs z = (u_{n-1}, u_n, u_{n+1}, T_n, sigma_{n-1}, sigma_n) (scaled
+        unknowns, a mirrored node given by the u and T of its source node), pz =
+        (qref_{n-1}, qref_n, qref_{n+1}, step length, ground) and c = (base time step),
+        and the configurations and time steps they give."""
         mb = self.mb
         nd, nt, k = mb.ndof, mb.nt, mb.k
         z = ca.SX.sym("z", 3 * nd + nt + 2)
@@ -220,10 +223,17 @@ class Transcription(PathRows, CostTerms):
         for i, flag in ((1, mirrored), (2, next_mirrored)):
             if flag:
                 q[i] = self.layout.image(q[i], step, ground)
+        return z, pz, c, q, c[0] * z[3 * nd + nt], c[0] * z[3 * nd + nt + 1]
+
+    def _dynamics_element(self, mirrored: bool, next_mirrored: bool) -> ca.Function:
+        """The phase-independent part of a node's dynamics row (ndof,) as an SX Function
+        of the three-node element's inputs (`_element_configurations`)."""
+        mb = self.mb
+        nd, nt = mb.ndof, mb.nt
+        z, pz, c, q, h0, h1 = self._element_configurations(mirrored, next_mirrored)
         tau = TORQUE_SCALE * z[3 * nd : 3 * nd + nt]
         if mirrored:  # tau_{N-1} is the image of tau_0
             tau = ca.mtimes(ca.DM(self.B), tau)
-        h0, h1 = c[0] * z[3 * nd + nt], c[0] * z[3 * nd + nt + 1]
         r = self.mech.discrete_euler_lagrange(q[0], q[1], q[2], h0, h1, tau, tau)
         res = mb.null_space_transpose(q[1], r) / (0.5 * (h0 + h1) * FORCE_SCALE)
         name = "dynamics_element" + ("_mirrored" if mirrored else "_next_mirrored" if next_mirrored else "")

@@ -40,7 +40,8 @@ def certified(result: PlanResult):
     (moved to the world origin), so the certificate in the metadata is the one a reader of
     the recording gets. A scene drafted from a URDF is certified on that URDF
     (`gait_planner.verify.robot`), and the result returned carries its locked joints'
-    `held_efforts` (a new result; `result` is not changed)."""
+    `held_efforts` and, apart, the impacts' `held_impulses` (a new result; `result` is not
+    changed)."""
     from gait_planner.io.messages import foot_wrenches, node_efforts
     from gait_planner.verify.continuous import certificate
     from gait_planner.verify.mechanics import parse_scene
@@ -51,12 +52,18 @@ def certified(result: PlanResult):
         for body, r, F, M, _ in foot_wrenches(result, n):
             wrenches[body][n] = np.concatenate([F, M + np.cross(r, F)])
     if result.scene.robot is not None:  # drafted from a URDF: certified on it
-        from gait_planner.verify.robot import robot_certificate
+        from gait_planner.verify.robot import robot_certificate, split_impulses
 
         cert, held = robot_certificate(
             scene, result.scene.robot.urdf, result.times, result.q, result.joint_angles,
             node_efforts(result), wrenches, result.active_contacts)
-        return dataclasses.replace(result, held_efforts={**result.held_efforts, **held}), cert
+        names = list(held)
+        efforts, impulses = split_impulses(
+            np.column_stack([held[n] for n in names]).reshape(result.n_nodes, len(names)),
+            result.times, result.active_contacts)
+        return dataclasses.replace(
+            result, held_efforts={**result.held_efforts, **dict(zip(names, efforts.T))},
+            held_impulses={**result.held_impulses, **dict(zip(names, impulses.T))}), cert
     return result, certificate(scene, result.times, result.q, node_efforts(result), wrenches,
                                result.active_contacts)
 

@@ -13,6 +13,7 @@ from gait_planner.verify.actuation import (effort_couples, effort_slots, joint_c
 from gait_planner.verify.recorded import certificate_of_recording
 from gait_planner.verify.ground import RecordedGround
 from gait_planner.verify.joined import verify_joined
+from gait_planner.verify.effort_limits import effort_limit_failures, effort_shares
 from gait_planner.verify.physical import check_physical
 from gait_planner.verify.limits import LIMITS
 from gait_planner.verify.report import VerificationReport
@@ -360,6 +361,9 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
 
     physical = check_physical(rec, scene, mu)
     failures += physical.failures
+    shares = effort_shares(rec.urdf, rec.joint_names, effort) \
+        if scene.robot_root is not None else None
+    failures += effort_limit_failures(shares or {})
     continuous = certificate_of_recording(rec)
     failures += [f"continuous dynamics: {f}" for f in continuous.failures]
 
@@ -383,6 +387,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         max_scaling_bound_excess=max(excesses, default=math.nan),
         max_potential_energy_error=energy_error,
         failures=tuple(failures), notes=tuple(notes), physical=physical, continuous=continuous,
+        effort_shares=shares,
     )
 
 

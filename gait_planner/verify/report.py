@@ -63,6 +63,8 @@ class VerificationReport:
     notes: tuple[str, ...] = ()
     physical: PhysicalReport | None = None  # per-point cones, swing clearance, speeds, torques
     continuous: ContinuousCertificate | None = None  # inverse dynamics of the continuous model
+    # a robot drafted from its URDF: joint -> (largest |effort| / URDF limit, node, limit N m)
+    effort_shares: dict[str, tuple[float, int, float]] | None = None
 
     @property
     def ok(self) -> bool:

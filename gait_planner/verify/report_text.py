@@ -22,6 +22,7 @@ import math
 
 from gait_planner.verify.continuous import LIMITS as CONTINUOUS_LIMITS, MOMENT_ARM
 from gait_planner.verify.physical import GROUND_BAND, SOLID_TOLERANCE
+from gait_planner.verify.effort_limits import LIMIT_TOLERANCE
 from gait_planner.verify.limits import LIMITS
 
 __all__ = ["report_lines"]
@@ -121,6 +122,10 @@ def _actuation(r, rows: _Rows) -> None:
     rows.within("net moment of all couples", r.max_net_moment, "rel.", limit)
     rows.within("revolute couples off their axis", r.max_revolute_off_axis, "rel.", limit)
     rows.within("efforts vs generalised force", r.max_effort_mismatch, "rel.", limit)
+    if r.effort_shares:  # a robot's URDF: every published effort against its limit
+        name, (share, node, _) = max(r.effort_shares.items(), key=lambda kv: kv[1][0])
+        rows.within(f"largest effort / URDF limit ({name}, node {node})", share, "",
+                    1.0 + LIMIT_TOLERANCE)
 
 
 def _periodicity(r, rows: _Rows) -> None:

@@ -12,7 +12,12 @@ says the published motion, efforts and ground forces are a motion of the robot t
 described — including what the draft changed to make it symmetric.
 
 The locked joints' generalized forces are what holds them: their efforts in the
-JointTrajectory (`held_efforts`).
+JointTrajectory (`held_efforts`). At a node where a contact is established the base's
+velocity jumps and central differences turn the impact's impulse into an effort divided
+by the node's time step (G1's waist yaw: 104 N m against 15 at its neighbours, issue
+#61), which a controller must not feed forward: there the effort published is its
+neighbours' mean and the rest is published apart as the impulse, N m s
+(`split_impulses`; MultibodyState.held_joint_impulses).
 """
 
 from __future__ import annotations
@@ -26,7 +31,7 @@ from gait_planner.verify.continuous import (ContinuousCertificate, switch_mask,
                                             effort_names, inverse_dynamics, local_force)
 from gait_planner.verify.mechanics import SceneData
 
-__all__ = ["robot_certificate"]
+__all__ = ["robot_certificate", "split_impulses"]
 
 
 def _set(model: pin.Model, q: np.ndarray, name: str, angle: float) -> None:
@@ -37,13 +42,29 @@ def _set(model: pin.Model, q: np.ndarray, name: str, angle: float) -> None:
         q[joint.idx_q] = angle
 
 
+def split_impulses(held: np.ndarray, times: np.ndarray,
+                   active_contacts: Sequence[Sequence[str]]) -> tuple[np.ndarray, np.ndarray]:
+    """(efforts, impulses), each like `held` (N+1, m) N m and N m s: at every node n in
+    1..N-1 where a contact is established (not active at n-1), the effort becomes the mean
+    of its neighbours' and the impulse (held_n - that mean) w_n, w_n = (t_{n+1} -
+    t_{n-1}) / 2; zero impulse elsewhere (module docstring)."""
+    efforts, impulses = np.array(held, dtype=float), np.zeros_like(held, dtype=float)
+    for n in range(1, len(times) - 1):
+        if set(active_contacts[n]) - set(active_contacts[n - 1]):
+            mean = 0.5 * (efforts[n - 1] + efforts[n + 1])
+            impulses[n] = (efforts[n] - mean) * 0.5 * (times[n + 1] - times[n - 1])
+            efforts[n] = mean
+    return efforts, impulses
+
+
 def robot_certificate(scene: SceneData, urdf: str, times: np.ndarray, q: np.ndarray,
                       angles: np.ndarray, efforts: np.ndarray,
                       foot_wrenches: Mapping[str, np.ndarray],
                       active_contacts: Sequence[Sequence[str]],
                       wrench_source: str = "recorded"
                       ) -> tuple[ContinuousCertificate, dict[str, np.ndarray]]:
-    """(certificate, held efforts) of a drafted scene's plan on its URDF text `urdf`.
+    """(certificate, raw held efforts) of a drafted scene's plan on its URDF text `urdf`
+    (the impacts' impulses still in them: `split_impulses`).
 
     times (N+1,) s; q (N+1, 12 nb) director coordinates (the root's COM and directors place
     the base link: `SceneData.robot_root`); angles, efforts (N+1, na) rad, N m in the order
