@@ -7,8 +7,8 @@ A scene's ``gait.options`` may declare the posture a walker keeps (docs/user-gui
   (`gait_planner.model.angles` convention, e.g. ``knee_r: [0, 75]``), each bound within
   [-180, 180], lower < upper, upper - lower < 180 (the margins of
   `gait_planner.ocp.posture` are exact only then), a roll range within [-90, 90];
-* ``torso_lean_max``: the root body's d3 within this angle of vertical, in [0, 90)
-  (0 = off).
+* ``torso_lean_max``: the root body's d3 (a robot drafted from a URDF: its base link's z
+  axis) within this angle of vertical, in [0, 90) (0 = off).
 
 The scene loader checks them when a scene with a gait is loaded, and
 `gait_planner.ocp.settings` when a request overrides them: both call the functions here.

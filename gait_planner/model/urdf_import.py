@@ -35,7 +35,11 @@ approximation of it:
 * **Limits.** The URDF's ranges (`joint_limits`, within +-89.5 deg of its zero: the range
   rows take ranges narrower than 180 deg) and efforts (`effort_limits`, hard bounds on the
   torques) per joint; its slowest velocity limit for every joint (`joint_speed_max`: the
-  planner's speed rows take one bound).
+  planner's speed rows take one bound). The locked joints' efforts are bounded too
+  (`robot.holds`, `gait_planner.model.urdf_holds`).
+* **Walking envelope.** An upright walk (`gait_planner.model.urdf_envelope`): the base
+  within 10 deg of upright, hip yaw within +-15 deg, the stance knee within +-45 deg in
+  single support.
 * **Gait.** walker3d's five phases for feet with heel and forefoot, the compass's two for
   point feet; walker3d's swing clearance and strike speed, the step length and the time
   step scaled from walker3d by the leg length L
@@ -64,6 +68,8 @@ import yaml
 
 from gait_planner.model.rotations import matrix_rpy
 from gait_planner.model.urdf_contacts import foot_contacts
+from gait_planner.model.urdf_envelope import (HIP_YAW_DEG, STANCE_KNEE_DEG, UPRIGHT_DEG,
+                                              leg_roles, walking_envelope)
 from gait_planner.model.urdf_errors import UrdfError
 from gait_planner.model.urdf_fuse import ball_points, find_balls
 from gait_planner.model.urdf_holds import locked_holds
@@ -317,15 +323,19 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     owner = {full.getJointId(model.names[j]) if j > 1 else 1: (b.name, b.com, b.R)
              for j, b in bodies.items()}
     holds, unheld = locked_holds(full, q_lock, legs, owner)
+    full_data = full.createData()
+    pin.forwardKinematics(full, full_data, q_lock)
+    roles = {side: leg_roles(full, full_data, _path(full, foot), axes)
+             for side, foot in (("l", left_foot), ("r", right_foot))}
     source = {"urdf": urdf_file, **({"package_dirs": list(robot_dirs)} if robot_dirs else {}),
               "locked": lock_angles, **({"holds": holds} if holds else {})}
     return _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
                   left_of, name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
-                  changes, source, mirror_tolerance, unheld)
+                  changes, source, mirror_tolerance, unheld, roles)
 
 
 def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-           left_of, name, changes, source, mirror_tolerance, unheld) -> UrdfDraft:
+           left_of, name, changes, source, mirror_tolerance, unheld, roles) -> UrdfDraft:
     order = [1] + [j for j in ids.values() if j in bodies]
     for foot, points in contacts.items():
         bodies[foot].points.update(points)
@@ -380,6 +390,14 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
             contact_names[(side[foot], point)] = cname
             contact_yaml.append({"name": cname, "body": bodies[foot].name, "point": point})
     step = round(WALKER3D_STEP_RATIO * leg, 4)
+    phases = _phases(contact_names, point_feet)
+    sides = {name: side for (side, _), name in contact_names.items()}
+    stance = {}
+    for phase in phases:
+        held = {sides[c] for c in phase["contacts"]}
+        if len(held) == 1:
+            stance.setdefault(held.pop(), []).append(phase["name"])
+    envelope = walking_envelope(roles, limits, stance)
     fused = f" ({3 * len(balls)} as {len(balls)} spherical)" if balls else ""
     scene = {
         "name": name,
@@ -403,8 +421,8 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
             "step_length": step, "base_time_step": round(0.01 * math.sqrt(leg / WALKER3D_LEG), 5),
             "scaling_bounds": [0.5, 1.5], "friction_coefficient": 0.8,
             "cost": "kinetic_energy", "mirror": mirror,
-            "phases": _phases(contact_names, point_feet),
-            "options": {**_swing_options(leg, half_widths),
+            "phases": phases,
+            "options": {**_swing_options(leg, half_widths), **envelope,
                         "joint_limits": limits, "effort_limits": efforts,
                         **({"joint_speed_max": min(speeds.values())} if speeds else {}),
                         "step_length_bounds": [round(0.6 * step, 4), round(1.4 * step, 4)]},
@@ -417,7 +435,10 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
               f"(hip to sole) L = {leg:.4f} m:\n# step_length = 0.7066 L, base_time_step = "
               f"0.01 s sqrt(L / 0.897 m) (walker3d scaled).\n# Joint ranges: the URDF's within "
               f"+-{_RANGE_MAX} deg of its zero pose (the planner's range rows);\n# joint_speed_max: "
-              f"the slowest joint's velocity limit (one bound for every joint).\n")
+              f"the slowest joint's velocity limit (one bound for every joint).\n# Walking "
+              f"envelope (gait_planner.model.urdf_envelope): the base link within "
+              f"{UPRIGHT_DEG:g} deg of upright,\n# hip yaw within +-{HIP_YAW_DEG:g} deg, the "
+              f"stance knee within +-{STANCE_KNEE_DEG:g} deg in single support.\n")
     if lock_angles:
         header += "# Locked joints (merged into their parent): " + ", ".join(
             f"{k} = {v:g} rad" for k, v in lock_angles.items()) + "\n"

@@ -82,10 +82,10 @@ class PathRows:
             self._without_elements[name] = ca.MX(rows.shape[0], 1)
         root = mb.block(mb.scene.root.body).start
         inner = self.Q[:, 1:N]
-        for name, entry, bound in (("torso_lean", 11, self._lean_bound),
-                                   ("torso_height", 2, s.torso_height_min)):
+        for name, entry, bound in (("torso_lean", self._uprightness(inner), self._lean_bound),
+                                   ("torso_height", inner[root + 2, :], s.torso_height_min)):
             if bound > 0:  # the entry itself is in _node_rows
-                self._ineq.append((name, ca.vec(inner[root + entry, :] - bound)))
+                self._ineq.append((name, ca.vec(entry - bound)))
                 self._without_elements[name] = ca.MX(ca.DM.ones(N - 1) * -bound)
         phase_index = {p.name: k for k, p in enumerate(mb.scene.gait.phases)}
         ranges = [("joint_limits", "joint_limits", list(range(1, N)), s.joint_limits)] + [
@@ -108,9 +108,20 @@ class PathRows:
             self._ineq.append(("joint_speed", ca.vec(speed)))
             self._without_elements["joint_speed"] = ca.MX(speed.numel(), 1)
 
+    def _uprightness(self, q):
+        """The z component of the root's up axis in configurations q (k, n) (row (1, n)):
+        its d3, or for a scene drafted from a URDF its link frame's z axis (G1's pelvis
+        frame is pitched 3.1 deg from its principal axes, the directors)."""
+        scene = self.mb.scene
+        root = self.mb.block(scene.root.body).start
+        if scene.robot is None:
+            return q[root + 11, :]
+        up = scene.robot.link_pose(scene.root.body)[1][:, 2]  # director components
+        return up[0] * q[root + 5, :] + up[1] * q[root + 8, :] + up[2] * q[root + 11, :]
+
     @property
     def _lean_bound(self) -> float:
-        """d3_z of the torso at its largest lean (0: no lean limit)."""
+        """The up axis' z component at the torso's largest lean (0: no lean limit)."""
         lean_max = self.settings.torso_lean_max
         return float(np.cos(np.radians(lean_max))) if lean_max > 0 else 0.0
 
@@ -224,7 +235,7 @@ class PathRows:
         out = [mb.null_space_transpose(q, ca.mtimes(C.T, ca.vertcat(*held)))
                / FORCE_SCALE] + cones if contacts else []
         root = mb.block(mb.scene.root.body).start
-        out += [q[root + 11]] if self._lean_bound > 0 else []
+        out += [self._uprightness(q)] if self._lean_bound > 0 else []
         out += [q[root + 2]] if s.torso_height_min > 0 else []
         name = f"node_rows_phase{k}" + ("_mirrored" if mirrored else "")
         return ca.Function(name, [z, pz, c], [ca.vertcat(*out)], ["z", "pz", "c"], ["r"])

@@ -63,8 +63,8 @@ class GaitSettings:
     friction_coefficient -; cost one of COSTS; intervals per phase;
     torque_regularisation weight on sum h |tau|^2 (J s per (N m)^2 s, i.e. 1/(N s)) added to
     any cost; friction_smoothing delta (N) of mu f_z - sqrt(f_x^2 + f_y^2 + delta^2) >= 0;
-    torso_lean_max deg in [0, 90) (the root body's d3 within this angle of vertical;
-    0 = off; the transcription takes its cosine); torso_height_min m (torso
+    torso_lean_max deg in [0, 90) (the root body's d3, a drafted robot's base link z
+    axis, within this angle of vertical; 0 = off; the transcription takes its cosine); torso_height_min m (torso
     centre-of-mass height; 0 = off); joint_limits ((angle name, lower rad, upper rad), ...)
     from the option ``joint_limits: {name: [lo, hi]}`` in degrees, converted by
     `gait_planner.model.posture.check_joint_limits` in `settings_for`; effort_limits

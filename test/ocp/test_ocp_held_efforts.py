@@ -1,5 +1,7 @@
 """The efforts that hold a drafted robot's locked joints (`gait_planner.ocp.held_efforts`),
-against Pinocchio's inverse dynamics on the URDF itself (issue #61).
+against Pinocchio's inverse dynamics on the URDF itself (issue #61); what cannot hold is
+refused, impacts' impulses are published apart and the verifier judges every published
+effort against the URDF's limit.
 
 A synthetic biped (test/urdf_bipeds.py) whose locked waist carries an arm off its axis:
 its base moves along a smooth path (a translation and a turn about a skew axis), and the
@@ -14,11 +16,16 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from gait_planner.cli.robot import write_draft
 from gait_planner.model.angles import configuration
-from gait_planner.model.loader import scene_from_text
+from gait_planner.model.loader import find_scene, scene_from_text
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.urdf_import import draft_scene
 from gait_planner.ocp.held_efforts import held_efforts, holds_of, static_held_efforts
+from gait_planner.problem import resolve
+from gait_planner.request import PlanRequest, RequestError
+from gait_planner.verify.effort_limits import effort_limit_failures, effort_shares
+from gait_planner.verify.robot import split_impulses
 from urdf_bipeds import biped
 
 AXIS = np.array([0.3, 1.0, 0.2]) / np.linalg.norm([0.3, 1.0, 0.2])  # the base's turn
@@ -114,3 +121,44 @@ def test_the_draft_bounds_every_locked_joint_with_an_effort_limit():
     assert (hold.name, hold.body, hold.side, hold.effort) == \
         ("waist_joint", scene.root.body, 1, 30.0)
     assert hold.mass == pytest.approx(1.0)
+
+
+def test_a_waist_that_cannot_hold_the_standing_robot_is_refused(tmp_path):
+    """The arm's weight 3 cm beside the waist's x axis needs ~0.3 N m standing: a 0.1 N m
+    limit is refused before anything is built, naming the joint and what it needs."""
+    urdf = biped(waist_axis="x", arm_com="0.05 0.03 0.2", waist_effort=0.1)
+    (tmp_path / "biped.urdf").write_text(urdf)
+    draft = draft_scene(urdf, urdf_file="biped.urdf")
+    scene_file = write_draft(draft, tmp_path / "biped.yaml")
+    with pytest.raises(RequestError, match=r"locked joint waist_joint needs 0\.\d+ N m .* "
+                                           r"beyond its URDF effort limit 0\.1 N m"):
+        resolve(PlanRequest(scene=str(scene_file)), find_scene)
+    held = static_held_efforts(Multibody(scene_from_text(draft.yaml, "b.yaml")),
+                               configuration(scene_from_text(draft.yaml, "b.yaml")))
+    assert abs(held["waist_joint"]) > 0.1
+
+
+def test_an_impacts_impulse_is_published_apart():
+    """At the node where a contact is established the effort is its neighbours' mean and
+    the rest, times the node's time step, is the impulse; elsewhere nothing moves."""
+    times = np.array([0.0, 0.01, 0.02, 0.035, 0.05, 0.06])
+    held = np.array([[1.0, 0.5], [2.0, 0.5], [3.0, 0.5], [90.0, -40.0], [5.0, 0.5],
+                     [6.0, 0.5]])
+    active = [("a",), ("a",), ("a",), ("a", "b"), ("a", "b"), ("b",)]  # b lands at node 3
+    efforts, impulses = split_impulses(held, times, active)
+    assert np.array_equal(efforts[[0, 1, 2, 4, 5]], held[[0, 1, 2, 4, 5]])
+    assert efforts[3] == pytest.approx([4.0, 0.5])
+    assert impulses[3] == pytest.approx([86.0 * 0.015, -40.5 * 0.015])
+    assert not impulses[[0, 1, 2, 4, 5]].any()  # a release (node 5) is no impact
+
+
+def test_the_verifier_fails_an_effort_beyond_the_urdfs_limit():
+    urdf = biped(waist_effort=7.5)
+    names = ("left_knee_joint", "waist_joint")
+    effort = np.array([[10.0, 7.5], [-119.0, -7.0], [0.0, 7.52]])
+    shares = effort_shares(urdf, names, effort)
+    assert shares["left_knee_joint"] == pytest.approx((119.0 / 120.0, 1, 120.0))
+    assert shares["waist_joint"][:2] == pytest.approx((7.52 / 7.5, 2))
+    (failure,) = effort_limit_failures(shares)
+    assert "joint waist_joint needs 7.52 N m at node 2" in failure
+    assert not effort_limit_failures(effort_shares(urdf, names, effort[:2]))

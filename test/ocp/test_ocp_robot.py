@@ -6,8 +6,9 @@ back as a user would.
 * the plan converges and passes every check of the verifier, the continuous-dynamics
   certificate on the original URDF included;
 * the recorded JointTrajectory names every joint of the URDF (the locked ones held at their
-  angle), its torques stay within the URDF's effort limits, its angles within the draft's
-  ranges and its rates within the joint speed bound;
+  angle), its torques stay within the URDF's effort limits, the locked joints' holding
+  efforts too (issue #61; the impacts' impulses published apart), its angles within the
+  draft's ranges and its rates within the joint speed bound;
 * the recording's /robot_description is the URDF itself and /tf and /tf_static carry every
   one of its links; the rerun view draws the URDF's meshes, moved per node by /tf;
 * Pinocchio's forward kinematics of the published joint angles on the original URDF (its
@@ -39,6 +40,7 @@ from gait_planner.ocp.solve import Planner
 from gait_planner.pipeline import plan_and_record
 from gait_planner.request import PlanRequest
 from gait_planner.verify import verify_recording
+from gait_planner.verify.effort_limits import LIMIT_TOLERANCE, effort_shares
 from gait_planner.problem import resolve
 
 
@@ -94,6 +96,22 @@ def test_trajectory_is_in_the_urdfs_joints_and_limits(robot):
             assert np.all(position[:, i] == draft.locked[name]) and speed[i] == 0.0
     if "joint_speed_max" in options:  # the slowest joint's limit, for every joint
         assert speed.max() <= np.radians(options["joint_speed_max"]) * 1.01
+
+
+def test_every_published_effort_is_within_the_urdfs_limit(robot):
+    """Locked joints included (issue #61): what holds them is bounded in the plan; at an
+    impact node the impulse is published apart, in N m s, not folded into an effort."""
+    urdf, draft, outcome = robot
+    rec = read_plan_mcap(outcome.mcap_path)
+    shares = effort_shares(urdf, rec.joint_names, np.asarray(rec.effort))
+    assert set(draft.locked) & set(shares)  # the locked joints are judged too
+    worst = max(shares, key=lambda name: shares[name][0])
+    assert shares[worst][0] <= 1.0 + LIMIT_TOLERANCE, (worst, shares[worst])
+    assert set(rec.held_joint_names) == set(draft.locked)
+    impacts = [n for n in range(1, len(rec.times) - 1)
+               if set(rec.active_contacts[n]) - set(rec.active_contacts[n - 1])]
+    struck = np.abs(rec.held_joint_impulses).max(axis=1) > 0
+    assert impacts and set(np.flatnonzero(struck)) <= set(impacts)
 
 
 def test_the_recording_is_the_robots_own(robot):

@@ -1,0 +1,109 @@
+"""How a robot's plan walks, read from its recording as a user reads it (issue #61, item 3):
+the base link's pitch and roll range (/tf's world -> base link), the knee's flexion in
+stance and in swing (the JointTrajectory), the step width (the held contact points on
+/gait_planner/contact_forces) and every published effort's share of the URDF's limit
+(`gait_planner.verify.effort_limits`), the locked joints' apart.
+
+A knee is the second joint of a leg whose axis is the base's pitch axis (y) at the URDF's
+zero pose: hip pitch, then knee, then ankle pitch (G1, Talos, Bolt); its flexion is |angle|
+from that zero, where these robots' legs are straight. A leg is in stance at a node where
+one of its foot's contact points is held.
+
+    .venv/bin/python benchmarks/robot_posture.py RUN.mcap [RUN.mcap ...]   # one JSON line each
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+
+import numpy as np
+
+PITCH_AXIS = 0.9  # |y| of a joint's world axis at the zero pose: a pitch joint
+
+
+def _knees(urdf: str, names) -> dict[str, str]:
+    """{knee joint: "l" or "r"} of the planned joints `names` (module docstring)."""
+    import pinocchio as pin
+
+    model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
+    data = model.createData()
+    pin.forwardKinematics(model, data, pin.neutral(model))
+    out = {}
+    for j in range(2, model.njoints):
+        if model.names[j] not in names:
+            continue
+        chain, k = [], j
+        while k > 1:
+            chain.append(k)
+            k = int(model.parents[k])
+        pitch = [i for i in reversed(chain) if abs(_world_axis(model, data, i)[1]) > PITCH_AXIS]
+        if len(pitch) >= 2 and pitch[1] == j:
+            side = "l" if data.oMi[j].translation[1] > 0 else "r"
+            out[model.names[j]] = side
+    return out
+
+
+def _world_axis(model, data, joint: int) -> np.ndarray:
+    """A 1-dof revolute joint's unit axis in the world at the zero pose, else zeros."""
+    from gait_planner.model.urdf_import import UrdfError, revolute_axis
+
+    try:
+        return data.oMi[joint].rotation @ revolute_axis(model, joint)
+    except UrdfError:
+        return np.zeros(3)
+
+
+def posture(path: str) -> dict:
+    """The measures of one recording (module docstring)."""
+    from gait_planner.io.mcap_reader import read_plan_mcap
+    from gait_planner.verify.effort_limits import effort_shares
+
+    rec = read_plan_mcap(path)
+    N = len(rec.times) - 1
+    base = [next(t for t in frames if t.parent == "world") for frames in rec.tf]
+    R = np.array([t.matrix()[:3, :3] for t in base])
+    pitch = np.degrees(np.arcsin(np.clip(-R[:, 2, 0], -1, 1)))
+    roll = np.degrees(np.arctan2(R[:, 2, 1], R[:, 2, 2]))
+    names = list(rec.joint_names)
+    knees = _knees(rec.urdf, [n for n in names if n not in rec.held_joint_names])
+    flexion = {"stance": 0.0, "swing": 0.0}
+    width = []
+    for n in range(N + 1):
+        held = dict(zip(rec.contact_names[n], rec.contact_points[n]))
+        for knee, side in knees.items():
+            down = any(name.startswith(f"foot_{side}") for name in rec.active_contacts[n])
+            angle = abs(math.degrees(rec.positions[n, names.index(knee)]))
+            key = "stance" if down else "swing"
+            flexion[key] = max(flexion[key], angle)
+        left = [p for name, p in held.items() if name.startswith("foot_l")]
+        right = [p for name, p in held.items() if name.startswith("foot_r")]
+        if left and right:
+            width.append(float(np.mean(left, axis=0)[1] - np.mean(right, axis=0)[1]))
+    shares = effort_shares(rec.urdf, names, np.asarray(rec.effort))
+    locked = set(rec.held_joint_names)
+
+    def worst(pick) -> tuple[str | None, float | None]:
+        chosen = {n: s for n, s in shares.items() if pick(n)}
+        if not chosen:
+            return None, None
+        name = max(chosen, key=lambda n: chosen[n][0])
+        return name, chosen[name][0]
+
+    planned_joint, planned_share = worst(lambda n: n not in locked)
+    locked_joint, locked_share = worst(lambda n: n in locked)
+    return {"pelvis_pitch_deg": [float(pitch.min()), float(pitch.max())],
+            "pelvis_roll_deg": [float(roll.min()), float(roll.max())],
+            "knees": sorted(knees), "stance_knee_max_deg": flexion["stance"],
+            "swing_knee_max_deg": flexion["swing"],
+            "step_width_m": float(np.mean(width)) if width else None,
+            "effort_share_planned": planned_share, "effort_share_planned_joint": planned_joint,
+            "effort_share_locked": locked_share, "effort_share_locked_joint": locked_joint,
+            "impulse_max_Nms": float(np.abs(rec.held_joint_impulses).max())
+            if rec.held_joint_impulses.size else 0.0}
+
+
+if __name__ == "__main__":
+    for argument in sys.argv[1:]:
+        print(json.dumps({"mcap": argument, **posture(argument)}))
