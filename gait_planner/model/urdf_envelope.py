@@ -11,7 +11,7 @@ robot's own geometry at the URDF's zero pose (base level, legs straight):
 * the hip yaw joints (the first joint of a leg turning about the vertical) within
   +-HIP_YAW_DEG, so that the feet point where the robot walks;
 * the knees (the second joint of a leg turning about the base's pitch axis, after the hip
-  pitch) flexed at most STANCE_KNEE_DEG in the single-support phases where their leg is
+  pitch, at least a quarter of the leg up from its last joint: not an ankle) flexed at most STANCE_KNEE_DEG in the single-support phases where their leg is
   the stance leg (``phase_joint_limits``), either way from the zero pose (and within the
   URDF's range), whatever the URDF's sign.
 
@@ -31,6 +31,7 @@ UPRIGHT_DEG = 10.0  # base link z axis from vertical
 HIP_YAW_DEG = 15.0  # hip yaw from the zero pose
 STANCE_KNEE_DEG = 45.0  # stance knee flexion from the straight zero pose, single support
 _ALONG = 0.9  # |component| of a joint's world axis along x, y or z: a roll, pitch, yaw joint
+_MID_LEG = 0.25  # a knee is at least this share of the hip's height above the last joint
 
 
 def leg_roles(model, data, chain: Sequence[int], axes: dict[str, np.ndarray]) -> dict:
@@ -38,9 +39,11 @@ def leg_roles(model, data, chain: Sequence[int], axes: dict[str, np.ndarray]) ->
     (Pinocchio model, forward kinematics in `data` at the zero pose), `axes` the joints'
     unit axes in their own frames (`urdf_import.revolute_axis`)."""
     world = {j: data.oMi[j].rotation @ axes[model.names[j]] for j in chain}
+    height = {j: float(data.oMi[j].translation[2] - data.oMi[chain[-1]].translation[2])
+              for j in chain}
     pitch = [j for j in chain if abs(world[j][1]) > _ALONG]
-    if len(pitch) < 2:
-        return {}
+    if len(pitch) < 2 or height[pitch[1]] < _MID_LEG * height[chain[0]]:
+        return {}  # no second pitch joint, or it is an ankle
     knee = pitch[1]
     yaw = [j for j in chain[:chain.index(knee)] if abs(world[j][2]) > _ALONG]
     return {"knee": model.names[knee], **({"hip_yaw": model.names[yaw[0]]} if yaw else {})}
