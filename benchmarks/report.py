@@ -726,6 +726,26 @@ def robots(doc) -> list[str]:
                 f"and {b['cost']:.5g} J s): round-off in the derivatives leads IPOPT to "
                 "another local optimum or the certificate to another grid, so their times "
                 "compare different work."), ""]
+    walking = [dict(r, **r["posture"],
+                    pitch="%.1f to %.1f" % tuple(r["posture"]["pelvis_pitch_deg"]),
+                    roll="%.1f to %.1f" % tuple(r["posture"]["pelvis_roll_deg"]),
+                    planned=_share(r["posture"], "planned"), locked=_share(r["posture"], "locked"))
+               for r in rows if r.get("posture")]
+    if walking:
+        out += ["How each plan walks, read from its recording (`robot_posture.py`, issue #61): "
+                "the base link's pitch and roll (/tf, deg), the knees' largest flexion from "
+                "the zero pose with the leg on the ground (stance) and off it (swing), the "
+                "step width (left minus right held points, m), every published effort's "
+                "largest share of its URDF limit, planned and locked joints apart, and the "
+                "largest impulse a locked joint takes at an impact (published apart, N m s).",
+                ""]
+        out += table(walking, [
+            ("robot", "robot", ""), ("derivatives", "mode", ""), ("pelvis pitch deg", "pitch", ""),
+            ("pelvis roll deg", "roll", ""), ("stance knee deg", "stance_knee_max_deg", ".1f"),
+            ("swing knee deg", "swing_knee_max_deg", ".1f"), ("step width m", "step_width_m",
+                                                               ".3f"),
+            ("planned effort / limit", "planned", ""), ("locked effort / limit", "locked", ""),
+            ("impulse N m s", "impulse_max_Nms", ".3g")]) + [""]
     twins = [dict(r, walked=(f"{r['half_cycles_walked']} of {h.get('steps', 10)}"
                              if r.get("half_cycles_walked") is not None else "–"),
                   why=r.get("walk") or r.get("error") or "")
@@ -750,6 +770,12 @@ def robots(doc) -> list[str]:
                 f"[{h['figure']}]({h['figure']})", "",
                 f"![robots mid-step]({h['figure']})", ""]
     return out
+
+
+def _share(posture: dict, kind: str) -> str:
+    """'87.1% (waist_roll_joint)' of robot_posture's largest share of one kind, or '–'."""
+    share = posture.get(f"effort_share_{kind}")
+    return "–" if share is None else f"{share:.1%} ({posture[f'effort_share_{kind}_joint']})"
 
 
 def _request_rows(doc) -> list[dict]:

@@ -17,7 +17,9 @@ them: the efforts conjugate to the joint angles (`model.angles.conjugate_torques
 published efforts) times the joint-angle rates give each joint's power; W+ the time
 integral of the positive part summed over the joints (trapezoidal rule), the cost of
 transport W+ / (m g s) with m the total mass and s the step length; the peak |effort| and,
-per joint with an effort limit, its peak over the limit (the largest share named).
+per joint with an effort limit, its peak over the limit (the largest share named); for a
+robot, how it walks (`robot_posture.py`: pelvis attitude, knees, step width, every
+published effort's share of its URDF limit, the locked joints' apart).
 """
 
 from __future__ import annotations
@@ -173,6 +175,10 @@ def main() -> None:
                mcap=str(outcome.mcap_path or ""))
     if result.success:
         row.update(measures(result))
+        if args.name in ROBOTS:
+            from robot_posture import posture
+
+            row["posture"] = posture(str(outcome.mcap_path))
     row["process_inner_s"] = time.perf_counter() - START
     print(json.dumps(row))
 

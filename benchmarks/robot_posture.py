@@ -7,7 +7,7 @@ stance and in swing (the JointTrajectory), the step width (the held contact poin
 A knee is the second joint of a leg whose axis is the base's pitch axis (y) at the URDF's
 zero pose: hip pitch, then knee, then ankle pitch (G1, Talos, Bolt); its flexion is |angle|
 from that zero, where these robots' legs are straight. A leg is in stance at a node where
-one of its foot's contact points is held.
+its foot alone is on the ground (single support), in swing where it is off the ground.
 
     .venv/bin/python benchmarks/robot_posture.py RUN.mcap [RUN.mcap ...]   # one JSON line each
 """
@@ -72,11 +72,13 @@ def posture(path: str) -> dict:
     width = []
     for n in range(N + 1):
         held = dict(zip(rec.contact_names[n], rec.contact_points[n]))
+        down = {side for side in ("l", "r")
+                if any(name.startswith(f"foot_{side}") for name in rec.active_contacts[n])}
         for knee, side in knees.items():
-            down = any(name.startswith(f"foot_{side}") for name in rec.active_contacts[n])
             angle = abs(math.degrees(rec.positions[n, names.index(knee)]))
-            key = "stance" if down else "swing"
-            flexion[key] = max(flexion[key], angle)
+            key = "swing" if side not in down else "stance" if len(down) == 1 else None
+            if key:
+                flexion[key] = max(flexion[key], angle)
         left = [p for name, p in held.items() if name.startswith("foot_l")]
         right = [p for name, p in held.items() if name.startswith("foot_r")]
         if left and right:
