@@ -32,6 +32,10 @@ approximation of it:
   (G1's right knee inertia, Bolt's 1.5e-6 kg). `mirror_tolerance` (a fraction, default
   5 %: `--mirror-tolerance`) is the mass and inertia difference the user accepts; the
   refusal names the value that would accept the robot.
+* **Legs apart.** The lower legs' bodies (knee, shank, ankle, foot) carry spheres that
+  contain their collision geometry (``collision:``, `gait_planner.model.urdf_collision`),
+  and the gait keeps them ``leg_clearance`` (LEG_CLEARANCE, 1 cm) apart
+  (`gait_planner.ocp.legs`).
 * **Limits.** The URDF's ranges (`joint_limits`, within +-89.5 deg of its zero: the range
   rows take ranges narrower than 180 deg) and efforts (`effort_limits`, hard bounds on the
   torques) per joint; its slowest velocity limit for every joint (`joint_speed_max`: the
@@ -63,6 +67,7 @@ import numpy as np
 import yaml
 
 from gait_planner.model.rotations import matrix_rpy
+from gait_planner.model.urdf_collision import leg_spheres
 from gait_planner.model.urdf_contacts import foot_contacts
 from gait_planner.model.urdf_errors import UrdfError
 from gait_planner.model.urdf_fuse import ball_points, find_balls
@@ -76,6 +81,7 @@ _MIN_MASS = 1e-6  # kg: a moving body lighter than this is massless
 _INERTIA_TOLERANCE = 1e-9  # relative: eigenvalues and triangle inequality
 WALKER3D_LEG = 0.897  # m, walker3d's hip height standing (config/scenes/walker3d.yaml)
 WALKER3D_STEP_RATIO = 0.6338 / WALKER3D_LEG
+LEG_CLEARANCE = 0.01  # m between the lower legs' collision spheres (`gait_planner.ocp.legs`)
 
 
 @dataclass(frozen=True)
@@ -313,15 +319,16 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     q0 = pin.neutral(model)
     pin.forwardKinematics(model, data, q0)
     contacts, half_widths = foot_contacts(model, geometry, data, foot_ids, links)
+    spheres = leg_spheres(model, geometry, data, bodies, left_of, foot_ids)
     source = {"urdf": urdf_file, **({"package_dirs": list(robot_dirs)} if robot_dirs else {}),
               "locked": lock_angles}
     return _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-                  left_of, name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
+                  spheres, left_of, name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
                   changes, source, mirror_tolerance)
 
 
 def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-           left_of, name, changes, source, mirror_tolerance) -> UrdfDraft:
+           spheres, left_of, name, changes, source, mirror_tolerance) -> UrdfDraft:
     order = [1] + [j for j in ids.values() if j in bodies]
     for foot, points in contacts.items():
         bodies[foot].points.update(points)
@@ -386,7 +393,10 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
         "root": {"body": root.name, "type": "free"},
         "bodies": [{"name": bodies[j].name, "mass": round(bodies[j].mass, 12),
                     "inertia": _round(bodies[j].moments),
-                    "points": {p: _round(v) for p, v in local[j].items()}} for j in order],
+                    "points": {p: _round(v) for p, v in local[j].items()},
+                    **({"collision": [_round(np.r_[s[:3], s[3] + 1e-6], 6) for s in spheres[j]]}
+                       if j in spheres
+                       else {})} for j in order],
         "joints": [j.get("entry") or {
             "name": jname, "type": "revolute", "axis": _round(j["axis"]),
             "reference_rpy": _round(matrix_rpy(j["reference"])), "parent": j["parent"],
@@ -401,6 +411,7 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
             "cost": "kinetic_energy", "mirror": mirror,
             "phases": _phases(contact_names, point_feet),
             "options": {**_swing_options(leg, half_widths),
+                        **({"leg_clearance": LEG_CLEARANCE} if spheres else {}),
                         "joint_limits": limits, "effort_limits": efforts,
                         **({"joint_speed_max": min(speeds.values())} if speeds else {}),
                         "step_length_bounds": [round(0.6 * step, 4), round(1.4 * step, 4)]},
@@ -412,7 +423,9 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
               f"principal axes;\n# joints: the URDF's, zero and sign as the URDF's. Leg length "
               f"(hip to sole) L = {leg:.4f} m:\n# step_length = 0.7066 L, base_time_step = "
               f"0.01 s sqrt(L / 0.897 m) (walker3d scaled).\n# Joint ranges: the URDF's within "
-              f"+-{_RANGE_MAX} deg of its zero pose (the planner's range rows);\n# joint_speed_max: "
+              f"+-{_RANGE_MAX} deg of its zero pose (the planner's range rows);\n# collision: spheres "
+              f"containing the lower legs' collision geometry (leg_clearance between legs);"
+              f"\n# joint_speed_max: "
               f"the slowest joint's velocity limit (one bound for every joint).\n")
     if lock_angles:
         header += "# Locked joints (merged into their parent): " + ", ".join(

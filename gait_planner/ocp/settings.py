@@ -118,6 +118,9 @@ class GaitSettings:
     - 2 tau_n + tau_{n-1}|^2 over the node torques, across the mirrored join, added to the
     cost (the J reported excludes it; `ocp.cost_terms`): no torque jumps at one node and
     back, where an inequality row touches its bound for one node (walker2d's strike rows);
+    leg_clearance m: the smallest distance kept between the collision spheres of different
+    legs (`Body.collision`; 1 cm; rows only where the scene gives two legs spheres: the
+    drafts of URDF robots and walker3d; `gait_planner.ocp.legs`);
     refinements: how many times a converged plan that misses the continuous-dynamics
     certificate is planned again on a grid twice as fine, from itself
     (`gait_planner.strategies.plan_certified`, `gait_planner.ocp.refine`; 0 = never);
@@ -154,6 +157,7 @@ class GaitSettings:
     speed_scaling_bounds: tuple[float, ...] = ()
     twist_regularisation: float = 0.0
     torque_smoothness: float = 0.0
+    leg_clearance: float = 0.01
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
     refinements: int = 2
@@ -207,7 +211,7 @@ class GaitSettings:
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
                      "strike_deceleration_max", "joint_speed_max", "speed", "speed_max",
-                     "twist_regularisation", "torque_smoothness"):
+                     "twist_regularisation", "torque_smoothness", "leg_clearance"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 bad(name, f"must be a number, got {value!r}")
