@@ -12,15 +12,17 @@ sphere's body-fixed centre). With R_ij = r_i + r_j + clearance, the pair's margi
 is >= 0 exactly when the spheres are at least `clearance` apart, equals the distance
 |c_i - c_j| - R_ij to first order at 0 and is smooth everywhere (no square root at
 coincident centres). Saturated, s_ij = M tanh(m_ij / M) (M = SATURATION) keeps its sign,
-is m_ij within 0.15 % for |m_ij| <= 1 cm and never beyond m_ij, and lies in (-M, M). One
+is m_ij within 0.6 % for |m_ij| <= 1 cm and never beyond m_ij, and lies in (-M, M). One
 row per node keeps every pair:
 
     row = -eps log sum_ij exp(-s_ij / eps) >= 0,   eps = SMOOTHING,
 
 a smooth minimum, min_ij s_ij - eps log(pairs) <= row <= min_ij s_ij: the row at 0 puts
 every pair at least its clearance apart (conservative by at most eps log(pairs), 1.8 mm
-for Talos's 1225 pairs). With M / eps = 600 each exp(-s / eps) lies within
-(1e-261, 1e261): no pair far apart underflows the sum to 0, none overlapping overflows it.
+for Talos's 1225 pairs). With M / eps = 300 each exp(-s / eps) lies within
+(1e-130, 1e131): no pair far apart underflows the sum S to 0, and no overlap overflows
+S^2, which the row's second derivatives divide by (with M / eps = 600 Talos's first
+Hessian was NaN).
 One row, not one per pair: Talos's legs have 35 spheres each, and 1225 rows per node would
 be 100,000 inequality rows, each with its slack in IPOPT's KKT system.
 
@@ -41,7 +43,7 @@ __all__ = ["SATURATION", "SMOOTHING", "leg_bodies", "leg_clearance_rows",
            "leg_sphere_distances"]
 
 SMOOTHING = 2.5e-4  # m: eps of the smooth minimum
-SATURATION = 0.15  # m: M of the margins' saturation M tanh(m / M); M / eps = 600
+SATURATION = 0.075  # m: M of the margins' saturation M tanh(m / M); M / eps = 300
 
 
 def leg_bodies(scene: Scene) -> list[tuple[str, ...]]:

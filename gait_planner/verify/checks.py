@@ -13,6 +13,7 @@ from gait_planner.verify.actuation import (effort_couples, effort_slots, joint_c
 from gait_planner.verify.recorded import certificate_of_recording
 from gait_planner.verify.ground import RecordedGround
 from gait_planner.verify.joined import verify_joined
+from gait_planner.verify.legs import judge_legs, legs_of_recording
 from gait_planner.verify.physical import check_physical
 from gait_planner.verify.limits import LIMITS
 from gait_planner.verify.report import VerificationReport
@@ -362,6 +363,8 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
     failures += physical.failures
     continuous = certificate_of_recording(rec)
     failures += [f"continuous dynamics: {f}" for f in continuous.failures]
+    legs = legs_of_recording(rec, scene)
+    judge_legs(legs, failures, notes)
 
     return VerificationReport(
         path=str(rec.path), scene=scene.name, ground=ground.describe(), cost_name=cost_name,
@@ -383,6 +386,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         max_scaling_bound_excess=max(excesses, default=math.nan),
         max_potential_energy_error=energy_error,
         failures=tuple(failures), notes=tuple(notes), physical=physical, continuous=continuous,
+        legs=legs,
     )
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from gait_planner.verify.continuous import ContinuousCertificate
+from gait_planner.verify.legs import LegClearance
 from gait_planner.verify.physical import PhysicalReport
 from gait_planner.verify.report_text import report_lines
 
@@ -63,6 +64,7 @@ class VerificationReport:
     notes: tuple[str, ...] = ()
     physical: PhysicalReport | None = None  # per-point cones, swing clearance, speeds, torques
     continuous: ContinuousCertificate | None = None  # inverse dynamics of the continuous model
+    legs: LegClearance | None = None  # the legs' smallest distance (scenes with leg spheres)
 
     @property
     def ok(self) -> bool:
