@@ -25,8 +25,9 @@ import numpy as np
 
 from gait_planner.model.urdf_errors import UrdfError
 
-__all__ = ["CELL", "LOWER_LEG", "SPHERES", "collision_pieces", "fit_spheres", "leg_spheres"]
+__all__ = ["CELL", "LEG_CLEARANCE", "LOWER_LEG", "SPHERES", "collision_pieces", "fit_spheres", "leg_spheres"]
 
+LEG_CLEARANCE = 0.01  # m: the draft's leg_clearance (`gait_planner.ocp.legs`)
 LOWER_LEG = 0.65  # the lower part of the leg (of hip to sole) whose bodies get spheres
 SPHERES = 12  # at most, per body
 CELL = 0.03  # m: no narrower cells where a coarser grid fits

@@ -34,7 +34,7 @@ approximation of it:
   refusal names the value that would accept the robot.
 * **Legs apart.** The lower legs' bodies (knee, shank, ankle, foot) carry spheres that
   contain their collision geometry (``collision:``, `gait_planner.model.urdf_collision`),
-  and the gait keeps them ``leg_clearance`` (LEG_CLEARANCE, 1 cm) apart
+  and the gait keeps them ``leg_clearance`` (`leg_clearance`, default 1 cm) apart
   (`gait_planner.ocp.legs`).
 * **Limits.** The URDF's ranges (`joint_limits`, within +-89.5 deg of its zero: the range
   rows take ranges narrower than 180 deg) and efforts (`effort_limits`, hard bounds on the
@@ -67,7 +67,7 @@ import numpy as np
 import yaml
 
 from gait_planner.model.rotations import matrix_rpy
-from gait_planner.model.urdf_collision import leg_spheres
+from gait_planner.model.urdf_collision import LEG_CLEARANCE, leg_spheres
 from gait_planner.model.urdf_contacts import foot_contacts
 from gait_planner.model.urdf_errors import UrdfError
 from gait_planner.model.urdf_fuse import ball_points, find_balls
@@ -81,7 +81,6 @@ _MIN_MASS = 1e-6  # kg: a moving body lighter than this is massless
 _INERTIA_TOLERANCE = 1e-9  # relative: eigenvalues and triangle inequality
 WALKER3D_LEG = 0.897  # m, walker3d's hip height standing (config/scenes/walker3d.yaml)
 WALKER3D_STEP_RATIO = 0.6338 / WALKER3D_LEG
-LEG_CLEARANCE = 0.01  # m between the lower legs' collision spheres (`gait_planner.ocp.legs`)
 
 
 @dataclass(frozen=True)
@@ -268,14 +267,19 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
                 locked: Mapping[str, float] | None = None, name: str | None = None,
                 package_dirs: Sequence[str | Path] = (), urdf_file: str = "robot.urdf",
                 robot_dirs: Sequence[str] = (),
-                mirror_tolerance: float = MIRROR_TOLERANCE) -> UrdfDraft:
+                mirror_tolerance: float = MIRROR_TOLERANCE,
+                leg_clearance: float = LEG_CLEARANCE) -> UrdfDraft:
     """The scene of a URDF's legs (module docstring); UrdfError naming what is refused.
 
     `package_dirs` resolve the URDF's meshes here; the draft's ``robot:`` section names the
     URDF as `urdf_file` and its mesh folders as `robot_dirs` (both as the scene file will
     read them: relative to its folder, or absolute). `mirror_tolerance`: the relative
     difference of a right link's mass and inertia from its left partner's mirror image
-    written symmetric (a fraction in [0, 1); `gait_planner.model.urdf_mirror`)."""
+    written symmetric (a fraction in [0, 1); `gait_planner.model.urdf_mirror`).
+    `leg_clearance` m >= 0: the gait's distance between the legs' collision spheres."""
+    if not (isinstance(leg_clearance, (int, float)) and 0.0 <= leg_clearance < math.inf):
+        raise UrdfError(f"--leg-clearance takes a distance >= 0 m (0.01 for 1 cm), got "
+                        f"{leg_clearance!r}")
     if not 0.0 <= mirror_tolerance < 1.0:
         raise UrdfError(f"--mirror-tolerance takes a fraction in [0, 1) (0.06 for 6 %), got "
                         f"{mirror_tolerance:g}")
@@ -323,12 +327,14 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     source = {"urdf": urdf_file, **({"package_dirs": list(robot_dirs)} if robot_dirs else {}),
               "locked": lock_angles}
     return _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-                  spheres, left_of, name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
+                  spheres, leg_clearance, left_of,
+                  name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
                   changes, source, mirror_tolerance)
 
 
 def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-           spheres, left_of, name, changes, source, mirror_tolerance) -> UrdfDraft:
+           spheres, leg_clearance, left_of, name, changes, source,
+           mirror_tolerance) -> UrdfDraft:
     order = [1] + [j for j in ids.values() if j in bodies]
     for foot, points in contacts.items():
         bodies[foot].points.update(points)
@@ -411,7 +417,7 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
             "cost": "kinetic_energy", "mirror": mirror,
             "phases": _phases(contact_names, point_feet),
             "options": {**_swing_options(leg, half_widths),
-                        **({"leg_clearance": LEG_CLEARANCE} if spheres else {}),
+                        **({"leg_clearance": float(leg_clearance)} if spheres else {}),
                         "joint_limits": limits, "effort_limits": efforts,
                         **({"joint_speed_max": min(speeds.values())} if speeds else {}),
                         "step_length_bounds": [round(0.6 * step, 4), round(1.4 * step, 4)]},

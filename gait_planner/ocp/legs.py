@@ -26,6 +26,8 @@ Hessian was NaN).
 One row, not one per pair: Talos's legs have 35 spheres each, and 1225 rows per node would
 be 100,000 inequality rows, each with its slack in IPOPT's KKT system.
 
+The rows are built with the gait option legs_apart (default true; walker3d's gait sets it
+false, keeping the paper's problem, whose optimum passes one foot through the other).
 The spheres contain the bodies, so the true distance between the legs' collision geometry
 is at least the spheres' (`leg_sphere_distances`); the verifier measures the former with
 coal (`gait_planner.verify.legs`).

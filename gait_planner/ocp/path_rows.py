@@ -109,7 +109,7 @@ class PathRows:
                                          first_row)
             self._ineq.append(("joint_speed", ca.vec(speed)))
             self._without_elements["joint_speed"] = ca.MX(speed.numel(), 1)
-        legs = leg_clearance_rows(mb)
+        legs = leg_clearance_rows(mb) if s.legs_apart else None
         if legs is not None:  # nodes N-1 and N: images of 0 and 1, their rows mirrored
             first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
             rows = self._node_terms(legs, np.array([s.leg_clearance, SMOOTHING]), first_row,

@@ -17,7 +17,9 @@ root their chain hangs from. What is measured:
 
 Judged: a distance <= 0 (the legs touch or overlap) fails the plan; one below the plan's
 ``leg_clearance`` (the metadata's, the distance the planner's rows kept between the
-spheres, which contain the geometry) is noted. Written again here from the scene file: nothing
+spheres, which contain the geometry) is noted. A plan that was not asked to keep its legs
+apart (``legs_apart: false``, walker3d's paper problem: no leg_clearance in the metadata)
+is measured, and touching legs noted, not failed. Written again here from the scene file: nothing
 of `gait_planner.ocp.legs` is used.
 """
 
@@ -108,12 +110,18 @@ def legs_of_recording(rec, scene: SceneData) -> LegClearance | None:
 
 def judge_legs(legs: LegClearance | None, failures: list[str], notes: list[str]) -> None:
     """A failure when the legs touch or overlap (distance <= 0), a note when they come
-    closer than the plan's leg_clearance (module docstring)."""
+    closer than the plan's leg_clearance (module docstring); for a plan that was not
+    asked to keep them apart (no leg_clearance in its metadata: walker3d's paper problem)
+    touching is noted, not failed."""
     if legs is None:
         return
     a, b = legs.pair
     where = f"{a} and {b} at node {legs.node} ({legs.source})"
-    if not legs.smallest > 0:
+    if math.isnan(legs.clearance):
+        if not legs.smallest > 0:
+            notes.append(f"the legs touch, {legs.smallest:.4g} m apart: {where}; the plan was "
+                         f"not asked to keep them apart (no leg_clearance in its metadata)")
+    elif not legs.smallest > 0:
         failures.append(f"the legs touch: {where} are {legs.smallest:.4g} m apart")
     elif legs.smallest < legs.clearance:
         notes.append(f"the legs come {legs.smallest:.4g} m close, less than the plan's "

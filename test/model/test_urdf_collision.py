@@ -155,3 +155,15 @@ def test_sphere_distances_are_coals_and_bound_the_geometrys(drafted):
         assert ours.min() <= true.smallest + 1e-9
         margins.append(true.smallest - ours.min())
     assert min(margins) >= 0
+
+
+def test_the_drafts_leg_clearance_is_an_option_and_a_negative_one_is_refused(example_robots):
+    from gait_planner.model.urdf_errors import UrdfError
+
+    relative, options = ROBOTS["g1"]
+    path = example_robots / relative
+    dirs = [str(example_robots.parents[1])]
+    draft = draft_scene(path.read_text(), package_dirs=dirs, leg_clearance=0.025)
+    assert scene_from_text(draft.yaml, "g1.yaml").gait.options["leg_clearance"] == 0.025
+    with pytest.raises(UrdfError, match="--leg-clearance takes a distance >= 0 m"):
+        draft_scene(path.read_text(), package_dirs=dirs, leg_clearance=-0.01)

@@ -5,9 +5,10 @@
 * the row is a smooth minimum of the saturated pair margins, never above the smallest and
   at most eps log(pairs) below it, and its sign is the sign of the smallest sphere
   distance minus the clearance (up to that amount), at random configurations of the legs;
-* a negative leg_clearance is refused by name;
-* the transcription holds one leg_clearance row per node 1..N-1, declared as node elements
-  (their sum with the rest of g: test_ocp_derivatives.test_elements_and_rest_sum_to_g_and_cost).
+* a negative leg_clearance, a legs_apart that is not a boolean are refused by name;
+* with legs_apart (walker3d's paper problem has it off) the transcription holds one
+  leg_clearance row per node 1..N-1, declared as node elements (their sum with the rest
+  of g: test_ocp_derivatives.test_elements_and_rest_sum_to_g_and_cost).
 """
 
 from __future__ import annotations
@@ -58,14 +59,19 @@ def test_row_is_a_smooth_minimum_of_the_sphere_distances(model, seed, clearance)
         assert row >= 0
 
 
-def test_a_negative_clearance_is_refused_by_name(model):
+def test_a_negative_clearance_and_a_legs_apart_not_boolean_are_refused_by_name(model):
     with pytest.raises(SettingsError, match="leg_clearance: must be >= 0, got -0.01"):
         settings_for(model("walker3d").scene, leg_clearance=-0.01)
+    with pytest.raises(SettingsError, match="legs_apart: must be true or false, got 'yes'"):
+        settings_for(model("walker3d").scene, legs_apart="yes")
 
 
 def test_one_row_per_node_as_node_elements(model):
     m = model("walker3d")
-    s = settings_for(m.scene)
+    assert not settings_for(m.scene).legs_apart  # the paper's problem (walker3d.yaml)
+    off = Transcription(DiscreteMechanics(m.mb), settings_for(m.scene))
+    assert "leg_clearance" not in {name for name, _, _ in off.constraint_groups()}
+    s = settings_for(m.scene, legs_apart=True)
     tr = Transcription(DiscreteMechanics(m.mb), s)
     sizes = {name: size for name, size, _ in tr.constraint_groups()}
     assert sizes["leg_clearance"] == tr.N - 1
