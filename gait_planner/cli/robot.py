@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from gait_planner.cli.errors import CliError
+from gait_planner.model.urdf_collision import LEG_CLEARANCE
 from gait_planner.model.urdf_mirror import MIRROR_COM_TOLERANCE, MIRROR_TOLERANCE
 
 URDF_HELP = ("a robot's URDF: its legs are planned in its own joint names and limits, every "
@@ -31,6 +32,10 @@ def add_urdf_options(parser: argparse.ArgumentParser) -> None:
                         "fraction is written as that mirror image, and the draft's header "
                         f"says so (default {MIRROR_TOLERANCE:g}); centres of mass: "
                         f"{MIRROR_COM_TOLERANCE * 100:g} cm")
+    parser.add_argument("--leg-clearance", type=float, default=LEG_CLEARANCE, metavar="M",
+                        help="the distance kept between the two legs' collision spheres "
+                        "(the draft's leg_clearance gait option; default "
+                        f"{LEG_CLEARANCE:g} m)")
 
 
 def add_scene_parser(commands: argparse._SubParsersAction) -> None:
@@ -84,7 +89,8 @@ def draft_of(args: argparse.Namespace, folder: Path | None = None):
         return draft_scene(text, feet=feet, locked=locked, name=args.name, package_dirs=dirs,
                            urdf_file=written(path),
                            robot_dirs=[written(d) for d in args.package_dir],
-                           mirror_tolerance=args.mirror_tolerance)
+                           mirror_tolerance=args.mirror_tolerance,
+                           leg_clearance=args.leg_clearance)
     except UrdfError as error:
         raise CliError(f"{path}: {error}") from None
 

@@ -21,7 +21,10 @@ YAML layout (exactly these keys; unknown keys are errors)::
     root: {body: torso, type: free}   # free | planar
     bodies:                           # order kept
       - {name: torso, mass: 33.99, inertia: [J1, J2, J3], length: 0.66,  # length optional
-         points: {hip_r: [x, y, z]}}  # body-fixed, from the COM, director components
+         points: {hip_r: [x, y, z]},  # body-fixed, from the COM, director components
+         collision: [[x, y, z, r]]}   # optional spheres containing the body (not in a
+                                      # planar scene): the legs' clearance rows measure
+                                      # them (gait_planner.ocp.legs)
     joints:                           # reordered depth-first from the root
       - {name: hip_r, type: spherical, parent: torso, parent_point: hip_r,
          child: thigh_r, child_point: hip}
@@ -236,6 +239,11 @@ def _build_scene(data: Any, file: str, source: str, folder: Path | None = None) 
     root_body = c.name(root_map["body"], "root.body")
     c.known(root_body, "root.body", [b.name for b in bodies], "body")
     root = Root(body=root_body, type=c.choice(root_map["type"], "root.type", RootType))
+    for i, body in enumerate(bodies):
+        if body.collision and root.type is RootType.PLANAR:
+            c.fail(join(join("bodies", i), "collision"),
+                   "a planar scene's legs move in one plane, one drawn over the other: a "
+                   "clearance between them is meaningless, and the planner keeps none")
     joints = parse_joints(c, top["joints"], bodies, root)
     contacts = parse_contacts(c, top["contacts"], bodies)
     pose = parse_initial_pose(c, top["initial_pose"], joints, root)

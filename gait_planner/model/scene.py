@@ -49,6 +49,10 @@ class Body:
         inertia: principal moments (J1, J2, J3) about the centre of mass along d1, d2, d3.
         points: named body-fixed points (m, from the centre of mass, director components).
         length: drawing length (m) of the body along d3, used for URDF geometry.
+        collision: spheres (x, y, z, r) (m: centre from the centre of mass in director
+            components, radius > 0) that contain the body's collision geometry: the shapes
+            the rows that keep the legs apart measure (`gait_planner.ocp.legs`); () for a
+            body those rows leave out.
     """
 
     name: str
@@ -56,6 +60,7 @@ class Body:
     inertia: Vec3
     points: Mapping[str, Vec3] = field(default_factory=lambda: MappingProxyType({}))
     length: float = 0.0
+    collision: tuple[tuple[float, float, float, float], ...] = ()
 
     @property
     def euler_tensor(self) -> Vec3:

@@ -24,15 +24,17 @@ _INERTIA_TOLERANCE = 1e-12  # relative round-off allowed in E_i >= 0
 
 def parse_bodies(c: Checker, value: Any, allow_nonphysical: bool) -> tuple[Body, ...]:
     """The `bodies:` list: each a name, a mass (kg), principal inertias (kg m^2) a rigid body
-    can have (`_check_inertia`), body-fixed points (m, from the centre of mass) and an
-    optional length (m); in the file's order."""
+    can have (`_check_inertia`), body-fixed points (m, from the centre of mass), an
+    optional length (m) and optional collision spheres ([x, y, z, r] m, r > 0); in the
+    file's order."""
     items = c.named_list(value, "bodies", "body")
     if not items:
         c.fail("bodies", "must list at least one body")
     bodies = []
     for i, item in enumerate(items):
         key = join("bodies", i)
-        b = c.mapping(item, key, ("name", "mass", "inertia"), ("length", "points"))
+        b = c.mapping(item, key, ("name", "mass", "inertia"),
+                      ("length", "points", "collision"))
         points = c.mapping(b.get("points", {}), join(key, "points"))
         for point in points:
             c.name(point, join(join(key, "points"), point))
@@ -47,10 +49,20 @@ def parse_bodies(c: Checker, value: Any, allow_nonphysical: bool) -> tuple[Body,
                 {p: c.vector(v, join(join(key, "points"), p)) for p, v in points.items()}
             ),
             length=c.number(b.get("length", 0.0), join(key, "length"), minimum=0.0),
+            collision=_spheres(c, b.get("collision", []), join(key, "collision")),
         )
         _check_inertia(c, body, join(key, "inertia"), allow_nonphysical)
         bodies.append(body)
     return tuple(bodies)
+
+
+def _spheres(c: Checker, value: Any, key: str) -> tuple[tuple[float, ...], ...]:
+    """A body's `collision:` list of spheres [x, y, z, r] (m; r > 0)."""
+    out = []
+    for i, sphere in enumerate(c.sequence(value, key)):
+        x, y, z, r = c.vector(sphere, join(key, i), 4)
+        out.append((x, y, z, c.number(r, join(join(key, i), 3), positive=True)))
+    return tuple(out)
 
 
 def _check_inertia(c: Checker, body: Body, key: str, allow_nonphysical: bool) -> None:

@@ -32,6 +32,10 @@ approximation of it:
   (G1's right knee inertia, Bolt's 1.5e-6 kg). `mirror_tolerance` (a fraction, default
   5 %: `--mirror-tolerance`) is the mass and inertia difference the user accepts; the
   refusal names the value that would accept the robot.
+* **Legs apart.** The lower legs' bodies (knee, shank, ankle, foot) carry spheres that
+  contain their collision geometry (``collision:``, `gait_planner.model.urdf_collision`),
+  and the gait keeps them ``leg_clearance`` (`leg_clearance`, default 1 cm) apart
+  (`gait_planner.ocp.legs`).
 * **Limits.** The URDF's ranges (`joint_limits`, within +-89.5 deg of its zero: the range
   rows take ranges narrower than 180 deg) and efforts (`effort_limits`, hard bounds on the
   torques) per joint; its slowest velocity limit for every joint (`joint_speed_max`: the
@@ -67,6 +71,7 @@ import numpy as np
 import yaml
 
 from gait_planner.model.rotations import matrix_rpy
+from gait_planner.model.urdf_collision import LEG_CLEARANCE, leg_spheres
 from gait_planner.model.urdf_contacts import foot_contacts
 from gait_planner.model.urdf_envelope import (HIP_YAW_DEG, STANCE_KNEE_DEG, UPRIGHT_DEG,
                                               leg_roles, walking_envelope)
@@ -269,14 +274,19 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
                 locked: Mapping[str, float] | None = None, name: str | None = None,
                 package_dirs: Sequence[str | Path] = (), urdf_file: str = "robot.urdf",
                 robot_dirs: Sequence[str] = (),
-                mirror_tolerance: float = MIRROR_TOLERANCE) -> UrdfDraft:
+                mirror_tolerance: float = MIRROR_TOLERANCE,
+                leg_clearance: float = LEG_CLEARANCE) -> UrdfDraft:
     """The scene of a URDF's legs (module docstring); UrdfError naming what is refused.
 
     `package_dirs` resolve the URDF's meshes here; the draft's ``robot:`` section names the
     URDF as `urdf_file` and its mesh folders as `robot_dirs` (both as the scene file will
     read them: relative to its folder, or absolute). `mirror_tolerance`: the relative
     difference of a right link's mass and inertia from its left partner's mirror image
-    written symmetric (a fraction in [0, 1); `gait_planner.model.urdf_mirror`)."""
+    written symmetric (a fraction in [0, 1); `gait_planner.model.urdf_mirror`).
+    `leg_clearance` m >= 0: the gait's distance between the legs' collision spheres."""
+    if not (isinstance(leg_clearance, (int, float)) and 0.0 <= leg_clearance < math.inf):
+        raise UrdfError(f"--leg-clearance takes a distance >= 0 m (0.01 for 1 cm), got "
+                        f"{leg_clearance!r}")
     if not 0.0 <= mirror_tolerance < 1.0:
         raise UrdfError(f"--mirror-tolerance takes a fraction in [0, 1) (0.06 for 6 %), got "
                         f"{mirror_tolerance:g}")
@@ -320,6 +330,7 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     q0 = pin.neutral(model)
     pin.forwardKinematics(model, data, q0)
     contacts, half_widths = foot_contacts(model, geometry, data, foot_ids, links)
+    spheres = leg_spheres(model, geometry, data, bodies, left_of, foot_ids)
     owner = {full.getJointId(model.names[j]) if j > 1 else 1: (b.name, b.com, b.R)
              for j, b in bodies.items()}
     holds, unheld = locked_holds(full, q_lock, legs, owner)
@@ -330,12 +341,14 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     source = {"urdf": urdf_file, **({"package_dirs": list(robot_dirs)} if robot_dirs else {}),
               "locked": lock_angles, **({"holds": holds} if holds else {})}
     return _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-                  left_of, name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
+                  spheres, leg_clearance, left_of,
+                  name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
                   changes, source, mirror_tolerance, unheld, roles)
 
 
 def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-           left_of, name, changes, source, mirror_tolerance, unheld, roles) -> UrdfDraft:
+           spheres, leg_clearance, left_of, name, changes, source,
+           mirror_tolerance, unheld, roles) -> UrdfDraft:
     order = [1] + [j for j in ids.values() if j in bodies]
     for foot, points in contacts.items():
         bodies[foot].points.update(points)
@@ -408,7 +421,10 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
         "root": {"body": root.name, "type": "free"},
         "bodies": [{"name": bodies[j].name, "mass": round(bodies[j].mass, 12),
                     "inertia": _round(bodies[j].moments),
-                    "points": {p: _round(v) for p, v in local[j].items()}} for j in order],
+                    "points": {p: _round(v) for p, v in local[j].items()},
+                    **({"collision": [_round(np.r_[s[:3], s[3] + 1e-6], 6) for s in spheres[j]]}
+                       if j in spheres
+                       else {})} for j in order],
         "joints": [j.get("entry") or {
             "name": jname, "type": "revolute", "axis": _round(j["axis"]),
             "reference_rpy": _round(matrix_rpy(j["reference"])), "parent": j["parent"],
@@ -423,6 +439,7 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
             "cost": "kinetic_energy", "mirror": mirror,
             "phases": phases,
             "options": {**_swing_options(leg, half_widths), **envelope,
+                        **({"leg_clearance": float(leg_clearance)} if spheres else {}),
                         "joint_limits": limits, "effort_limits": efforts,
                         **({"joint_speed_max": min(speeds.values())} if speeds else {}),
                         "step_length_bounds": [round(0.6 * step, 4), round(1.4 * step, 4)]},
@@ -434,11 +451,13 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
               f"principal axes;\n# joints: the URDF's, zero and sign as the URDF's. Leg length "
               f"(hip to sole) L = {leg:.4f} m:\n# step_length = 0.7066 L, base_time_step = "
               f"0.01 s sqrt(L / 0.897 m) (walker3d scaled).\n# Joint ranges: the URDF's within "
-              f"+-{_RANGE_MAX} deg of its zero pose (the planner's range rows);\n# joint_speed_max: "
-              f"the slowest joint's velocity limit (one bound for every joint).\n# Walking "
-              f"envelope (gait_planner.model.urdf_envelope): the base link within "
-              f"{UPRIGHT_DEG:g} deg of upright,\n# hip yaw within +-{HIP_YAW_DEG:g} deg, the "
-              f"stance knee within +-{STANCE_KNEE_DEG:g} deg in single support.\n")
+              f"+-{_RANGE_MAX} deg of its zero pose (the planner's range rows);\n# collision: "
+              f"spheres containing the lower legs' collision geometry (leg_clearance between "
+              f"legs);\n# joint_speed_max: the slowest joint's velocity limit (one bound for "
+              f"every joint).\n# Walking envelope (gait_planner.model.urdf_envelope): the base "
+              f"link within {UPRIGHT_DEG:g} deg of upright,\n# hip yaw within "
+              f"+-{HIP_YAW_DEG:g} deg, the stance knee within +-{STANCE_KNEE_DEG:g} deg in "
+              f"single support.\n")
     if lock_angles:
         header += "# Locked joints (merged into their parent): " + ", ".join(
             f"{k} = {v:g} rad" for k, v in lock_angles.items()) + "\n"

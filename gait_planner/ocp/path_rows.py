@@ -1,7 +1,8 @@
 """The transcription's path rows (docs/design.md section 8): what a plan must keep at its
 nodes and intervals beyond the dynamics, the contacts and the cones. Per phase, the swing
 points' clearance above the ground and their speed before a strike (`ocp.clearance`), the
-joint ranges and speed limits, the torso's lean and height (`ocp.posture`); and the
+joint ranges and speed limits, the torso's lean and height (`ocp.posture`), the legs'
+clearance from each other (`ocp.legs`); and the
 per-node rows element that evaluates a node's contact-dependent rows (cones, unilateral
 conditions, the entries bounded at a node) from its own unknowns.
 
@@ -23,6 +24,7 @@ from gait_planner.ocp.clearance import (approach_schedule, clearance_rows,
                                         schedule_heights, segment_heights, segment_schedule,
                                         strike_rows, strike_schedule)
 from gait_planner.ocp.elements import ElementGroup
+from gait_planner.ocp.legs import SMOOTHING, leg_clearance_rows
 from gait_planner.ocp.posture import (JOINT_RANGE_ROW_UPPER, joint_limit_constants,
                                       joint_limit_rows, joint_speed_margins)
 
@@ -107,6 +109,13 @@ class PathRows:
                                          first_row)
             self._ineq.append(("joint_speed", ca.vec(speed)))
             self._without_elements["joint_speed"] = ca.MX(speed.numel(), 1)
+        legs = leg_clearance_rows(mb) if s.legs_apart else None
+        if legs is not None:  # nodes N-1 and N: images of 0 and 1, their rows mirrored
+            first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
+            rows = self._node_terms(legs, np.array([s.leg_clearance, SMOOTHING]), first_row,
+                                    list(range(1, N)))
+            self._ineq.append(("leg_clearance", ca.vec(rows)))
+            self._without_elements["leg_clearance"] = ca.MX(rows.numel(), 1)
 
     def _uprightness(self, q):
         """The z component of the root's up axis in configurations q (k, n) (row (1, n)):

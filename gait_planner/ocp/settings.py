@@ -118,6 +118,10 @@ class GaitSettings:
     - 2 tau_n + tau_{n-1}|^2 over the node torques, across the mirrored join, added to the
     cost (the J reported excludes it; `ocp.cost_terms`): no torque jumps at one node and
     back, where an inequality row touches its bound for one node (walker2d's strike rows);
+    legs_apart: keep the collision spheres of different legs (`Body.collision`) leg_clearance
+    m apart (`gait_planner.ocp.legs`; rows only where the scene gives two legs spheres: the
+    drafts of URDF robots, walker3d; walker3d's gait sets it false: the paper's problem,
+    whose optimum passes one foot through the other);
     refinements: how many times a converged plan that misses the continuous-dynamics
     certificate is planned again on a grid twice as fine, from itself
     (`gait_planner.strategies.plan_certified`, `gait_planner.ocp.refine`; 0 = never);
@@ -154,6 +158,8 @@ class GaitSettings:
     speed_scaling_bounds: tuple[float, ...] = ()
     twist_regularisation: float = 0.0
     torque_smoothness: float = 0.0
+    legs_apart: bool = True
+    leg_clearance: float = 0.01
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
     refinements: int = 2
@@ -204,10 +210,12 @@ class GaitSettings:
                     bad(name, f"need [lower, upper]{unit} with 0 < lower <= upper, got "
                               f"{bounds!r}")
                 object.__setattr__(self, name, tuple(float(b) for b in bounds))
+        if not isinstance(self.legs_apart, bool):
+            bad("legs_apart", f"must be true or false, got {self.legs_apart!r}")
         for name in ("torque_regularisation", "friction_smoothing", "torso_height_min",
                      "foot_half_width", "swing_clearance", "swing_clearance_ramp", "strike_speed_max",
                      "strike_deceleration_max", "joint_speed_max", "speed", "speed_max",
-                     "twist_regularisation", "torque_smoothness"):
+                     "twist_regularisation", "torque_smoothness", "leg_clearance"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 bad(name, f"must be a number, got {value!r}")

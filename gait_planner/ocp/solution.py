@@ -190,6 +190,9 @@ def build_result(tr: Transcription, settings: GaitSettings, x: np.ndarray, p: np
                if s.strike_deceleration_max > 0 else {}),
             **({"torque_smoothness": repr(s.torque_smoothness)}
                if s.torque_smoothness > 0 else {}),
+            **({"leg_clearance": repr(s.leg_clearance)}
+               if any(name == "leg_clearance" for name, _, _ in tr.constraint_groups())
+               else {}),
             "speed": repr(s.speed),
             **ground.metadata(),
             "joint_limits_deg": ",".join(f"{name}:{np.degrees(lo):.6g}:{np.degrees(hi):.6g}"

@@ -80,6 +80,10 @@ Checks and method (limits in `LIMITS`):
   the continuous model at every inner node from the recorded motion and foot wrenches,
   against the published efforts (torque error within 0.2 % of the peak away from contact
   switches, 2 % at them) and a free floating base (residual force and moment).
+* Legs apart (`gait_planner.verify.legs`; scenes whose lower legs carry collision spheres):
+  the smallest distance between the collision geometry of the two legs at every node,
+  by coal on the URDF's own geometry for a drafted scene, between the spheres otherwise;
+  the legs touching (distance <= 0) fails, closer than the plan's leg_clearance is noted.
 * Time and cost: times strictly increasing, interval lengths = base_time_step * sigma of
   their phase (when the metadata states base_time_step), sigma within the scaling
   bounds, duration = t_{N-1} - t_0, cost recomputed from q, times and efforts

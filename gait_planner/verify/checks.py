@@ -14,6 +14,7 @@ from gait_planner.verify.recorded import certificate_of_recording
 from gait_planner.verify.ground import RecordedGround
 from gait_planner.verify.joined import verify_joined
 from gait_planner.verify.effort_limits import effort_limit_failures, effort_shares
+from gait_planner.verify.legs import judge_legs, legs_of_recording
 from gait_planner.verify.physical import check_physical
 from gait_planner.verify.limits import LIMITS
 from gait_planner.verify.report import VerificationReport
@@ -366,6 +367,8 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
     failures += effort_limit_failures(shares or {})
     continuous = certificate_of_recording(rec)
     failures += [f"continuous dynamics: {f}" for f in continuous.failures]
+    legs = legs_of_recording(rec, scene)
+    judge_legs(legs, failures, notes)
 
     return VerificationReport(
         path=str(rec.path), scene=scene.name, ground=ground.describe(), cost_name=cost_name,
@@ -387,7 +390,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
         max_scaling_bound_excess=max(excesses, default=math.nan),
         max_potential_energy_error=energy_error,
         failures=tuple(failures), notes=tuple(notes), physical=physical, continuous=continuous,
-        effort_shares=shares,
+        effort_shares=shares, legs=legs,
     )
 
 

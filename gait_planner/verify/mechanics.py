@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -19,6 +19,8 @@ class BodyData:
     mass: float
     inertia: tuple[float, float, float]
     points: dict[str, np.ndarray]
+    # spheres (x, y, z, r) containing the body (`collision:`; m, director components)
+    collision: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
 
 
 @dataclass(frozen=True)
@@ -69,7 +71,8 @@ def parse_scene(text: str) -> SceneData:
         raise ValueError("the attached scene is not a YAML mapping")
     bodies = tuple(
         BodyData(str(b["name"]), float(b["mass"]), tuple(float(j) for j in b["inertia"]),
-                 {str(p): np.asarray(v, dtype=float) for p, v in (b.get("points") or {}).items()})
+                 {str(p): np.asarray(v, dtype=float) for p, v in (b.get("points") or {}).items()},
+                 np.asarray(b.get("collision") or np.zeros((0, 4)), dtype=float).reshape(-1, 4))
         for b in data["bodies"])
     by_name = {b.name: b for b in bodies}
     joints = []

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from gait_planner.verify.continuous import ContinuousCertificate
+from gait_planner.verify.legs import LegClearance
 from gait_planner.verify.physical import PhysicalReport
 from gait_planner.verify.report_text import report_lines
 
@@ -65,6 +66,7 @@ class VerificationReport:
     continuous: ContinuousCertificate | None = None  # inverse dynamics of the continuous model
     # a robot drafted from its URDF: joint -> (largest |effort| / URDF limit, node, limit N m)
     effort_shares: dict[str, tuple[float, int, float]] | None = None
+    legs: LegClearance | None = None  # the legs' smallest distance (scenes with leg spheres)
 
     @property
     def ok(self) -> bool:

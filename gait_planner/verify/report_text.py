@@ -3,7 +3,7 @@
 `report_lines(report)` opens with the scene and the ground checked against ("ground: ramp 10
 deg up", `gait_planner.verify.ground`), then groups the measured numbers by what they test
 (constraints, contacts, ground forces, discrete dynamics, actuation, periodicity, time and
-cost, physical plausibility, continuous dynamics), one line per number::
+cost, physical plausibility, continuous dynamics, legs apart), one line per number::
 
     held points: drift over an interval      2.1e-13 m      limit 1e-09 m       ok
 
@@ -203,6 +203,17 @@ def _continuous(c, rows: _Rows) -> None:
     rows.row("base residual moment at switches", f"{c.max_moment_switch:.3g} N m")
 
 
+def _legs(legs, rows: _Rows) -> None:
+    rows.group(f"legs apart: {legs.source}")
+    a, b = legs.pair
+    kept = legs.clearance == legs.clearance  # not nan: the plan kept its legs apart
+    mark = ("FAILED" if rows.failed("the legs touch") else "ok") if kept else \
+        ("noted" if not legs.smallest > 0 else "")
+    rows.row(f"smallest distance ({a}, {b}, node {legs.node})", _number(legs.smallest, "m"),
+             "limit > 0 m" if kept else "not kept apart", mark)
+    rows.row("the plan's leg_clearance (between its spheres)", _number(legs.clearance, "m"))
+
+
 def report_lines(r) -> list[str]:
     """The lines of `r` (a `VerificationReport`), in the order of the module docstring."""
     rows = _Rows(r.failures)
@@ -222,6 +233,8 @@ def report_lines(r) -> list[str]:
         _physical(r.physical, rows)
     if r.continuous is not None:
         _continuous(r.continuous, rows)
+    if r.legs is not None:
+        _legs(r.legs, rows)
     lines = rows.lines
     lines += [f"note: {n}" for n in r.notes]
     lines += [f"FAILED: {f}" for f in r.failures]

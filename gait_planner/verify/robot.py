@@ -31,7 +31,7 @@ from gait_planner.verify.continuous import (ContinuousCertificate, switch_mask,
                                             effort_names, inverse_dynamics, local_force)
 from gait_planner.verify.mechanics import SceneData
 
-__all__ = ["robot_certificate", "split_impulses"]
+__all__ = ["robot_certificate", "split_impulses", "urdf_configurations"]
 
 
 def _set(model: pin.Model, q: np.ndarray, name: str, angle: float) -> None:
@@ -55,6 +55,29 @@ def split_impulses(held: np.ndarray, times: np.ndarray,
             impulses[n] = (efforts[n] - mean) * 0.5 * (times[n + 1] - times[n - 1])
             efforts[n] = mean
     return efforts, impulses
+
+
+def urdf_configurations(scene: SceneData, model: pin.Model, q: np.ndarray,
+                        angles: np.ndarray) -> list[np.ndarray]:
+    """The URDF configurations (model.nq,) of a drafted scene's nodes: the base link placed
+    by the root body's centre of mass and directors in q (N+1, 12 nb) (`SceneData.robot_root`),
+    the planned joints at their angles (N+1, na) (`effort_names` order), the locked ones at
+    their locked angle."""
+    names, locked = effort_names(scene), dict(scene.robot_locked or {})
+    position, rotation = scene.robot_root
+    root = scene.body_index(scene.root)
+    configs = []
+    for row, angle_row in zip(q, angles):
+        phi, D = row[12 * root:12 * root + 3], row[12 * root + 3:12 * root + 12].reshape(3, 3).T
+        U, _, Vt = np.linalg.svd(D @ rotation)  # nearest rotation (round-off)
+        config = pin.neutral(model)
+        config[:3], config[3:7] = phi + D @ position, pin.Quaternion(U @ Vt).coeffs()
+        for name, angle in zip(names, angle_row):
+            _set(model, config, name, float(angle))
+        for name, angle in locked.items():
+            _set(model, config, name, angle)
+        configs.append(config)
+    return configs
 
 
 def robot_certificate(scene: SceneData, urdf: str, times: np.ndarray, q: np.ndarray,
@@ -85,19 +108,8 @@ def robot_certificate(scene: SceneData, urdf: str, times: np.ndarray, q: np.ndar
         raise ValueError(f"the URDF does not match scene {scene.name!r}: "
                          + (f"no joints {unknown}" if unknown else
                             f"joints {loose} are neither planned nor locked"))
-    position, rotation = scene.robot_root
+    configs = urdf_configurations(scene, model, q, angles)
     root = scene.body_index(scene.root)
-    configs = []
-    for row, angle_row in zip(q, angles):
-        phi, D = row[12 * root:12 * root + 3], row[12 * root + 3:12 * root + 12].reshape(3, 3).T
-        U, _, Vt = np.linalg.svd(D @ rotation)  # nearest rotation (round-off)
-        config = pin.neutral(model)
-        config[:3], config[3:7] = phi + D @ position, pin.Quaternion(U @ Vt).coeffs()
-        for name, angle in zip(names, angle_row):
-            _set(model, config, name, float(angle))
-        for name, angle in locked.items():
-            _set(model, config, name, angle)
-        configs.append(config)
     joint_of = {body: model.frames[model.getFrameId(body)].parentJoint for body in foot_wrenches}
 
     def external(n: int, data) -> list:

@@ -362,6 +362,11 @@ SET_CASES = [
      "gait.options.joint_limits: 'elbow' is not a joint angle of scene 'walker3d'; known: "
      "hip_r_pitch"),
     ("gait.options.joint_limits", [0, 75], "gait.options.joint_limits: need a mapping"),
+    ("bodies[2].collision[0]", [0, 0, 0],
+     "walker3d.yaml: bodies[2].collision[0]: must be a list of 4 numbers, got 3 entries"),
+    ("bodies[2].collision[1]", [0, 0, 0, -0.01],
+     "walker3d.yaml: bodies[2].collision[1][3]: must be a positive number, got -0.01"),
+    ("bodies[2].collision", {"x": 1}, "walker3d.yaml: bodies[2].collision: must be a list"),
 ]
 
 
@@ -384,6 +389,8 @@ def test_validation_rule(tmp_path, path, value, expected):
     ("gait.options.joint_limits.knee_l", [0, 180], "joint_limits.knee_l: need finite lower"),
     ("gait.options.torso_lean_max", 100,
      "torso_lean_max: must be in [0, 90) degrees, got 100.0"),
+    ("bodies[2].collision", [[0.0, 0.0, 0.0, 0.05]],
+     "walker2d.yaml: bodies[2].collision: a planar scene's legs move in one plane"),
 ])
 def test_planar_rules(tmp_path, path, value, expected):
     data = scene_data("walker2d")

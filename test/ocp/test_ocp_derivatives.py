@@ -73,11 +73,13 @@ def test_element_derivatives_equal_casadi_whole_graph(name, overrides):
 
 
 @pytest.mark.parametrize("name, overrides", [("walker2d", {}), ("walker2d", HUMAN),
-                                             ("walker3d", {}), ("compass", {})])
+                                             ("walker3d", {}), ("compass", {}),
+                                             ("walker3d", {"legs_apart": True})])
 def test_elements_and_rest_sum_to_g_and_cost(name, overrides):
     """g and the cost are their elements plus the rest, in every kind of element: contact
     terms, cones and torso bounds of a node, contact rows of an interval, swing clearances
-    (walker3d: full contacts with roll bounds). The mirror image nodes N-1 and N are the
+    (walker3d: full contacts with roll bounds; with legs_apart its legs' clearance rows).
+    The mirror image nodes N-1 and N are the
     regular elements at mirrored unknowns and references (`Layout.images`) where
     the mirror commutes with the reparametrisation (the walkers), variants of their own
     where it does not (the compass, whose root is mirrored into the other leg)."""
@@ -91,6 +93,7 @@ def test_elements_and_rest_sum_to_g_and_cost(name, overrides):
         assert {"joint_speed_element", "joint_limits_element", "node_rows_phase0",
                 "node_rows_phase4", "contact_hold_phase0_element"} <= names
         assert any(n.startswith("clearance_") for n in names)
+        assert ("leg_clearance_element" in names) == overrides.get("legs_apart", False)
     g, g_rest, f, f_rest = (np.array(v).ravel() for v in ca.Function(
         "parts", [tr.x, tr.p], [tr.g, tr.g_without_elements, tr.cost, tr.cost_without_elements]
     )(x, p))

@@ -15,9 +15,10 @@ back as a user would.
   base placed as the recorded root body) puts every held contact point where the plan
   publishes it (1e-6 m);
 * each held foot stays on its own side of the walk's mid-plane (left: y > 0, right: y < 0).
-  Talos's plan puts each stance foot 1 to 4 cm across it: its legs cross, which no check
-  and no row of the planner forbids yet (the draft's hip roll range is the URDF's +-30 deg);
-  expected to fail until one does.
+  Talos's plan put each stance foot 1 to 4 cm across it until the legs were kept apart
+  (`gait_planner.ocp.legs`): its legs crossed, the left ankle 14 mm into the right leg;
+* the legs' collision geometry, measured by coal at every node, is at least the draft's
+  leg_clearance apart.
 
 Slow: without compiling, Bolt's problem builds and solves in about 50 s, G1's in about 4 min
 (refined once to 80 intervals), Talos's in about 3 min (refined once to 80 intervals).
@@ -169,10 +170,7 @@ def test_published_angles_put_the_held_contacts_where_the_plan_has_them(robot):
     assert held > 0 and worst < 1e-6
 
 
-def test_each_held_foot_stays_on_its_side(robot, request):
-    if request.node.callspec.params["robot"] == "talos":
-        request.applymarker(pytest.mark.xfail(strict=True, reason="Talos's legs cross: no "
-                                              "row keeps the feet on their sides"))
+def test_each_held_foot_stays_on_its_side(robot):
     _, _, outcome = robot
     rec = read_plan_mcap(outcome.mcap_path)
     side = {c.name: 1.0 if c.name.startswith("foot_l") else -1.0  # the draft's names
@@ -181,6 +179,19 @@ def test_each_held_foot_stays_on_its_side(robot, request):
                 for n in range(len(rec.times))
                 for i, name in enumerate(rec.contact_names[n]) if name in rec.active_contacts[n])
     assert worst > 0.0, f"a held foot {-worst:.3f} m across the mid-plane"
+
+
+def test_the_legs_collision_geometry_keeps_the_clearance(robot):
+    """The verifier's coal distance between the two legs' links (their URDF collision
+    geometry) at every node is at least the draft's leg_clearance, which the plan kept
+    between the spheres that contain them."""
+    _, draft, outcome = robot
+    legs = verify_recording(outcome.mcap_path).legs
+    clearance = yaml.safe_load(draft.yaml)["gait"]["options"]["leg_clearance"]
+    assert legs.source == "the URDF's collision geometry (coal)"
+    assert legs.clearance == clearance == 0.01
+    assert legs.distance.shape == (outcome.result.n_nodes,)
+    assert legs.smallest >= clearance, (legs.pair, legs.node)
 
 
 def _directors(q_row, index: int) -> np.ndarray:
