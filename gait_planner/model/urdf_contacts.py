@@ -26,7 +26,7 @@ import numpy as np
 
 from gait_planner.model.urdf_errors import UrdfError
 
-__all__ = ["foot_contacts", "sole_points"]
+__all__ = ["foot_contacts", "read_mesh", "sole_points"]
 
 _SOLE = 1e-3  # m: vertices this close above the lowest one are on the sole
 _POINT_FOOT = 0.02  # m: a sole shorter than this along forward is a point
@@ -110,6 +110,16 @@ def mesh_vertices(obj) -> np.ndarray:
     file's ``Y_UP`` turned to z up (module docstring)."""
     vertices = np.asarray(obj.geometry.vertices(), dtype=float)
     return vertices @ _Y_UP.T if collada_y_up(obj.meshPath) else vertices
+
+
+def read_mesh(path: str, scale) -> np.ndarray:
+    """The vertices (n, 3) m of the mesh file `path` scaled by `scale` (3,), as coal reads
+    it for Pinocchio, a Collada ``Y_UP`` turned to z up (module docstring)."""
+    import coal  # noqa: PLC0415 - Pinocchio's geometry library, on demand
+
+    vertices = np.asarray(coal.MeshLoader().load(path, np.asarray(scale, float)).vertices(),
+                          dtype=float)
+    return vertices @ _Y_UP.T if collada_y_up(path) else vertices
 
 
 def collada_y_up(path: str) -> bool:

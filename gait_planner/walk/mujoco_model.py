@@ -43,7 +43,7 @@ from gait_planner.model.angles import angle_names
 from gait_planner.model.ground import Ground, GroundError
 from gait_planner.model.scene import Scene
 from gait_planner.walk.director_frames import SiteFrame, director_frames
-from gait_planner.walk.robot_urdf import RobotUrdf, simulation_urdf
+from gait_planner.walk.robot_urdf import FootMesh, RobotUrdf, foot_meshes, simulation_urdf
 
 __all__ = ["STAIRS_BEHIND", "STAIR_TREADS", "WalkModel", "build_model", "plan_qpos",
            "plan_root_qvel", "recorded_ground", "root_link_pose", "set_inertia"]
@@ -95,6 +95,7 @@ def build_model(rec: RecordedPlan, scene: Scene, half_width: float, radius: floa
         feet = {c.body for c in scene.contacts}
         spec = _load(simulation_urdf(robot, angle_names(scene), feet), "the robot's URDF")
         _check_root(spec, scene, "the robot's URDF")
+        _add_meshes(spec, foot_meshes(robot, feet))
         for geom in spec.geoms:  # the feet's own collision geometry, the only geometry left
             for key, value in foot.items():
                 setattr(geom, key, value)
@@ -154,6 +155,19 @@ def _add_spheres(spec, scene: Scene, half_width: float, radius: float, foot: dic
         for side in (1.0, -1.0):
             body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[radius, 0, 0],
                           pos=[0.0, side * half_width, radius], **foot)
+
+
+def _add_meshes(spec, meshes: list[FootMesh]) -> None:
+    """The feet's meshes MuJoCo does not read from a file, from their vertices (its
+    collision takes their convex hull, as it does of any mesh)."""
+    import mujoco
+
+    for i, mesh in enumerate(meshes):
+        spec.add_mesh(name=f"foot_mesh_{i}", uservert=mesh.vertices.ravel().tolist())
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, mesh.R.ravel())
+        spec.body(mesh.link).add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"foot_mesh_{i}",
+                                      pos=mesh.pos, quat=quat)
 
 
 def _add_site(spec, name: str, frame: SiteFrame) -> None:
