@@ -6,14 +6,20 @@ collision geometry with `buildGeomFromUrdfString`), so the URDF is parsed, its f
 merged and meshes read as the rest of the field does. The draft is the URDF's model, not an
 approximation of it:
 
-* **Legs.** The two chains from the floating base to the feet (`feet`, or the two lowest
-  leaves of the tree, left = +y). Every other joint is locked at `locked` (default: the
-  URDF's zero) and its links merged into their parent with `pinocchio.buildReducedModel`:
-  one rigid body with the combined mass and inertia.
+* **The walker's frame.** The scene's world (x forward, y left, z up) is found from the
+  robot at its draft pose, whatever axes the URDF uses (`gait_planner.model.urdf_frame`:
+  the mirror plane from the feet, forward from the soles, else the knees, else the URDF's
+  x); the draft is written in it (iCub, whose base x points backwards, walks along -x of
+  its base).
+* **Legs.** The two chains from the floating base to the feet (`feet` LEFT, RIGHT, or the
+  two lowest leaves of the tree, left told by the walker's frame). Every other joint is
+  locked at `locked` (default: the URDF's zero) and its links, massless or not, merged
+  into their parent with `pinocchio.buildReducedModel`: one rigid body with the combined
+  mass and inertia.
 * **Bodies.** Each remaining joint's body; its directors are its principal axes of inertia
   (the inertia at the centre of mass diagonalised; of the 24 right-handed orderings of the
-  eigenvectors the one nearest the link's own frame), joint points and contact points in
-  them, from the centre of mass.
+  eigenvectors the one nearest the walker's axes, so that the URDF's link frames do not
+  matter), joint points and contact points in them, from the centre of mass.
 * **Joints.** Every leg joint is revolute: its axis in the parent's directors and its
   zero-angle reference R0 (the child's directors in the parent's at the URDF's zero pose,
   as `reference_rpy`), so the scene's joint angle is the URDF's (zero at the URDF's zero,
@@ -22,16 +28,18 @@ approximation of it:
   joints) whose axes meet in one point as pitch, roll, yaw: one spherical joint whose
   angles are the three URDF joints' (`gait_planner.model.urdf_fuse`; exact; links with
   mass are never fused).
-* **Contacts.** Heel and forefoot, or a point foot, from each foot's collision geometry at
-  the URDF zero pose (`gait_planner.model.urdf_contacts`).
-* **Mirror.** Left and right bodies paired by their names (``left_``/``right_``,
-  ``l_``/``r_``, ``_l``/``_r``, ``FL_``/``FR_``, ...). The half-cycle's mirror periodicity
-  needs a symmetric robot: right and left data that differ by more than
-  `gait_planner.model.urdf_mirror`'s tolerances are refused, naming the link; below them
-  the draft writes the left link's data mirrored for the right one and lists what moved
-  (G1's right knee inertia, Bolt's 1.5e-6 kg). `mirror_tolerance` (a fraction, default
-  5 %: `--mirror-tolerance`) is the mass and inertia difference the user accepts; the
-  refusal names the value that would accept the robot.
+* **Contacts.** Heel and forefoot, or a point foot, from each foot's collision geometry
+  (else its visual geometry) at the draft pose (`gait_planner.model.urdf_contacts`).
+* **Mirror.** Left and right bodies and joints paired from the kinematic tree (the legs'
+  joints in chain order), not from their names, and compared in the walker's world at
+  the draft pose, not link frame by link frame (`gait_planner.model.urdf_mirror`). The
+  half-cycle's mirror periodicity needs a symmetric robot: right and left data that differ
+  by more than its tolerances are refused, naming the link; below them the draft writes
+  the left link's data mirrored for the right one and lists what moved (G1's right knee
+  inertia, Bolt's 1.5e-6 kg, iCub's right leg links, whose URDF has no inertia).
+  `mirror_tolerance` (a fraction, default 5 %: `--mirror-tolerance`) is the mass and
+  inertia difference the user accepts; the refusal names the value that would accept the
+  robot.
 * **Limits.** The URDF's ranges (`joint_limits`, within +-89.5 deg of its zero: the range
   rows take ranges narrower than 180 deg) and efforts (`effort_limits`, hard bounds on the
   torques) per joint; its slowest velocity limit for every joint (`joint_speed_max`: the
@@ -45,8 +53,9 @@ approximation of it:
 Refused before anything is built, with the joint or link named (`UrdfError`): an
 unreadable or closed-chain description, a leg joint that is not revolute (prismatic,
 planar, floating, spherical), a moving leg body without mass (other than a ball joint's)
-or with a non-physical inertia, fewer than two feet, a foot without collision geometry or
-contact frames, a mesh that cannot be read.
+or with a non-physical inertia, fewer than two feet, feet not side by side or not below
+the hips along z, a foot without collision or visual geometry or contact frames, a mesh
+that cannot be read.
 """
 
 from __future__ import annotations

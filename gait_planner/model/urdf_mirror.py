@@ -21,7 +21,12 @@ walker's mid-plane, S = diag(1, -1, 1) in the walker's frame
 * `mirror_geometry`, on the drafted points, axes and references (director components,
   the right links' principal axes being the left ones' mirrored in the world): points
   (X1, X2, X3) -> (X1, -X2, X3), axes n -> +-(-S n), references R0 -> S R0 S, after
-  checking that the URDF's own placements agree to round-off (_SNAP_TOLERANCE).
+  checking that the URDF's own placements agree within GEOMETRY_TOLERANCE (1e-3
+  relative: iCub's rpy of 1.5708 leave its right joints a few micrometres and 1e-4 rad
+  from its left ones' images); what moved beyond 1e-6 relative is listed in the header.
+* A link with mass whose URDF inertia is zero (`MISSING_INERTIA`: all of iCub's right leg
+  links but its foot in example-robot-data) takes its twin's mirrored inertia, its mass
+  and centre of mass still checked; the header says so.
 """
 
 from __future__ import annotations

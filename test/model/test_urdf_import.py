@@ -208,6 +208,21 @@ def test_an_asymmetric_robot_with_turned_frames_is_refused_naming_the_link():
         draft_scene(turn_link_frames(urdf, turns))
 
 
+def test_a_massless_link_outside_the_legs_is_merged_into_the_base():
+    """A locked link without mass (an IMU or a handle frame on a joint) adds nothing: the
+    draft is the robot's without that link."""
+    plain = biped()
+    arm = plain[plain.index('<link name="arm_link">'):plain.index("</link>", plain.index(
+        '<link name="arm_link">')) + len("</link>")]
+    massless, _ = _draft_data(plain.replace(arm, '<link name="arm_link"/>'))
+    without = biped().replace(arm, "")
+    without = without[:without.index('<joint name="waist_joint"')] + without[
+        without.index("</joint>", without.index('<joint name="waist_joint"')) + len("</joint>"):]
+    bare, _ = _draft_data(without)
+    massless["description"] = bare["description"]  # it counts the locked joints
+    _assert_same(bare, massless)
+
+
 # ----------------------------------------------------------------------------- example robots
 
 
