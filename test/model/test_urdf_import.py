@@ -199,6 +199,26 @@ def test_any_leg_link_frames_and_base_heading_draft_the_plain_scene(yaw, turns):
             ROUND_OFF, link
 
 
+CENTRED_FEET = "".join(  # soles centred under the ankles: they do not tell forward
+    f'<collision><origin xyz="{x} {y} -0.06"/><geometry><sphere radius="0.005"/></geometry>'
+    f'</collision>' for x in (-0.08, 0.08) for y in (-0.03, 0.03))
+
+
+@pytest.mark.parametrize("feet, cue", [(None, "the soles"), (CENTRED_FEET, "the knees")])
+def test_the_walking_direction_follows_the_feet_or_the_knees(feet, cue):
+    """With its base turned (x backwards, or sideways) the robot walks as the plain one
+    does: the soles tell forward (the toes reach further than the heels), or, with soles
+    centred under the ankles, the knees (flexing moves the feet back); the header says
+    which."""
+    plain, _ = _draft_data(biped(foot_geometry=feet))
+    assert "Walking direction" not in draft_scene(biped(foot_geometry=feet)).yaml  # its x
+    for yaw in (np.pi, np.pi / 2):
+        urdf = turn_link_frames(biped(foot_geometry=feet), {"base_link": rot_z(yaw)})
+        turned, _ = _draft_data(urdf)
+        _assert_same(plain, turned)
+        assert f"told by {cue}" in draft_scene(urdf).yaml
+
+
 def test_an_asymmetric_robot_with_turned_frames_is_refused_naming_the_link():
     urdf = biped().replace('<origin xyz="0 0 -0.15" rpy="-0.1 -0.2 -0.3"/>',
                            '<origin xyz="0 0 -0.17" rpy="-0.1 -0.2 -0.3"/>')
