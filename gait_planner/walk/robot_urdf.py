@@ -18,10 +18,12 @@ MuJoCo's compiler:
   and other links' meshes need not exist on this machine). A foot mesh MuJoCo does not
   read (Collada, iCub's) is left out of the text and given by `foot_meshes` as the
   vertices the draft read.
-* **Point masses.** A link whose <inertia> is zero (a point mass: iCub's right leg links
-  and ankles in example-robot-data) gets POINT_INERTIA on its diagonal: MuJoCo refuses a
-  body without a positive inertia. The walk simulates the URDF as written, not the draft,
-  which gives such a link its twin's mirrored inertia (`gait_planner.model.urdf_mirror`).
+* **Missing inertias.** A link whose <inertia> is zero (iCub's right leg links and
+  ankles in example-robot-data: the URDF lacks them) takes the draft's body (its twin's
+  mirrored inertia, `gait_planner.model.urdf_mirror`), as the certificate does
+  (`gait_planner.verify.robot`), when that body is the link alone; else (a link whose
+  fixed children carry the mass, iCub's ankle_2) a point mass's POINT_INERTIA: MuJoCo
+  refuses a body without a positive inertia.
 * **MuJoCo's compiler options.** Every link stays a body of its own (``fusestatic``
   false), masses and inertias are the URDF's ``<inertial>`` (``inertiafromgeom`` false),
   mesh paths are kept as resolved (``strippath`` false).
@@ -68,9 +70,12 @@ class RobotUrdf:
     locked: Mapping[str, float] = field(default_factory=dict)
 
 
-def simulation_urdf(robot: RobotUrdf, planned: Iterable[str], feet: Iterable[str]) -> str:
+def simulation_urdf(robot: RobotUrdf, planned: Iterable[str], feet: Iterable[str],
+                    drafted: Mapping[str, tuple] | None = None) -> str:
     """The URDF text of the module docstring; `planned` the joints the plan moves, `feet`
-    the links carrying its contact points. ValueError naming the joint, link or mesh."""
+    the links carrying its contact points, `drafted` the draft's bodies (link -> (mass kg,
+    COM (3,) m, inertia (3, 3) kg m^2 at the COM, in the link's frame)) for the links the
+    URDF gives no inertia. ValueError naming the joint, link or mesh."""
     try:
         root = ET.fromstring(robot.text)
     except ET.ParseError as error:
@@ -84,8 +89,8 @@ def simulation_urdf(robot: RobotUrdf, planned: Iterable[str], feet: Iterable[str
             raise ValueError(f"joint {name!r} ({kind}) of the URDF is neither planned nor "
                              f"locked by the draft")
     shapes = _foot_shapes(root, feet)
-    for inertia in root.iter("inertia"):
-        _point_mass(inertia)
+    for link in root.findall("link"):
+        _complete(root, link, (drafted or {}).get(link.get("name")))
     for link in root.findall("link"):
         for element in link.findall("visual") + link.findall("collision"):
             link.remove(element)
@@ -132,13 +137,38 @@ def _weld(joint: ET.Element, value: float) -> None:
             joint.remove(child)
 
 
-def _point_mass(inertia: ET.Element) -> None:
-    """A zero inertia tensor (a point mass, iCub's links) made MuJoCo's smallest sphere's:
-    MuJoCo refuses a body whose inertia is not positive."""
+def _complete(root: ET.Element, link: ET.Element, drafted: tuple | None) -> None:
+    """A link without an inertia (its <inertia> zero) takes the draft's body when the body
+    is the link alone (nothing with mass fixed below it), else a point mass's
+    POINT_INERTIA: MuJoCo refuses a body without a positive inertia."""
+    inertia = link.find("inertial/inertia")
     keys = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
-    if all(abs(float(inertia.get(k, "0"))) <= MISSING_INERTIA for k in keys):
-        for k in keys:
-            inertia.set(k, repr(POINT_INERTIA) if k in keys[:3] else "0")
+    if inertia is None or any(abs(float(inertia.get(k, "0"))) > MISSING_INERTIA for k in keys):
+        return
+    alone = all(_mass(root, name) == 0 for name in _fixed_below(root, {link.get("name")})
+                if name != link.get("name"))
+    if drafted is not None and alone:
+        mass, com, tensor = drafted
+        inertial = link.find("inertial")
+        _set_inertial(inertial, mass, com, tensor)
+        return
+    for k in keys:
+        inertia.set(k, repr(POINT_INERTIA) if k in keys[:3] else "0")
+
+
+def _set_inertial(inertial: ET.Element, mass: float, com, tensor) -> None:
+    for old in list(inertial):
+        inertial.remove(old)
+    ET.SubElement(inertial, "origin", xyz=" ".join(repr(float(v)) for v in com), rpy="0 0 0")
+    ET.SubElement(inertial, "mass", value=repr(float(mass)))
+    ET.SubElement(inertial, "inertia", **{k: repr(float(tensor[i, j])) for k, (i, j) in (
+        ("ixx", (0, 0)), ("iyy", (1, 1)), ("izz", (2, 2)), ("ixy", (0, 1)), ("ixz", (0, 2)),
+        ("iyz", (1, 2)))})
+
+
+def _mass(root: ET.Element, name: str) -> float:
+    mass = root.find(f"link[@name='{name}']/inertial/mass")
+    return 0.0 if mass is None else float(mass.get("value", "0"))
 
 
 def foot_meshes(robot: RobotUrdf, feet: Iterable[str]) -> list[FootMesh]:

@@ -139,6 +139,20 @@ def test_feet_read_from_visual_or_collada_meshes_touch_where_their_contacts_are(
             assert world[:, 1].min() < site[1] < world[:, 1].max()
 
 
+def test_links_without_inertia_take_the_drafts(example_robots):
+    """iCub's URDF gives its right leg links a mass but no inertia: MuJoCo gets the draft's
+    body (the left twin's mirror image, same principal moments); its ankle_2, whose fixed
+    foot carries the inertia, stays a point mass."""
+    scene, wm, _ = _walker(example_robots, ICUB)
+    model = wm.model
+    for right, left in (("r_upper_leg", "l_upper_leg"), ("r_hip_1", "l_hip_1")):
+        assert np.allclose(np.sort(model.body(right).inertia), np.sort(model.body(left).inertia),
+                           rtol=1e-6, atol=0)  # MuJoCo's own eigen solver
+        assert np.allclose(np.sort(model.body(right).inertia), np.sort(scene.body(right).inertia),
+                           rtol=1e-6, atol=0)  # MuJoCo's own eigen solver
+    assert model.body("r_ankle_2").inertia.max() < 1e-8
+
+
 def test_another_robot_and_a_missing_mesh_are_refused(example_robots):
     scene, _, g1 = _walker(example_robots, G1)
     rec = types.SimpleNamespace(metadata={}, path="g1", joint_names=angle_names(scene))
