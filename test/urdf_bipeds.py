@@ -2,6 +2,12 @@
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+from gait_planner.model.rotations import matrix_rpy, rpy_matrix
+
 AXES = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1", "-y": "0 -1 0"}
 
 
@@ -56,3 +62,53 @@ def biped(tilt: float = 0.2, knee_axis: str = "y", foot_geometry: str | None = N
     <origin xyz="0 0 0.2"/><axis xyz="{AXES[waist_axis]}"/><limit lower="-1" upper="1" effort="{waist_effort}" velocity="5"/></joint>
   {"".join(legs)}
 </robot>"""
+
+
+def turn_link_frames(urdf: str, turns: dict[str, np.ndarray],
+                     flipped: tuple[str, ...] = ()) -> str:
+    """The same robot with the frames of the links named in `turns` turned: link L's new
+    frame is its old one times turns[L] (3, 3), every joint origin, axis, inertial and
+    geometry origin rewritten to match, so the links, joints and masses stay where they
+    are (a turned base link turns the whole robot in the URDF's world: Rz(pi) makes its x
+    point backwards, as iCub's). The joints named in `flipped` turn about the opposite
+    axis (their ranges negated), as a right joint of iCub does against its left twin."""
+    robot = ET.fromstring(urdf)
+    eye = np.eye(3)
+    for joint in robot.findall("joint"):
+        Qp = turns.get(joint.find("parent").get("link"), eye)
+        Qc = turns.get(joint.find("child").get("link"), eye)
+        _set_origin(joint, lambda p, R: (Qp.T @ p, Qp.T @ R @ Qc))
+        axis = joint.find("axis")
+        if axis is not None:
+            sign = -1.0 if joint.get("name") in flipped else 1.0
+            axis.set("xyz", _text(sign * Qc.T @ _vector(axis.get("xyz"))))
+        limit = joint.find("limit")
+        if joint.get("name") in flipped and limit is not None:
+            lower, upper = limit.get("lower"), limit.get("upper")
+            limit.set("lower", repr(-float(upper)))
+            limit.set("upper", repr(-float(lower)))
+    for link in robot.findall("link"):
+        Q = turns.get(link.get("name"))
+        if Q is not None:
+            for part in link.findall("inertial") + link.findall("collision") + \
+                    link.findall("visual"):
+                _set_origin(part, lambda p, R, Q=Q: (Q.T @ p, Q.T @ R))
+    return ET.tostring(robot, encoding="unicode")
+
+
+def _set_origin(element, change) -> None:
+    origin = element.find("origin")
+    if origin is None:
+        origin = ET.SubElement(element, "origin")
+    p, R = change(_vector(origin.get("xyz", "0 0 0")),
+                  rpy_matrix(_vector(origin.get("rpy", "0 0 0"))))
+    origin.set("xyz", _text(p))
+    origin.set("rpy", _text(matrix_rpy(R)))
+
+
+def _vector(text: str) -> np.ndarray:
+    return np.array([float(v) for v in text.split()])
+
+
+def _text(v) -> str:
+    return " ".join(repr(float(x)) for x in v)

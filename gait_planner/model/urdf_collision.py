@@ -73,7 +73,13 @@ def fit_spheres(pieces: list[tuple[np.ndarray, float]], lateral: np.ndarray,
     if not pieces:
         raise ValueError("no collision pieces to fit spheres to")
     lateral = np.asarray(lateral, dtype=float) / np.linalg.norm(lateral)
-    across = np.linalg.svd(np.eye(3) - np.outer(lateral, lateral))[0][:, :2]  # (3, 2)
+    # the plane across `lateral`, spanned from the director least along it: a basis that
+    # moves continuously with `lateral` (an SVD's basis of a repeated singular value does
+    # not, and a round-off of a turned link frame reordered the cells)
+    axis = np.eye(3)[int(np.argmin(np.abs(lateral)))]
+    first = axis - (axis @ lateral) * lateral
+    first /= np.linalg.norm(first)
+    across = np.column_stack([first, np.cross(lateral, first)])  # (3, 2)
     centroids = np.array([p.mean(axis=0) for p, _ in pieces]) @ across  # (n, 2)
     low, high = centroids.min(axis=0), centroids.max(axis=0)
     cells = _grid(high - low, count, cell)
@@ -121,22 +127,23 @@ def _reach(centre: np.ndarray, pieces) -> float:
 
 
 def leg_spheres(model, geometry, data, bodies, left_of: dict[int, int],
-                foot_ids) -> dict[int, np.ndarray]:
+                foot_ids, frame) -> dict[int, np.ndarray]:
     """joint -> (s, 4) spheres (centre in the body's director components from its centre of
     mass, radius; m) of the lower legs' bodies (module docstring), from a reduced Pinocchio
     model's collision `geometry` at the zero pose (`data` after forward kinematics);
     `bodies`: joint -> the draft's body (R, com: its directors and centre of mass in the
-    joint frame), `left_of`: right joint -> its left partner. Bodies without collision
-    geometry get none."""
+    joint frame), `left_of`: right joint -> its left partner, `frame` the walker's world in
+    the URDF's (`gait_planner.model.urdf_frame.WalkFrame`: its up and left). Bodies without
+    collision geometry get none."""
     lower = []
     for foot in foot_ids:
         path, joint = [], foot
         while joint > 1:
             path.append(joint)
             joint = int(model.parents[joint])
-        hip, ankle = (data.oMi[j].translation[2] for j in (path[-1], foot))
-        lower += [j for j in path if j in bodies and
-                  data.oMi[j].translation[2] - ankle <= LOWER_LEG * (hip - ankle)]
+        up = {j: float(frame.W[:, 2] @ data.oMi[j].translation) for j in path}
+        hip, ankle = up[path[-1]], up[foot]
+        lower += [j for j in path if j in bodies and up[j] - ankle <= LOWER_LEG * (hip - ankle)]
     mirror = np.array([1.0, -1.0, 1.0])
 
     def pieces(j: int) -> list[tuple[np.ndarray, float]]:
@@ -151,7 +158,7 @@ def leg_spheres(model, geometry, data, bodies, left_of: dict[int, int],
         own = pieces(j) + [(p * mirror, rho) for r in right for p, rho in pieces(r)]
         if not own:
             continue
-        lateral = bodies[j].R.T @ data.oMi[j].rotation.T @ np.array([0.0, 1.0, 0.0])
+        lateral = bodies[j].R.T @ data.oMi[j].rotation.T @ frame.W[:, 1]
         out[j] = fit_spheres(own, lateral)
         for r in right:
             out[r] = out[j] * np.r_[mirror, 1.0]

@@ -1,64 +1,84 @@
-"""A drafted robot's contact points, from each foot's collision geometry at the URDF zero
-pose (`gait_planner.model.urdf_import`): a sphere's lowest point, a box's lowest corners, a
-capsule's or cylinder's lowest points at its two ends, a mesh's lowest vertices. With points
-ahead and behind the foot's centre, the rear ones make the ``heel`` and the front ones the
-``forefoot`` (each the centre of its group: two points per foot, as walker3d's foot, whose
-full contact also holds the roll about the heel-forefoot line); a single point makes a
-point foot (the compass's phases). A foot without collision geometry: the links fixed to it
-without mass (`gait-planner urdf`'s contact frames) are its points.
+"""A drafted robot's contact points, from each foot's geometry at the draft pose
+(`gait_planner.model.urdf_import`).
+
+`sole_points` takes a foot's lowest points: a sphere's lowest point, a box's lowest corners,
+a capsule's or cylinder's lowest points at its two ends, a mesh's lowest vertices, of its
+collision geometry; a foot without any reads its visual geometry (Alexander's feet have
+only visual meshes); a foot without either takes the links fixed to it without mass
+(`gait-planner urdf`'s contact frames) as its points. A Collada mesh (.dae) declared
+``Y_UP`` is turned to z up as its authors' viewers turn it (coal, which reads the meshes
+for Pinocchio, keeps the file's axes: iCub's feet would point sideways).
+
+`foot_contacts` groups them in the walker's frame (`gait_planner.model.urdf_frame`): with
+points ahead and behind the sole's middle, the rear ones make the ``heel`` and the front
+ones the ``forefoot`` (each the centre of its group: two points per foot, as walker3d's
+foot, whose full contact also holds the roll about the heel-forefoot line); a sole shorter
+than 2 cm makes a point foot (the compass's phases).
 """
 
 from __future__ import annotations
 
 import itertools
+import re
+from pathlib import Path
 
 import numpy as np
 
 from gait_planner.model.urdf_errors import UrdfError
 
-__all__ = ["foot_contacts"]
+__all__ = ["foot_contacts", "read_mesh", "sole_points"]
+
+_SOLE = 1e-3  # m: vertices this close above the lowest one are on the sole
+_POINT_FOOT = 0.02  # m: a sole shorter than this along forward is a point
+_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # Collada Y_UP -> Z_UP
 
 
-def foot_contacts(model, geometry, data, foot_ids, links) -> tuple[dict, dict[int, float]]:
-    """(foot joint -> {"heel": p, "forefoot": p} or {"foot": p}, joint-frame points; foot
-    joint -> the sole's half width (its points' lateral spread), flat feet with a width
-    only). A foot without collision geometry: the links fixed to it without mass (contact
-    frames, as `gait-planner urdf` writes them) are its points."""
+def sole_points(model, geometries, data, foot: int, link: str) -> tuple[np.ndarray, np.ndarray]:
+    """(points in the foot's joint frame (n, 3), the same in the URDF world (n, 3)), m, of
+    the sole of foot joint `foot` (carrying `link`) at the pose of `data`; `geometries`:
+    Pinocchio geometry models in order of preference (collision, then visual)."""
     import pinocchio as pin  # noqa: PLC0415 - only the importer needs it at import time
 
-    out, half_widths = {}, {}
-    for foot in foot_ids:
-        lowest: list[np.ndarray] = []  # joint-frame points
+    lowest: list[np.ndarray] = []
+    for geometry in geometries:
         for obj in geometry.geometryObjects:
-            if obj.parentJoint != foot:
-                continue
-            lowest += _lowest_points(obj, data.oMi[foot])
-        link = links[foot]
-        lowest = lowest or [np.array(f.placement.translation) for f in model.frames
-                            if f.parentJoint == foot and f.type == pin.FrameType.BODY
-                            and f.name != link and f.inertia.mass == 0]
-        if not lowest:
-            raise UrdfError(f"foot link {link!r} has no collision geometry and no massless "
-                            f"links fixed to it: its contact points come from its "
-                            f"<collision> spheres, boxes or meshes, or else from such links")
-        world = np.array([data.oMi[foot].act(p) for p in lowest])
-        z0 = world[:, 2].min()
-        on_sole = world[:, 2] <= z0 + 1e-3
-        pts, wpts = np.array(lowest)[on_sole], world[on_sole]
-        span = np.ptp(wpts[:, 0])
-        if span < 0.02:  # a point foot
+            if obj.parentJoint == foot:
+                lowest += _lowest_points(obj, data.oMi[foot])
+        if lowest:
+            break
+    lowest = lowest or [np.array(f.placement.translation) for f in model.frames
+                        if f.parentJoint == foot and f.type == pin.FrameType.BODY
+                        and f.name != link and f.inertia.mass == 0]
+    if not lowest:
+        raise UrdfError(f"foot link {link!r} has no collision or visual geometry and no "
+                        f"massless links fixed to it: its contact points come from its "
+                        f"spheres, boxes or meshes, or else from such links")
+    world = np.array([data.oMi[foot].act(p) for p in lowest])
+    on_sole = world[:, 2] <= world[:, 2].min() + _SOLE
+    return np.array(lowest)[on_sole], world[on_sole]
+
+
+def foot_contacts(soles: dict, frame) -> tuple[dict, dict[int, float]]:
+    """(foot joint -> {"heel": p, "forefoot": p} or {"foot": p}, joint-frame points (3,) m;
+    foot joint -> the sole's half width (its points' spread along left) m, flat feet with a
+    width only) from `soles` (foot joint -> `sole_points`) in `frame`
+    (`gait_planner.model.urdf_frame.WalkFrame`)."""
+    out, half_widths = {}, {}
+    for foot, (pts, world) in soles.items():
+        walk = np.array([frame.point(p) for p in world])
+        if np.ptp(walk[:, 0]) < _POINT_FOOT:
             out[foot] = {"foot": pts.mean(axis=0)}
             continue
-        middle = 0.5 * (wpts[:, 0].min() + wpts[:, 0].max())
-        out[foot] = {"heel": pts[wpts[:, 0] < middle].mean(axis=0),
-                     "forefoot": pts[wpts[:, 0] >= middle].mean(axis=0)}
-        if np.ptp(wpts[:, 1]) > 0:
-            half_widths[foot] = 0.5 * float(np.ptp(wpts[:, 1]))
+        middle = 0.5 * (walk[:, 0].min() + walk[:, 0].max())
+        out[foot] = {"heel": pts[walk[:, 0] < middle].mean(axis=0),
+                     "forefoot": pts[walk[:, 0] >= middle].mean(axis=0)}
+        if np.ptp(walk[:, 1]) > 0:
+            half_widths[foot] = 0.5 * float(np.ptp(walk[:, 1]))
     return out, half_widths
 
 
 def _lowest_points(obj, oMi) -> list[np.ndarray]:
-    """The lowest points at the zero pose (joint frame) of one collision object."""
+    """The lowest points at the zero pose (joint frame) of one geometry object."""
     geom, placement = obj.geometry, obj.placement
     kind = type(geom).__name__
     down = placement.rotation.T @ oMi.rotation.T @ np.array([0.0, 0.0, -1.0])  # local
@@ -76,10 +96,35 @@ def _lowest_points(obj, oMi) -> list[np.ndarray]:
         half = np.array(geom.halfSide)
         corners = [np.array(s) * half for s in itertools.product((-1.0, 1.0), repeat=3)]
     elif hasattr(geom, "vertices"):
-        corners = [np.array(v) for v in np.asarray(geom.vertices())]
+        corners = list(mesh_vertices(obj))
     else:
-        raise UrdfError(f"collision geometry {obj.name!r} is a {kind}, which the importer "
-                        f"does not read (spheres, boxes, capsules, cylinders and meshes)")
+        raise UrdfError(f"geometry {obj.name!r} is a {kind}, which the importer does not "
+                        f"read (spheres, boxes, capsules, cylinders and meshes)")
     local = np.array([placement.act(c) for c in corners])
     height = (oMi.rotation @ local.T)[2]
-    return list(local[height <= height.min() + 1e-3])
+    return list(local[height <= height.min() + _SOLE])
+
+
+def mesh_vertices(obj) -> np.ndarray:
+    """A mesh geometry object's vertices (n, 3) in its own frame, m (scaled), a Collada
+    file's ``Y_UP`` turned to z up (module docstring)."""
+    vertices = np.asarray(obj.geometry.vertices(), dtype=float)
+    return vertices @ _Y_UP.T if collada_y_up(obj.meshPath) else vertices
+
+
+def read_mesh(path: str, scale) -> np.ndarray:
+    """The vertices (n, 3) m of the mesh file `path` scaled by `scale` (3,), as coal reads
+    it for Pinocchio, a Collada ``Y_UP`` turned to z up (module docstring)."""
+    import coal  # noqa: PLC0415 - Pinocchio's geometry library, on demand
+
+    vertices = np.asarray(coal.MeshLoader().load(path, np.asarray(scale, float)).vertices(),
+                          dtype=float)
+    return vertices @ _Y_UP.T if collada_y_up(path) else vertices
+
+
+def collada_y_up(path: str) -> bool:
+    """True for a Collada file (.dae) whose <up_axis> is Y_UP."""
+    if not path.lower().endswith(".dae") or not Path(path).is_file():
+        return False
+    head = Path(path).read_text(errors="replace")[:20000]
+    return re.search(r"<up_axis>\s*Y_UP\s*</up_axis>", head) is not None

@@ -34,13 +34,15 @@ _ALONG = 0.9  # |component| of a joint's world axis along x, y or z: a roll, pit
 _MID_LEG = 0.25  # a knee is at least this share of the hip's height above the last joint
 
 
-def leg_roles(model, data, chain: Sequence[int], axes: dict[str, np.ndarray]) -> dict:
+def leg_roles(model, data, chain: Sequence[int], axes: dict[str, np.ndarray],
+              frame) -> dict:
     """{"hip_yaw": joint, "knee": joint} of one leg: `chain` its joint ids from the base
-    (Pinocchio model, forward kinematics in `data` at the zero pose), `axes` the joints'
-    unit axes in their own frames (`urdf_import.revolute_axis`)."""
-    world = {j: data.oMi[j].rotation @ axes[model.names[j]] for j in chain}
-    height = {j: float(data.oMi[j].translation[2] - data.oMi[chain[-1]].translation[2])
-              for j in chain}
+    (Pinocchio model, forward kinematics in `data` at the draft pose), `axes` the joints'
+    unit axes in their own frames (`urdf_import.revolute_axis`), `frame` the walker's world
+    in the URDF's (`gait_planner.model.urdf_frame.WalkFrame`: forward, left, up)."""
+    world = {j: frame.W.T @ data.oMi[j].rotation @ axes[model.names[j]] for j in chain}
+    height = {j: float(frame.W[:, 2] @ (data.oMi[j].translation
+                                         - data.oMi[chain[-1]].translation)) for j in chain}
     pitch = [j for j in chain if abs(world[j][1]) > _ALONG]
     if len(pitch) < 2 or height[pitch[1]] < _MID_LEG * height[chain[0]]:
         return {}  # no second pitch joint, or it is an ankle

@@ -6,14 +6,20 @@ collision geometry with `buildGeomFromUrdfString`), so the URDF is parsed, its f
 merged and meshes read as the rest of the field does. The draft is the URDF's model, not an
 approximation of it:
 
-* **Legs.** The two chains from the floating base to the feet (`feet`, or the two lowest
-  leaves of the tree, left = +y). Every other joint is locked at `locked` (default: the
-  URDF's zero) and its links merged into their parent with `pinocchio.buildReducedModel`:
-  one rigid body with the combined mass and inertia.
+* **The walker's frame.** The scene's world (x forward, y left, z up) is found from the
+  robot at its draft pose, whatever axes the URDF uses (`gait_planner.model.urdf_frame`:
+  the mirror plane from the feet, forward from the soles, else the knees, else the URDF's
+  x); the draft is written in it (iCub, whose base x points backwards, walks along -x of
+  its base).
+* **Legs.** The two chains from the floating base to the feet (`feet` LEFT, RIGHT, or the
+  two lowest leaves of the tree, left told by the walker's frame). Every other joint is
+  locked at `locked` (default: the URDF's zero) and its links, massless or not, merged
+  into their parent with `pinocchio.buildReducedModel`: one rigid body with the combined
+  mass and inertia.
 * **Bodies.** Each remaining joint's body; its directors are its principal axes of inertia
   (the inertia at the centre of mass diagonalised; of the 24 right-handed orderings of the
-  eigenvectors the one nearest the link's own frame), joint points and contact points in
-  them, from the centre of mass.
+  eigenvectors the one nearest the walker's axes, so that the URDF's link frames do not
+  matter), joint points and contact points in them, from the centre of mass.
 * **Joints.** Every leg joint is revolute: its axis in the parent's directors and its
   zero-angle reference R0 (the child's directors in the parent's at the URDF's zero pose,
   as `reference_rpy`), so the scene's joint angle is the URDF's (zero at the URDF's zero,
@@ -22,16 +28,18 @@ approximation of it:
   joints) whose axes meet in one point as pitch, roll, yaw: one spherical joint whose
   angles are the three URDF joints' (`gait_planner.model.urdf_fuse`; exact; links with
   mass are never fused).
-* **Contacts.** Heel and forefoot, or a point foot, from each foot's collision geometry at
-  the URDF zero pose (`gait_planner.model.urdf_contacts`).
-* **Mirror.** Left and right bodies paired by their names (``left_``/``right_``,
-  ``l_``/``r_``, ``_l``/``_r``, ``FL_``/``FR_``, ...). The half-cycle's mirror periodicity
-  needs a symmetric robot: right and left data that differ by more than
-  `gait_planner.model.urdf_mirror`'s tolerances are refused, naming the link; below them
-  the draft writes the left link's data mirrored for the right one and lists what moved
-  (G1's right knee inertia, Bolt's 1.5e-6 kg). `mirror_tolerance` (a fraction, default
-  5 %: `--mirror-tolerance`) is the mass and inertia difference the user accepts; the
-  refusal names the value that would accept the robot.
+* **Contacts.** Heel and forefoot, or a point foot, from each foot's collision geometry
+  (else its visual geometry) at the draft pose (`gait_planner.model.urdf_contacts`).
+* **Mirror.** Left and right bodies and joints paired from the kinematic tree (the legs'
+  joints in chain order), not from their names, and compared in the walker's world at
+  the draft pose, not link frame by link frame (`gait_planner.model.urdf_mirror`). The
+  half-cycle's mirror periodicity needs a symmetric robot: right and left data that differ
+  by more than its tolerances are refused, naming the link; below them the draft writes
+  the left link's data mirrored for the right one and lists what moved (G1's right knee
+  inertia, Bolt's 1.5e-6 kg, iCub's right leg links, whose URDF has no inertia).
+  `mirror_tolerance` (a fraction, default 5 %: `--mirror-tolerance`) is the mass and
+  inertia difference the user accepts; the refusal names the value that would accept the
+  robot.
 * **Legs apart.** The lower legs' bodies (knee, shank, ankle, foot) carry spheres that
   contain their collision geometry (``collision:``, `gait_planner.model.urdf_collision`),
   and the gait keeps them ``leg_clearance`` (`leg_clearance`, default 1 cm) apart
@@ -53,8 +61,9 @@ approximation of it:
 Refused before anything is built, with the joint or link named (`UrdfError`): an
 unreadable or closed-chain description, a leg joint that is not revolute (prismatic,
 planar, floating, spherical), a moving leg body without mass (other than a ball joint's)
-or with a non-physical inertia, fewer than two feet, a foot without collision geometry or
-contact frames, a mesh that cannot be read.
+or with a non-physical inertia, fewer than two feet, feet not side by side or not below
+the hips along z, a foot without collision or visual geometry or contact frames, a mesh
+that cannot be read.
 """
 
 from __future__ import annotations
@@ -72,14 +81,15 @@ import yaml
 
 from gait_planner.model.rotations import matrix_rpy
 from gait_planner.model.urdf_collision import LEG_CLEARANCE, leg_spheres
-from gait_planner.model.urdf_contacts import foot_contacts
+from gait_planner.model.urdf_contacts import foot_contacts, sole_points
 from gait_planner.model.urdf_envelope import (HIP_YAW_DEG, STANCE_KNEE_DEG, UPRIGHT_DEG,
                                               leg_roles, walking_envelope)
 from gait_planner.model.urdf_errors import UrdfError
+from gait_planner.model.urdf_frame import walking_frame
 from gait_planner.model.urdf_fuse import ball_points, find_balls
 from gait_planner.model.urdf_holds import locked_holds
 from gait_planner.model.urdf_mirror import (MIRROR_TOLERANCE, S, mirror_geometry,
-                                            mirrored_inertias)
+                                            mirror_pairs, mirrored_inertias)
 
 __all__ = ["UrdfDraft", "UrdfError", "draft_scene"]
 
@@ -168,8 +178,20 @@ def _path(model, joint: int) -> list[int]:
     return out[::-1]
 
 
+def _visual(model, urdf_text: str, package_dirs: Sequence[str]):
+    """The URDF's visual geometry (feet without collision geometry read it), or None when
+    it cannot be read."""
+    pin = _pin()
+    try:
+        return pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.VISUAL,
+                                           package_dirs=list(package_dirs))
+    except Exception:  # a visual mesh not found: the feet's frames remain
+        return None
+
+
 def _find_feet(model, feet: Sequence[str] | None) -> tuple[int, int]:
-    """(left, right) joint ids of the feet: given links, or the two lowest leaf joints."""
+    """The feet's joint ids: the given links (LEFT, RIGHT), or the two lowest leaf joints
+    (left and right told by `gait_planner.model.urdf_frame`)."""
     if feet:
         if len(feet) != 2:
             raise UrdfError(f"--feet takes two links LEFT,RIGHT, got {list(feet)}")
@@ -186,8 +208,7 @@ def _find_feet(model, feet: Sequence[str] | None) -> tuple[int, int]:
     if len(leaves) < 2:
         raise UrdfError(f"no two feet found: the tree has {len(leaves)} leaf joint(s) below "
                         f"the base; name the feet with --feet LEFT_LINK,RIGHT_LINK")
-    lowest = sorted(leaves, key=lambda j: data.oMi[j].translation[2])[:2]
-    left, right = sorted(lowest, key=lambda j: -data.oMi[j].translation[1])
+    left, right = sorted(leaves, key=lambda j: data.oMi[j].translation[2])[:2]
     if set(_path(model, left)) & set(_path(model, right)):
         raise UrdfError(f"the two lowest leaves {model.names[left]!r} and "
                         f"{model.names[right]!r} share joints; name the feet with --feet")
@@ -215,9 +236,12 @@ def revolute_axis(model, joint: int) -> np.ndarray:
 # ----------------------------------------------------------------------------- bodies
 
 
-def _principal(name: str, mass: float, inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(moments (3,), R (3, 3)): principal moments and axes (columns, link frame) nearest
-    the link's frame; UrdfError for a body without mass or with a non-physical inertia."""
+def _principal(name: str, mass: float, inertia: np.ndarray, world: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """(moments (3,), R (3, 3)): principal moments and axes (columns, joint frame) of the
+    inertia (3, 3) at the COM in the joint frame, ordered and signed nearest the walker's
+    axes (`world`: the joint frame's axes in the walker's world, so that the URDF's link
+    frames do not matter); UrdfError for a body without mass or a non-physical inertia."""
     if not mass > _MIN_MASS:
         raise UrdfError(f"link {name!r} moves with the leg but has no mass ({mass:g} kg): "
                         f"give it an <inertial>, or merge it by making its joint fixed")
@@ -232,8 +256,9 @@ def _principal(name: str, mass: float, inertia: np.ndarray) -> tuple[np.ndarray,
     for perm in itertools.permutations(range(3)):
         for signs in itertools.product((1.0, -1.0), repeat=3):
             R = vectors[:, perm] * signs
-            if np.linalg.det(R) > 0 and (best is None or np.trace(R) > best[0] + 1e-12):
-                best = (np.trace(R), R, values[list(perm)])
+            nearness = np.trace(world @ R)
+            if np.linalg.det(R) > 0 and (best is None or nearness > best[0] + 1e-12):
+                best = (nearness, R, values[list(perm)])
     _, R, moments = best
     if moments.min() <= _INERTIA_TOLERANCE * scale or \
             2 * moments.max() > moments.sum() * (1 + _INERTIA_TOLERANCE):
@@ -291,9 +316,10 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
         raise UrdfError(f"--mirror-tolerance takes a fraction in [0, 1) (0.06 for 6 %), got "
                         f"{mirror_tolerance:g}")
     pin = _pin()
-    full, geometry = _read(urdf_text, [str(p) for p in package_dirs])
-    left_foot, right_foot = _find_feet(full, feet)
-    legs = _path(full, left_foot) + _path(full, right_foot)
+    dirs = [str(p) for p in package_dirs]
+    full, geometry = _read(urdf_text, dirs)
+    foot_a, foot_b = _find_feet(full, feet)
+    legs = _path(full, foot_a) + _path(full, foot_b)
     axes = {full.names[j]: revolute_axis(full, j) for j in legs}  # joint frame: kept by
     # the reduction, which changes placements only
     locked = dict(locked or {})
@@ -307,47 +333,56 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
         q_lock[full.joints[jid].idx_q] = float(angle)
     others = [j for j in range(2, full.njoints) if j not in legs]
     lock_angles = {full.names[j]: float(q_lock[full.joints[j].idx_q]) for j in others}
-    model, geometry = pin.buildReducedModel(full, geometry, others, q_lock)
-    ids = {full.names[j]: model.getJointId(full.names[j]) for j in legs}
-    foot_ids = (ids[full.names[left_foot]], ids[full.names[right_foot]])
-
-    links = {j: _link_name(model, j) for j in [1] + list(ids.values())}
-    balls = find_balls(model, list(ids.values()), links)
-    inner = {j for ball in balls for j in ball.joints[:2]}  # carry the massless links
-    bodies: dict[int, _Body] = {}
-    changes: list[str] = []
-    inertias, left_of = mirrored_inertias(
-        model, {j: link for j, link in links.items() if j not in inner}, changes,
-        tolerance=mirror_tolerance)
-    for joint, (mass, com, inertia) in inertias.items():
-        if joint in left_of:  # a right link: the left one's principal axes mirrored
-            left = bodies[left_of[joint]]
-            moments, R = left.moments.copy(), S @ left.R @ S
-        else:
-            moments, R = _principal(links[joint], mass, inertia)
-        bodies[joint] = _Body(links[joint], joint, mass, moments, com, R)
+    shapes = [geometry]
+    if any(all(o.parentJoint != f for o in geometry.geometryObjects) for f in (foot_a, foot_b)):
+        shapes += [g for g in [_visual(full, urdf_text, dirs)] if g is not None]
+    model, shapes = pin.buildReducedModel(full, shapes, others, q_lock)
     data = model.createData()
-    q0 = pin.neutral(model)
-    pin.forwardKinematics(model, data, q0)
-    contacts, half_widths = foot_contacts(model, geometry, data, foot_ids, links)
-    spheres = leg_spheres(model, geometry, data, bodies, left_of, foot_ids)
+    pin.forwardKinematics(model, data, pin.neutral(model))
+    reduced = {j: model.getJointId(full.names[j]) for j in (foot_a, foot_b)}
+    links = {j: _link_name(model, j) for j in range(1, model.njoints)}
+    soles = {f: sole_points(model, shapes, data, f, links[f]) for f in reduced.values()}
+    frame, foot_ids = walking_frame(model, data, tuple(reduced.values()),
+                                    {f: world for f, (_, world) in soles.items()}, axes,
+                                    given=bool(feet))
+    left_leg, right_leg = (_path(model, f) for f in foot_ids)
+    ids = {str(model.names[j]): j for j in left_leg + right_leg}
+
+    balls = find_balls(model, list(ids.values()), links)
+    left_of, twins = mirror_pairs(model, left_leg, right_leg, balls)
+    inner = {j for ball in balls for j in ball.joints[:2]}  # carry the massless links
+    body_links = {j: links[j] for j in [1] + list(ids.values()) if j not in inner}
+    left_of = {r: l for r, l in left_of.items() if r in body_links}
+    changes: list[str] = []
+    inertias, source_of = mirrored_inertias(model, data, frame, body_links, left_of, changes,
+                                            tolerance=mirror_tolerance)
+    world = {j: frame.rotation(data.oMi[j].rotation) for j in body_links}
+    bodies: dict[int, _Body] = {}
+    for joint, (mass, com, inertia) in inertias.items():
+        if joint in source_of:  # a twin's image: its principal axes mirrored in the world
+            twin = bodies[source_of[joint]]
+            moments = twin.moments.copy()
+            R = world[joint].T @ S @ world[twin.joint] @ twin.R @ S
+        else:
+            moments, R = _principal(links[joint], mass, inertia, world[joint])
+        bodies[joint] = _Body(links[joint], joint, mass, moments, com, R)
+    contacts, half_widths = foot_contacts(soles, frame)
+    spheres = leg_spheres(model, shapes[0], data, bodies, left_of, foot_ids, frame)
     owner = {full.getJointId(model.names[j]) if j > 1 else 1: (b.name, b.com, b.R)
              for j, b in bodies.items()}
     holds, unheld = locked_holds(full, q_lock, legs, owner)
-    full_data = full.createData()
-    pin.forwardKinematics(full, full_data, q_lock)
-    roles = {side: leg_roles(full, full_data, _path(full, foot), axes)
-             for side, foot in (("l", left_foot), ("r", right_foot))}
+    roles = {side: leg_roles(model, data, leg, axes, frame)
+             for side, leg in (("l", left_leg), ("r", right_leg))}
     source = {"urdf": urdf_file, **({"package_dirs": list(robot_dirs)} if robot_dirs else {}),
               "locked": lock_angles, **({"holds": holds} if holds else {})}
     return _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-                  spheres, leg_clearance, left_of,
+                  left_of, twins, frame, spheres, leg_clearance,
                   name or re.sub(r"[^A-Za-z0-9_-]", "_", full.name or "robot"),
                   changes, source, mirror_tolerance, unheld, roles)
 
 
 def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
-           spheres, leg_clearance, left_of, name, changes, source,
+           left_of, twins, frame, spheres, leg_clearance, name, changes, source,
            mirror_tolerance, unheld, roles) -> UrdfDraft:
     order = [1] + [j for j in ids.values() if j in bodies]
     for foot, points in contacts.items():
@@ -381,7 +416,8 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
         if 0 < model.velocityLimit[jm.idx_v] < 1e10:
             speeds[jname] = round(math.degrees(model.velocityLimit[jm.idx_v]), 6)
     local = {j: {p: bodies[j].local(v) for p, v in bodies[j].points.items()} for j in order}
-    mirror_geometry({j: bodies[j].name for j in order}, left_of, local, joints)
+    mirror_geometry({j: bodies[j].name for j in order}, left_of, twins, local, joints,
+                    changes)
     # each body's link frame in its own: origin at the joint point (the root: -R^T com), R^T
     links = {bodies[j].name: _round(np.r_[local[j][ball_of[j].name if j in ball_of else
                                                    model.names[j]] if j != 1 else
@@ -393,7 +429,7 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
     hip = [data.oMi[_path(model, f)[0]].translation[2] for f in foot_ids]
     leg = float(np.mean(hip)) - z_sole
     root = bodies[1]
-    com_world = root.com - np.array([0.0, 0.0, z_sole])  # base at identity, sole at z = 0
+    com_world = frame.point(root.com) - np.array([0.0, 0.0, z_sole])  # sole at z = 0
     point_feet = all("foot" in contacts[f] for f in foot_ids)  # else heel, forefoot
     side = {foot_ids[0]: "l", foot_ids[1]: "r"}
     contact_yaml, contact_names = [], {}
@@ -432,7 +468,7 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
             for jname, j in joints.items()],
         "contacts": contact_yaml,
         "initial_pose": {"root_position": _round(com_world),
-                         "root_angles": _round(matrix_rpy(root.R)[::-1])},
+                         "root_angles": _round(matrix_rpy(frame.rotation(root.R))[::-1])},
         "gait": {
             "step_length": step, "base_time_step": round(0.01 * math.sqrt(leg / WALKER3D_LEG), 5),
             "scaling_bounds": [0.5, 1.5], "friction_coefficient": 0.8,
@@ -458,6 +494,11 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
               f"link within {UPRIGHT_DEG:g} deg of upright,\n# hip yaw within "
               f"+-{HIP_YAW_DEG:g} deg, the stance knee within +-{STANCE_KNEE_DEG:g} deg in "
               f"single support.\n")
+    if np.any(frame.W != np.eye(3)) or np.any(frame.origin != 0):
+        header += (f"# Walking direction (the scene's x): the URDF's "
+                   f"{_round(frame.W[:, 0], 6)}, told by {frame.cue}; left: "
+                   f"{_round(frame.W[:, 1], 6)}; mid-plane through {_round(frame.origin, 6)} m "
+                   f"(gait_planner.model.urdf_frame).\n")
     if lock_angles:
         header += "# Locked joints (merged into their parent): " + ", ".join(
             f"{k} = {v:g} rad" for k, v in lock_angles.items()) + "\n"

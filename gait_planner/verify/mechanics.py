@@ -58,6 +58,7 @@ class SceneData:
     # root body's frame and the locked joints (name -> rad); None for hand-written scenes
     robot_root: tuple[np.ndarray, np.ndarray] | None = None
     robot_locked: dict[str, float] | None = None
+    robot_links: dict[str, tuple[np.ndarray, np.ndarray]] | None = None  # every body's link
 
     def body_index(self, name: str) -> int:
         return [b.name for b in self.bodies].index(name)
@@ -120,8 +121,10 @@ def _robot(robot: Any, root: str) -> dict[str, Any]:
     """SceneData's robot fields of a ``robot:`` section (or none)."""
     if not robot:
         return {}
-    pose = [float(v) for v in robot["links"][root]]
-    return {"robot_root": (np.asarray(pose[:3]), _rpy(pose[3:])),
+    links = {str(body): (np.asarray([float(v) for v in pose[:3]]),
+                         _rpy([float(v) for v in pose[3:]]))
+             for body, pose in robot["links"].items()}
+    return {"robot_root": links[root], "robot_links": links,
             "robot_locked": {str(k): float(v) for k, v in (robot.get("locked") or {}).items()}}
 
 

@@ -11,6 +11,11 @@ terms, the published foot wrenches on the feet's joints), so a certificate that 
 says the published motion, efforts and ground forces are a motion of the robot the user
 described — including what the draft changed to make it symmetric.
 
+A link whose URDF gives a mass but a zero inertia tensor (iCub's right leg links in
+example-robot-data: the URDF lacks them) has no inertia to certify against: it is
+certified with the draft's body (its twin's mirror image, as the draft's header lists),
+placed by the robot section's link pose. Every other link is the URDF's.
+
 The locked joints' generalized forces are what holds them: their efforts in the
 JointTrajectory (`held_efforts`). At a node where a contact is established the base's
 velocity jumps and central differences turn the impact's impulse into an effort divided
@@ -32,6 +37,8 @@ from gait_planner.verify.continuous import (ContinuousCertificate, switch_mask,
 from gait_planner.verify.mechanics import SceneData
 
 __all__ = ["robot_certificate", "split_impulses", "urdf_configurations"]
+
+MISSING_INERTIA = 1e-12  # kg m^2: a link whose URDF inertia is this small has none
 
 
 def _set(model: pin.Model, q: np.ndarray, name: str, angle: float) -> None:
@@ -80,6 +87,23 @@ def urdf_configurations(scene: SceneData, model: pin.Model, q: np.ndarray,
     return configs
 
 
+def _complete_inertias(model: pin.Model, scene: SceneData) -> None:
+    """Give each joint whose URDF inertia is missing (a zero tensor, `MISSING_INERTIA`,
+    with its fixed links merged) and which carries a scene body the body's mass and
+    inertia, in its frame through the robot section's link pose (module docstring)."""
+    bodies = {b.name: b for b in scene.bodies}
+    for frame in model.frames:
+        joint = int(frame.parentJoint)
+        body = bodies.get(frame.name)
+        if (frame.type != pin.FrameType.BODY or body is None or joint < 1
+                or np.abs(model.inertias[joint].inertia).max() > MISSING_INERTIA
+                or not frame.placement.isIdentity()):  # the joint's own link
+            continue
+        position, rotation = scene.robot_links[frame.name]  # the link frame in the body's
+        model.inertias[joint] = pin.Inertia(body.mass, -rotation.T @ position,
+                                            rotation.T @ np.diag(body.inertia) @ rotation)
+
+
 def robot_certificate(scene: SceneData, urdf: str, times: np.ndarray, q: np.ndarray,
                       angles: np.ndarray, efforts: np.ndarray,
                       foot_wrenches: Mapping[str, np.ndarray],
@@ -101,6 +125,7 @@ def robot_certificate(scene: SceneData, urdf: str, times: np.ndarray, q: np.ndar
     names, locked = effort_names(scene), dict(scene.robot_locked or {})
     model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
     model.gravity = pin.Motion(np.array([0.0, 0.0, -scene.gravity]), np.zeros(3))
+    _complete_inertias(model, scene)
     moving = [model.names[j] for j in range(2, model.njoints)]
     unknown = [n for n in list(names) + list(locked) if n not in moving]
     loose = [n for n in moving if n not in names and n not in locked]

@@ -12,10 +12,10 @@ drafted robot's own URDF with its own feet.
   compiling (`set_inertia`): the URDF must carry a realisable tensor, the plan may use one
   that is not (the paper's torso), and the simulated walker is the planned one.
 * **A drafted robot's own** (`robot`, a `walk.robot_urdf.RobotUrdf`): its URDF with the
-  locked joints welded at the draft's angles, its own inertias, and the feet's own
-  collision geometry as the contact geometry (`walk.robot_urdf.simulation_urdf`: nothing
-  else collides, no visual geometry); the plan's frames are found on its links by
-  `walk.director_frames`.
+  locked joints welded at the draft's angles, its own inertias (the draft's where the URDF
+  has none: iCub's right leg), and the feet's own collision geometry as the contact
+  geometry (`walk.robot_urdf.simulation_urdf`: nothing else collides, no visual geometry);
+  the plan's frames are found on its links by `walk.director_frames`.
 
 Either way the plan's frames are MuJoCo sites: ``plan_root`` at the root body's centre of
 mass with its directors as axes (the plan's root state; `plan_qpos` places the root link so
@@ -43,7 +43,7 @@ from gait_planner.model.angles import angle_names
 from gait_planner.model.ground import Ground, GroundError
 from gait_planner.model.scene import Scene
 from gait_planner.walk.director_frames import SiteFrame, director_frames
-from gait_planner.walk.robot_urdf import RobotUrdf, simulation_urdf
+from gait_planner.walk.robot_urdf import FootMesh, RobotUrdf, foot_meshes, simulation_urdf
 
 __all__ = ["STAIRS_BEHIND", "STAIR_TREADS", "WalkModel", "build_model", "plan_qpos",
            "plan_root_qvel", "recorded_ground", "root_link_pose", "set_inertia"]
@@ -93,8 +93,10 @@ def build_model(rec: RecordedPlan, scene: Scene, half_width: float, radius: floa
         sites = {c.name: SiteFrame(c.name, np.zeros(3), np.eye(3)) for c in scene.contacts}
     else:
         feet = {c.body for c in scene.contacts}
-        spec = _load(simulation_urdf(robot, angle_names(scene), feet), "the robot's URDF")
+        spec = _load(simulation_urdf(robot, angle_names(scene), feet, _drafted(scene)),
+                     "the robot's URDF")
         _check_root(spec, scene, "the robot's URDF")
+        _add_meshes(spec, foot_meshes(robot, feet))
         for geom in spec.geoms:  # the feet's own collision geometry, the only geometry left
             for key, value in foot.items():
                 setattr(geom, key, value)
@@ -154,6 +156,31 @@ def _add_spheres(spec, scene: Scene, half_width: float, radius: float, foot: dic
         for side in (1.0, -1.0):
             body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[radius, 0, 0],
                           pos=[0.0, side * half_width, radius], **foot)
+
+
+def _drafted(scene: Scene) -> dict[str, tuple]:
+    """link -> the draft's body (mass kg, COM (3,) m, inertia (3, 3) kg m^2) in the link's
+    frame, for the links whose URDF lacks an inertia (`walk.robot_urdf`)."""
+    out = {}
+    for body in scene.bodies:
+        if body.name in scene.robot.links:
+            position, rotation = scene.robot.link_pose(body.name)  # link frame in the body's
+            out[body.name] = (body.mass, -rotation.T @ position,
+                              rotation.T @ np.diag(body.inertia) @ rotation)
+    return out
+
+
+def _add_meshes(spec, meshes: list[FootMesh]) -> None:
+    """The feet's meshes MuJoCo does not read from a file, from their vertices (its
+    collision takes their convex hull, as it does of any mesh)."""
+    import mujoco
+
+    for i, mesh in enumerate(meshes):
+        spec.add_mesh(name=f"foot_mesh_{i}", uservert=mesh.vertices.ravel().tolist())
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, mesh.R.ravel())
+        spec.body(mesh.link).add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"foot_mesh_{i}",
+                                      pos=mesh.pos, quat=quat)
 
 
 def _add_site(spec, name: str, frame: SiteFrame) -> None:

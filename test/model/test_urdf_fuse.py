@@ -134,8 +134,9 @@ def _swap_roll_and_yaw(joints, _links):
     yaw.set("xyz", roll_xyz)
 
 
-def _move_roll(joints, _links):
-    joints["ankle_l_roll"].find("origin").set("xyz", "0 0 0.01")
+def _move_roll(joints, _links):  # on both sides: the robot stays symmetric
+    for side in "lr":
+        joints[f"ankle_{side}_roll"].find("origin").set("xyz", "0 0 0.01")
 
 
 def _one_massless_link(joints, _links):

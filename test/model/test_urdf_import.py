@@ -22,15 +22,17 @@ import time
 import numpy as np
 import pinocchio as pin
 import pytest
+import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gait_planner.model.angles import configuration, joint_angles
 from gait_planner.model.loader import SceneError, load_scene_file, scene_from_text
 from gait_planner.model.multibody import Multibody
+from gait_planner.model.rotations import rot_z, rpy_matrix
 from gait_planner.model.scene import InitialPose
 from gait_planner.model.urdf_import import UrdfError, draft_scene
-from urdf_bipeds import AXES, biped
+from urdf_bipeds import AXES, biped, turn_link_frames
 
 ROUND_OFF = 1e-9
 
@@ -131,6 +133,117 @@ def test_non_physical_inertia_is_refused():
                            '<mass value="1.0"/><inertia ixx="0.02" iyy="0.03" izz="0.09"')
     with pytest.raises(UrdfError, match="link 'left_shin_link' has a non-physical inertia"):
         draft_scene(urdf)
+
+
+# ----------------------------------------------------------------------------- link frames
+
+LEG_LINKS = tuple(f"{side}_{part}_link" for side in ("left", "right")
+                  for part in ("hip", "thigh", "shin", "foot"))
+TURN = st.tuples(st.floats(-3.1, 3.1), st.floats(-1.5, 1.5), st.floats(-3.1, 3.1)).map(
+    rpy_matrix)
+
+
+def _draft_data(urdf: str) -> tuple[dict, dict]:
+    """(the draft's scene data without its robot section, the robot section's links)."""
+    data = yaml.safe_load(draft_scene(urdf).yaml)
+    return data, data.pop("robot")["links"]
+
+
+def _assert_same(a, b, where: str = "scene") -> None:
+    """Equal data, numbers to 1e-9."""
+    if isinstance(a, dict):
+        assert list(a) == list(b), where
+        for key in a:
+            _assert_same(a[key], b[key], f"{where}.{key}")
+    elif isinstance(a, list):
+        assert len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            _assert_same(x, y, f"{where}[{i}]")
+    elif isinstance(a, float) or isinstance(b, float):
+        assert abs(a - b) < ROUND_OFF, f"{where}: {a} != {b}"
+    else:
+        assert a == b, where
+
+
+def test_turned_leg_frames_and_a_backward_x_draft_the_plain_scene():
+    """iCub's case: its base x points backwards, its right leg's link frames are not its
+    left leg's mirrored and a right joint turns about the opposite axis; the draft is the
+    plain robot's, that joint's axis and range negated."""
+    turns = {"base_link": rot_z(np.pi), "right_hip_link": rpy_matrix([np.pi / 2, 0, 0]),
+             "right_thigh_link": rpy_matrix([0, 0, np.pi]),
+             "right_shin_link": rpy_matrix([0.3, -1.2, 2.0]),
+             "right_foot_link": rpy_matrix([0, np.pi / 2, np.pi / 2])}
+    plain, _ = _draft_data(biped())
+    turned, _ = _draft_data(turn_link_frames(biped(), turns, flipped=("right_knee_joint",)))
+    knee = next(j for j in plain["joints"] if j["name"] == "right_knee_joint")
+    knee["axis"] = [-x for x in knee["axis"]]
+    limits = plain["gait"]["options"]["joint_limits"]
+    limits["right_knee_joint"] = [-x for x in limits["right_knee_joint"][::-1]]
+    for phase in plain["gait"]["options"]["phase_joint_limits"].values():  # the envelope's
+        if "right_knee_joint" in phase:
+            phase["right_knee_joint"] = [-x for x in phase["right_knee_joint"][::-1]]
+    _assert_same(plain, turned)
+
+
+@settings(max_examples=25, deadline=None)
+@given(yaw=st.floats(-np.pi, np.pi), turns=st.lists(TURN, min_size=8, max_size=8))
+def test_any_leg_link_frames_and_base_heading_draft_the_plain_scene(yaw, turns):
+    """The draft does not depend on the URDF's link frames nor on its base's heading: each
+    body's link frame in the robot section is the plain one turned, everything else is
+    the plain draft."""
+    rotations = {"base_link": rot_z(yaw), **dict(zip(LEG_LINKS, turns))}
+    plain, plain_links = _draft_data(biped())
+    turned, turned_links = _draft_data(turn_link_frames(biped(), rotations))
+    _assert_same(plain, turned)
+    for link, Q in rotations.items():
+        position, rpy = np.reshape(plain_links[link], (2, 3))
+        assert np.abs(np.asarray(turned_links[link][:3]) - position).max() < ROUND_OFF
+        assert np.abs(rpy_matrix(turned_links[link][3:]) - rpy_matrix(rpy) @ Q).max() < \
+            ROUND_OFF, link
+
+
+CENTRED_FEET = "".join(  # soles centred under the ankles: they do not tell forward
+    f'<collision><origin xyz="{x} {y} -0.06"/><geometry><sphere radius="0.005"/></geometry>'
+    f'</collision>' for x in (-0.08, 0.08) for y in (-0.03, 0.03))
+
+
+@pytest.mark.parametrize("feet, cue", [(None, "the soles"), (CENTRED_FEET, "the knees")])
+def test_the_walking_direction_follows_the_feet_or_the_knees(feet, cue):
+    """With its base turned (x backwards, or sideways) the robot walks as the plain one
+    does: the soles tell forward (the toes reach further than the heels), or, with soles
+    centred under the ankles, the knees (flexing moves the feet back); the header says
+    which."""
+    plain, _ = _draft_data(biped(foot_geometry=feet))
+    assert "Walking direction" not in draft_scene(biped(foot_geometry=feet)).yaml  # its x
+    for yaw in (np.pi, np.pi / 2):
+        urdf = turn_link_frames(biped(foot_geometry=feet), {"base_link": rot_z(yaw)})
+        turned, _ = _draft_data(urdf)
+        _assert_same(plain, turned)
+        assert f"told by {cue}" in draft_scene(urdf).yaml
+
+
+def test_an_asymmetric_robot_with_turned_frames_is_refused_naming_the_link():
+    urdf = biped().replace('<origin xyz="0 0 -0.15" rpy="-0.1 -0.2 -0.3"/>',
+                           '<origin xyz="0 0 -0.17" rpy="-0.1 -0.2 -0.3"/>')
+    turns = {"base_link": rot_z(np.pi), "right_shin_link": rpy_matrix([0.3, -1.2, 2.0])}
+    with pytest.raises(UrdfError, match=r"right_shin_link's centre of mass is 20 mm from "
+                                        r"left_shin_link's mirror image"):
+        draft_scene(turn_link_frames(urdf, turns))
+
+
+def test_a_massless_link_outside_the_legs_is_merged_into_the_base():
+    """A locked link without mass (an IMU or a handle frame on a joint) adds nothing: the
+    draft is the robot's without that link."""
+    plain = biped()
+    arm = plain[plain.index('<link name="arm_link">'):plain.index("</link>", plain.index(
+        '<link name="arm_link">')) + len("</link>")]
+    massless, _ = _draft_data(plain.replace(arm, '<link name="arm_link"/>'))
+    without = biped().replace(arm, "")
+    without = without[:without.index('<joint name="waist_joint"')] + without[
+        without.index("</joint>", without.index('<joint name="waist_joint"')) + len("</joint>"):]
+    bare, _ = _draft_data(without)
+    massless["description"] = bare["description"]  # it counts the locked joints
+    _assert_same(bare, massless)
 
 
 # ----------------------------------------------------------------------------- example robots

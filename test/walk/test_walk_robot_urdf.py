@@ -1,6 +1,6 @@
 """A drafted robot walks on its own URDF (`gait_planner.walk.robot_urdf`,
 `walk.director_frames`, `walk.mujoco_model.build_model(..., robot=...)`), checked without a
-plan on G1 and Bolt from the example-robot-data wheel:
+plan on G1, Bolt, Alexander and iCub from the example-robot-data wheel:
 
 * the plan's frames sit where the scene puts them: at any root pose and leg angles, the
   ``plan_root`` site is the scene's root centre of mass and directors, each ``plan_<contact>``
@@ -9,7 +9,9 @@ plan on G1 and Bolt from the example-robot-data wheel:
 * locked joints are welded at the draft's angles (G1's arms bent: the centre of mass
   still agrees), only the feet's own collision geometry is left, each of it mapped to the
   contact point it carries (G1: four 5 mm spheres per foot, heel pair and toe pair; Bolt:
-  the meshes of its lower leg and of the foot fixed to it);
+  the meshes of its lower leg and of the foot fixed to it; Alexander: its visual foot
+  meshes, its URDF having no collision geometry; iCub: its Collada foot meshes, given to
+  MuJoCo as vertices), each foot's lowest vertex under and at the height of its contacts;
 * a URDF that is not the scene's robot and a foot mesh that is not found are refused.
 """
 
@@ -33,6 +35,8 @@ from gait_planner.walk.robot_urdf import RobotUrdf  # noqa: E402
 
 G1 = "g1_description/urdf/g1_29dof_rev_1_0.urdf"
 BOLT = "bolt_description/robots/bolt.urdf"
+ICUB = "icub_description/robots/icub_reduced.urdf"
+ALEXANDER = "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"
 ARMS = {"left_shoulder_pitch_joint": -0.3, "right_shoulder_pitch_joint": -0.3,
         "left_elbow_joint": 0.8, "right_elbow_joint": 0.8}
 
@@ -48,8 +52,11 @@ def _walker(example_robots, path, locked=None):
     return scene, wm, RobotUrdf(text, dirs, draft.locked)
 
 
-@pytest.mark.parametrize("path, locked", [(G1, None), (G1, ARMS), (BOLT, None)])
-def test_the_plans_frames_sit_where_the_scene_puts_them(example_robots, path, locked):
+@pytest.mark.parametrize("path, locked, tolerance", [
+    (G1, None, 1e-9), (G1, ARMS, 1e-9), (BOLT, None, 1e-9), (ALEXANDER, None, 1e-9),
+    (ICUB, None, 1e-4)])  # iCub: the draft writes its right joints' micrometres mirrored
+def test_the_plans_frames_sit_where_the_scene_puts_them(example_robots, path, locked,
+                                                         tolerance):
     scene, wm, _ = _walker(example_robots, path, locked)
     model, data = wm.model, mujoco.MjData(wm.model)
     rng = np.random.default_rng(7)
@@ -70,7 +77,7 @@ def test_the_plans_frames_sit_where_the_scene_puts_them(example_robots, path, lo
         for c, site in zip(scene.contacts, wm.contact_sites):
             b = scene.body_index(c.body)
             point = q[b, :3] + q[b, 3:].reshape(3, 3).T @ scene.body(c.body).points[c.point]
-            assert np.allclose(data.site_xpos[site], point, atol=1e-9), c.name
+            assert np.allclose(data.site_xpos[site], point, atol=tolerance), c.name
         masses = np.array([b.mass for b in scene.bodies])
         com = masses @ q[:, :3] / masses.sum()
         assert np.allclose(data.subtree_com[model.body(wm.root).id], com, atol=1e-4)
@@ -99,6 +106,51 @@ def test_only_the_feet_collide_each_geometry_with_its_contact(example_robots):
         contact = bolt_scene.contacts[bolt.geom_contact[g]]
         assert bolt.model.body_weldid[bolt.model.geom_bodyid[g]] == \
             bolt.model.body(contact.body).id
+
+
+@pytest.mark.parametrize("path, from_vertices", [(ICUB, 2), (ALEXANDER, 0)])
+def test_feet_read_from_visual_or_collada_meshes_touch_where_their_contacts_are(
+        example_robots, path, from_vertices):
+    """Alexander's feet have only visual meshes, iCub's Collada ones (which MuJoCo does not
+    read: given as vertices): in MuJoCo at the draft's initial pose each foot's lowest
+    vertex is at its contacts' height and under them."""
+    scene, wm, _ = _walker(example_robots, path)
+    model, data = wm.model, mujoco.MjData(wm.model)
+    feet = [g for g in range(model.ngeom) if model.geom_contype[g]]
+    assert len(feet) == 2 and all(model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH
+                                  for g in feet)
+    assert sum(model.mesh(model.geom_dataid[g]).name.startswith("foot_mesh_")
+               for g in feet) == from_vertices
+    q = configuration(scene).reshape(-1, 12)
+    i = scene.body_index(scene.root.body)
+    data.qpos[:] = plan_qpos(wm, i, q.reshape(-1), np.zeros(len(angle_names(scene))))
+    mujoco.mj_kinematics(model, data)
+    for g in feet:
+        mesh = model.geom_dataid[g]
+        start = model.mesh_vertadr[mesh]
+        local = model.mesh_vert[start:start + model.mesh_vertnum[mesh]]
+        world = local @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g]
+        sites = [data.site_xpos[s] for c, s in zip(scene.contacts, wm.contact_sites)
+                 if scene.contacts[wm.geom_contact[g]].body == c.body]
+        assert len(sites) == 2  # heel and forefoot
+        for site in sites:
+            assert abs(site[2] - world[:, 2].min()) < 1e-3  # the sole band of the draft
+            assert world[:, 0].min() < site[0] < world[:, 0].max()
+            assert world[:, 1].min() < site[1] < world[:, 1].max()
+
+
+def test_links_without_inertia_take_the_drafts(example_robots):
+    """iCub's URDF gives its right leg links a mass but no inertia: MuJoCo gets the draft's
+    body (the left twin's mirror image, same principal moments); its ankle_2, whose fixed
+    foot carries the inertia, stays a point mass."""
+    scene, wm, _ = _walker(example_robots, ICUB)
+    model = wm.model
+    for right, left in (("r_upper_leg", "l_upper_leg"), ("r_hip_1", "l_hip_1")):
+        assert np.allclose(np.sort(model.body(right).inertia), np.sort(model.body(left).inertia),
+                           rtol=1e-6, atol=0)  # MuJoCo's own eigen solver
+        assert np.allclose(np.sort(model.body(right).inertia), np.sort(scene.body(right).inertia),
+                           rtol=1e-6, atol=0)  # MuJoCo's own eigen solver
+    assert model.body("r_ankle_2").inertia.max() < 1e-8
 
 
 def test_another_robot_and_a_missing_mesh_are_refused(example_robots):
