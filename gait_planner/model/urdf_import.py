@@ -429,9 +429,9 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
               f"principal axes;\n# joints: the URDF's, zero and sign as the URDF's. Leg length "
               f"(hip to sole) L = {leg:.4f} m:\n# step_length = 0.7066 L, base_time_step = "
               f"0.01 s sqrt(L / 0.897 m) (walker3d scaled).\n# Joint ranges: the URDF's within "
-              f"+-{_RANGE_MAX} deg of its zero pose (the planner's range rows);\n# collision: spheres "
-              f"containing the lower legs' collision geometry (leg_clearance between legs);"
-              f"\n# joint_speed_max: "
+              f"+-{_RANGE_MAX} deg of its zero pose (the planner's range rows);\n"
+              f"# collision: spheres containing the lower legs' collision geometry "
+              f"(leg_clearance between legs);\n# joint_speed_max: "
               f"the slowest joint's velocity limit (one bound for every joint).\n")
     if lock_angles:
         header += "# Locked joints (merged into their parent): " + ", ".join(
