@@ -8,15 +8,18 @@ thighs, which meet at the crotch (Talos's are 12 mm apart standing), are left ou
 
 The fit: the body's collision geometry, in its director components from the centre of
 mass, is a set of convex pieces, each the convex hull of a few points grown by a radius rho
-(a mesh's triangles, split until no edge is longer than PIECE_EDGE, rho = 0; a box's corners; a sphere's centre, a capsule's or a
-cylinder's two end centres, rho = its radius). The pieces are split into `count` clusters
-(Lloyd's iterations on the pieces' centroids, started at quantiles along the principal axis
-of the points); each cluster gets the ball about the approximate centre of its smallest
-enclosing ball (Badoiu-Clarkson iterations) whose radius is max |c - p| + rho over the
-cluster's points. A ball is convex, so it contains each of its pieces whole: the spheres
-contain the collision geometry exactly, not only its sampled points. A right body's spheres
-are the left partner's mirrored, fitted to the left body's pieces and the right body's
-mirrored together (so they contain both).
+(a mesh's triangles, split until no edge is longer than PIECE_EDGE, rho = 0; a box's
+corners; a sphere's centre, a capsule's or a cylinder's two end centres, rho = its radius).
+The pieces are binned by their centroids into a grid of at most SPHERES cells (no narrower
+than CELL where a coarser grid fits) across the leg's lateral direction (world y at the
+zero pose): each cell spans the body's whole width, and its sphere, centred on the cell's
+points' bounding box with radius max |c - p| + rho over them, contains each of its pieces
+whole (a ball is convex): the spheres contain the collision geometry exactly, not only
+sampled points of it. A sphere that spans the width bulges little towards the other leg:
+Talos's standing shanks are 27.6 mm apart, their spheres 9.8 mm; a few spheres along the
+body's axis or on its surface overlapped by 10 to 30 cm (benchmarks/HISTORY.md,
+2026-12-06). A right body's spheres are its left partner's mirrored, fitted to the left
+body's pieces and the right body's mirrored together (so they contain both).
 """
 
 from __future__ import annotations
@@ -25,10 +28,11 @@ import numpy as np
 
 from gait_planner.model.urdf_errors import UrdfError
 
-__all__ = ["CELL", "LEG_CLEARANCE", "LOWER_LEG", "SPHERES", "collision_pieces", "fit_spheres", "leg_spheres"]
+__all__ = ["CELL", "LEG_CLEARANCE", "LOWER_LEG", "SPHERES", "collision_pieces", "fit_spheres",
+           "leg_spheres"]
 
 LEG_CLEARANCE = 0.01  # m: the draft's leg_clearance (`gait_planner.ocp.legs`)
-LOWER_LEG = 0.65  # the lower part of the leg (of hip to sole) whose bodies get spheres
+LOWER_LEG = 0.65  # the lower part of the leg (foot joint to hip) whose bodies get spheres
 SPHERES = 12  # at most, per body
 CELL = 0.03  # m: no narrower cells where a coarser grid fits
 PIECE_EDGE = 0.02  # m: a mesh's triangles are split until no edge is longer

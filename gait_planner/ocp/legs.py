@@ -20,11 +20,11 @@ row per node keeps every pair:
 a smooth minimum, min_ij s_ij - eps log(pairs) <= row <= min_ij s_ij: the row at 0 puts
 every pair at least its clearance apart (conservative by at most eps log(pairs), 1.8 mm
 for Talos's 1225 pairs). With M / eps = 300 each exp(-s / eps) lies within
-(1e-130, 1e131): no pair far apart underflows the sum S to 0, and no overlap overflows
+(5e-131, 2e130): no pair far apart underflows the sum S to 0, and no overlap overflows
 S^2, which the row's second derivatives divide by (with M / eps = 600 Talos's first
 Hessian was NaN).
 One row, not one per pair: Talos's legs have 35 spheres each, and 1225 rows per node would
-be 100,000 inequality rows, each with its slack in IPOPT's KKT system.
+be 48,000 inequality rows on its 40 intervals, each with its slack in IPOPT's KKT system.
 
 The rows are built with the gait option legs_apart (default true; walker3d's gait sets it
 false, keeping the paper's problem, whose optimum passes one foot through the other).

@@ -64,7 +64,9 @@ def test_ground_clearance(solved, name):
     rep = s.report
     if s.settings.ground_clearance:
         assert rep.min_contact_point_height >= -LIMITS["ground"]
-        assert rep.notes == ()
+        # walker3d's paper problem (legs_apart: false) passes a foot through the other
+        legs = tuple(n for n in rep.notes if "not asked to keep them apart" in n)
+        assert rep.notes == legs and bool(legs) == (name == "walker3d")
     else:  # the rigid compass scuffs at mid-stance; the verifier says so without failing
         assert rep.min_contact_point_height < 0
         assert any("ground_clearance: false" in n for n in rep.notes)
