@@ -49,6 +49,8 @@ ROBOTS = {
     "bolt": Robot("bolt_description/robots/bolt.urdf"),
     "g1": Robot("g1_description/urdf/g1_29dof_rev_1_0.urdf"),
     "talos": Robot("talos_data/robots/talos_reduced.urdf", {"mirror_tolerance": 0.06}),
+    "icub": Robot("icub_description/robots/icub_reduced.urdf"),  # x backwards (#61 item 4)
+    "alexander": Robot("alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"),
 }
 
 

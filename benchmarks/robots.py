@@ -1,6 +1,7 @@
 """Robots planned from their URDF (issue #37, item 6): per robot of the example-robot-data
-wheel (`robot_plan.ROBOTS`: Bolt, Unitree G1, Talos), the scene drafted and planned as a user
-plans it, in fresh processes; G1's plan beside walker3d scaled to G1 and walker3d itself.
+wheel (`robot_plan.ROBOTS`: Bolt, Unitree G1, Talos, iCub, Alexander), the scene drafted
+and planned as a user plans it, in fresh processes; G1's plan beside walker3d scaled to G1
+and walker3d itself.
 
     .venv/bin/python benchmarks/robots.py                  # every robot, compiled and not
     .venv/bin/python benchmarks/robots.py --quick          # Bolt only, compiled
