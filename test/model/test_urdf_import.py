@@ -28,6 +28,7 @@ from hypothesis import strategies as st
 
 from gait_planner.model.angles import configuration, joint_angles
 from gait_planner.model.loader import SceneError, load_scene_file, scene_from_text
+from gait_planner.model.urdf_frame import SNAP
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.rotations import rot_z, rpy_matrix
 from gait_planner.model.scene import InitialPose
@@ -186,11 +187,15 @@ def test_turned_leg_frames_and_a_backward_x_draft_the_plain_scene():
 
 
 @settings(max_examples=25, deadline=None)
-@given(yaw=st.floats(-np.pi, np.pi), turns=st.lists(TURN, min_size=8, max_size=8))
+@given(yaw=st.floats(-np.pi, np.pi).filter(  # a heading within SNAP of an axis is snapped
+    lambda y: y == 0.0 or min(abs(y - k * np.pi / 2) for k in range(-2, 3)) > 2 * SNAP),
+       turns=st.lists(TURN, min_size=8, max_size=8))
 def test_any_leg_link_frames_and_base_heading_draft_the_plain_scene(yaw, turns):
     """The draft does not depend on the URDF's link frames nor on its base's heading: each
     body's link frame in the robot section is the plain one turned, everything else is
-    the plain draft."""
+    the plain draft. (A heading within `urdf_frame.SNAP` of the URDF's axes is snapped
+    onto them by design, iCub's feet being 4.7e-5 rad off: its draft is the plain one
+    to that angle, not to round-off.)"""
     rotations = {"base_link": rot_z(yaw), **dict(zip(LEG_LINKS, turns))}
     plain, plain_links = _draft_data(biped())
     turned, turned_links = _draft_data(turn_link_frames(biped(), rotations))
