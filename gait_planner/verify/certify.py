@@ -59,7 +59,7 @@ def certified(result: PlanResult):
             node_efforts(result), wrenches, result.active_contacts)
         names = list(held)
         efforts, impulses = split_impulses(
-            np.column_stack([held[n] for n in names]).reshape(result.n_nodes, len(names)),
+            np.array([held[n] for n in names]).T.reshape(result.n_nodes, len(names)),
             result.times, result.active_contacts)
         return dataclasses.replace(
             result, held_efforts={**result.held_efforts, **dict(zip(names, efforts.T))},
