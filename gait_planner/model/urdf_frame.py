@@ -18,8 +18,10 @@ URDF's links use (iCub's base x points backwards).
   3. the URDF's x axis (Bolt's point feet and unlimited knees).
 * **Left** = up x forward; the left foot is the one on that side.
 
-A frame within `SNAP` of the URDF's own axes is snapped to them, so that a robot drafted
-in its own axes (G1, Talos, Bolt) is not turned by round-off. `--feet LEFT,RIGHT` fixes
+A frame within round-off (`SNAP`) of the URDF's own axes is snapped to them, so that a
+robot drafted in its own axes (G1, Talos, Bolt) is not turned by round-off; any other is
+kept as found (iCub's walks 4.7e-5 rad off its base's -x: its feet are that far apart
+along x, by its rpy of 1.5708). `--feet LEFT,RIGHT` fixes
 left and right; a clear cue that says otherwise is refused.
 """
 
@@ -30,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gait_planner.model.urdf_errors import UrdfError
+from gait_planner.model.urdf_read import leg_path
 
 __all__ = ["WalkFrame", "walking_frame"]
 
@@ -37,8 +40,8 @@ SOLE_CUE = 0.2  # (toe reach - heel reach) / sole length that makes the soles a 
 KNEE_CUE = 1.0 / 3.0  # a knee's range is one-sided when its smaller side is at most this
 #                       fraction of the larger one (G1 0.03, iCub 0.18, Talos 0)
 KNEE_RANGE = np.pi  # rad: a limit this far from zero is no limit (Bolt's +-10 rad)
-SNAP = 1e-4  # rad and m: a frame this close to the URDF's axes and origin is theirs
-#             (iCub's feet, 4.7e-5 rad and 2 um off its axes by its rpy of 1.5708)
+SNAP = 1e-9  # rad and m: a frame this close to the URDF's axes and origin is theirs (round-
+#             off; iCub's feet, 4.7e-5 rad and 2 um off its axes by its rpy of 1.5708, are not)
 _LATERAL = np.cos(np.radians(30.0))  # a knee's axis within 30 deg of the lateral line
 _UP = np.array([0.0, 0.0, 1.0])
 
@@ -72,7 +75,7 @@ def walking_frame(model, data, feet: tuple[int, int], soles: dict[int, np.ndarra
     a, b = feet
     ankle = {f: np.array(data.oMi[f].translation) for f in feet}
     for f in feet:
-        hip = _leg(model, f)[0]
+        hip = leg_path(model, f)[0]
         if not data.oMi[hip].translation[2] > soles[f][:, 2].min():
             raise UrdfError(f"foot {model.names[f]!r} is not below its hip along the URDF's "
                             f"z axis: the importer takes z as up (REP 103)")
@@ -105,15 +108,6 @@ def walking_frame(model, data, feet: tuple[int, int], soles: dict[int, np.ndarra
     return WalkFrame(W, origin, cue), (left, right)
 
 
-def _leg(model, foot: int) -> list[int]:
-    """The joints from the base (exclusive) to `foot`, hip first."""
-    out = []
-    while foot > 1:
-        out.append(foot)
-        foot = int(model.parents[foot])
-    return out[::-1]
-
-
 def _sole_cue(soles, ankle, ahead) -> float:
     """+1 or -1: the side of `ahead` the toes are on, or 0 when the soles do not say."""
     reach, length = 0.0, 0.0
@@ -129,7 +123,7 @@ def _knee_cue(model, data, feet, axes, lateral, ahead) -> float:
     or 0 when the knees do not say (both legs must agree)."""
     votes = []
     for foot in feet:
-        leg = _leg(model, foot)
+        leg = leg_path(model, foot)
         hip, ankle = data.oMi[leg[0]].translation, data.oMi[foot].translation
         best, knee = 0.0, None
         for j in leg:
