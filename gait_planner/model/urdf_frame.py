@@ -18,10 +18,11 @@ URDF's links use (iCub's base x points backwards).
   3. the URDF's x axis (Bolt's point feet and unlimited knees).
 * **Left** = up x forward; the left foot is the one on that side.
 
-A frame within round-off (`SNAP`) of the URDF's own axes is snapped to them, so that a
-robot drafted in its own axes (G1, Talos, Bolt) is not turned by round-off; any other is
-kept as found (iCub's walks 4.7e-5 rad off its base's -x: its feet are that far apart
-along x, by its rpy of 1.5708). `--feet LEFT,RIGHT` fixes
+A frame within `SNAP` of the URDF's own axes is snapped to them, as the draft writes
+mirror images within its tolerances (`gait_planner.model.urdf_mirror`): a robot drafted
+in its own axes (G1, Talos, Bolt) is not turned by round-off, and iCub, whose feet stand
+4.7e-5 rad off its base's y axis (its rpy of 1.5708), walks along its base's -x. The
+angle and distance snapped (`snapped`) are listed in the draft's header. `--feet LEFT,RIGHT` fixes
 left and right; a clear cue that says otherwise is refused.
 """
 
@@ -40,8 +41,8 @@ SOLE_CUE = 0.2  # (toe reach - heel reach) / sole length that makes the soles a 
 KNEE_CUE = 1.0 / 3.0  # a knee's range is one-sided when its smaller side is at most this
 #                       fraction of the larger one (G1 0.03, iCub 0.18, Talos 0)
 KNEE_RANGE = np.pi  # rad: a limit this far from zero is no limit (Bolt's +-10 rad)
-SNAP = 1e-9  # rad and m: a frame this close to the URDF's axes and origin is theirs (round-
-#             off; iCub's feet, 4.7e-5 rad and 2 um off its axes by its rpy of 1.5708, are not)
+SNAP = 1e-4  # rad and m: a frame this close to the URDF's axes and origin is theirs
+#             (iCub's feet, 4.7e-5 rad and 2 um off its axes by its rpy of 1.5708)
 _LATERAL = np.cos(np.radians(30.0))  # a knee's axis within 30 deg of the lateral line
 _UP = np.array([0.0, 0.0, 1.0])
 
@@ -55,6 +56,7 @@ class WalkFrame:
     W: np.ndarray
     origin: np.ndarray
     cue: str
+    snapped: tuple[float, float] = (0.0, 0.0)  # rad and m the frame was moved by (SNAP)
 
     def point(self, p) -> np.ndarray:
         """A URDF-world point (3,) m in the walker's world."""
@@ -99,13 +101,15 @@ def walking_frame(model, data, feet: tuple[int, int], soles: dict[int, np.ndarra
     if given:
         sign = 1.0
     forward = _snap(sign * ahead)
+    turned = float(np.arccos(np.clip(forward @ (sign * ahead), -1.0, 1.0)))
     W = np.column_stack([forward, np.cross(_UP, forward), _UP])
     left, right = (a, b) if sign > 0 else (b, a)
     middle = 0.5 * (ankle[a] + ankle[b])
     origin = (middle @ W[:, 1]) * W[:, 1]
-    if np.abs(origin).max() < SNAP:
+    shift = float(np.abs(origin).max())
+    if shift < SNAP:
         origin = np.zeros(3)
-    return WalkFrame(W, origin, cue), (left, right)
+    return WalkFrame(W, origin, cue, (turned, shift if shift < SNAP else 0.0)), (left, right)
 
 
 def _sole_cue(soles, ankle, ahead) -> float:

@@ -236,6 +236,9 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
             moments, R = _principal(links[joint], mass, inertia, world[joint])
         bodies[joint] = _Body(links[joint], joint, mass, moments, com, R)
     contacts, half_widths = foot_contacts(soles, frame)
+    if max(frame.snapped) > 1e-9:
+        changes.append(f"walking frame: turned by {frame.snapped[0]:.3g} rad and moved by "
+                       f"{frame.snapped[1] * 1e3:.3g} mm onto the URDF's axes")
     source = {"urdf": urdf_file, **({"package_dirs": list(robot_dirs)} if robot_dirs else {}),
               "locked": lock_angles}
     return _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
