@@ -47,7 +47,7 @@ def _knees(urdf: str, names) -> dict[str, str]:
 
 def _world_axis(model, data, joint: int) -> np.ndarray:
     """A 1-dof revolute joint's unit axis in the world at the zero pose, else zeros."""
-    from gait_planner.model.urdf_import import UrdfError, revolute_axis
+    from gait_planner.model.urdf_read import UrdfError, revolute_axis
 
     try:
         return data.oMi[joint].rotation @ revolute_axis(model, joint)

@@ -38,7 +38,7 @@ def leg_roles(model, data, chain: Sequence[int], axes: dict[str, np.ndarray],
               frame) -> dict:
     """{"hip_yaw": joint, "knee": joint} of one leg: `chain` its joint ids from the base
     (Pinocchio model, forward kinematics in `data` at the draft pose), `axes` the joints'
-    unit axes in their own frames (`urdf_import.revolute_axis`), `frame` the walker's world
+    unit axes in their own frames (`urdf_read.revolute_axis`), `frame` the walker's world
     in the URDF's (`gait_planner.model.urdf_frame.WalkFrame`: forward, left, up)."""
     world = {j: frame.W.T @ data.oMi[j].rotation @ axes[model.names[j]] for j in chain}
     height = {j: float(frame.W[:, 2] @ (data.oMi[j].translation

@@ -18,8 +18,11 @@ URDF's links use (iCub's base x points backwards).
   3. the URDF's x axis (Bolt's point feet and unlimited knees).
 * **Left** = up x forward; the left foot is the one on that side.
 
-A frame within `SNAP` of the URDF's own axes is snapped to them, so that a robot drafted
-in its own axes (G1, Talos, Bolt) is not turned by round-off. `--feet LEFT,RIGHT` fixes
+A frame within `SNAP` of the URDF's own axes is snapped to them, as the draft writes
+mirror images within its tolerances (`gait_planner.model.urdf_mirror`): a robot drafted
+in its own axes (G1, Talos, Bolt) is not turned by round-off, and iCub, whose feet stand
+4.7e-5 rad off its base's y axis (its rpy of 1.5708), walks along its base's -x. The
+angle and distance snapped (`snapped`) are listed in the draft's header. `--feet LEFT,RIGHT` fixes
 left and right; a clear cue that says otherwise is refused.
 """
 
@@ -30,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gait_planner.model.urdf_errors import UrdfError
+from gait_planner.model.urdf_read import leg_path
 
 __all__ = ["WalkFrame", "walking_frame"]
 
@@ -52,6 +56,7 @@ class WalkFrame:
     W: np.ndarray
     origin: np.ndarray
     cue: str
+    snapped: tuple[float, float] = (0.0, 0.0)  # rad and m the frame was moved by (SNAP)
 
     def point(self, p) -> np.ndarray:
         """A URDF-world point (3,) m in the walker's world."""
@@ -72,7 +77,7 @@ def walking_frame(model, data, feet: tuple[int, int], soles: dict[int, np.ndarra
     a, b = feet
     ankle = {f: np.array(data.oMi[f].translation) for f in feet}
     for f in feet:
-        hip = _leg(model, f)[0]
+        hip = leg_path(model, f)[0]
         if not data.oMi[hip].translation[2] > soles[f][:, 2].min():
             raise UrdfError(f"foot {model.names[f]!r} is not below its hip along the URDF's "
                             f"z axis: the importer takes z as up (REP 103)")
@@ -96,22 +101,15 @@ def walking_frame(model, data, feet: tuple[int, int], soles: dict[int, np.ndarra
     if given:
         sign = 1.0
     forward = _snap(sign * ahead)
+    turned = float(np.arccos(np.clip(forward @ (sign * ahead), -1.0, 1.0)))
     W = np.column_stack([forward, np.cross(_UP, forward), _UP])
     left, right = (a, b) if sign > 0 else (b, a)
     middle = 0.5 * (ankle[a] + ankle[b])
     origin = (middle @ W[:, 1]) * W[:, 1]
-    if np.abs(origin).max() < SNAP:
+    shift = float(np.abs(origin).max())
+    if shift < SNAP:
         origin = np.zeros(3)
-    return WalkFrame(W, origin, cue), (left, right)
-
-
-def _leg(model, foot: int) -> list[int]:
-    """The joints from the base (exclusive) to `foot`, hip first."""
-    out = []
-    while foot > 1:
-        out.append(foot)
-        foot = int(model.parents[foot])
-    return out[::-1]
+    return WalkFrame(W, origin, cue, (turned, shift if shift < SNAP else 0.0)), (left, right)
 
 
 def _sole_cue(soles, ankle, ahead) -> float:
@@ -129,7 +127,7 @@ def _knee_cue(model, data, feet, axes, lateral, ahead) -> float:
     or 0 when the knees do not say (both legs must agree)."""
     votes = []
     for foot in feet:
-        leg = _leg(model, foot)
+        leg = leg_path(model, foot)
         hip, ankle = data.oMi[leg[0]].translation, data.oMi[foot].translation
         best, knee = 0.0, None
         for j in leg:

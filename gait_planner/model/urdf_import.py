@@ -71,7 +71,6 @@ from __future__ import annotations
 import itertools
 import math
 import re
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Sequence
@@ -90,6 +89,8 @@ from gait_planner.model.urdf_fuse import ball_points, find_balls
 from gait_planner.model.urdf_holds import locked_holds
 from gait_planner.model.urdf_mirror import (MIRROR_TOLERANCE, S, mirror_geometry,
                                             mirror_pairs, mirrored_inertias)
+from gait_planner.model.urdf_read import (find_feet, leg_path, read_urdf, revolute_axis,
+                                          visual_geometry)
 
 __all__ = ["UrdfDraft", "UrdfError", "draft_scene"]
 
@@ -116,121 +117,6 @@ def _pin():
     import pinocchio as pin  # noqa: PLC0415 - only the importer needs it at import time
 
     return pin
-
-
-# ----------------------------------------------------------------------------- reading
-
-
-def _check_tree(urdf_text: str) -> None:
-    """UrdfError naming the link of a closed chain (a link that is the child of two joints:
-    Pinocchio's own error then names neither) or a joint whose parent link is missing."""
-    try:
-        robot = ET.fromstring(urdf_text)
-    except ET.ParseError as error:
-        raise UrdfError(f"the URDF is not well-formed XML: {error}") from None
-    parent_of: dict[str, str] = {}
-    links = {link.get("name") for link in robot.findall("link")}
-    for joint in robot.findall("joint"):
-        parent, child = joint.find("parent"), joint.find("child")
-        name = joint.get("name")
-        if parent is None or child is None:
-            raise UrdfError(f"joint {name!r} lacks its <parent> or <child>")
-        p, c = parent.get("link"), child.get("link")
-        if c in parent_of:
-            raise UrdfError(f"link {c!r} is the child of two joints ({parent_of[c]!r} and "
-                            f"{name!r}): a closed chain, which the planner's tree of bodies "
-                            f"cannot express")
-        parent_of[c] = name
-        for link in (p, c):
-            if link not in links:
-                raise UrdfError(f"joint {name!r} names the link {link!r}, which the URDF "
-                                f"does not declare")
-
-
-def _read(urdf_text: str, package_dirs: Sequence[str]):
-    pin = _pin()
-    _check_tree(urdf_text)
-    try:
-        model = pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
-    except Exception as error:  # Pinocchio raises ValueError/RuntimeError with urdfdom's text
-        raise UrdfError(f"the URDF cannot be read as a tree of links: {error}") from None
-    try:
-        geometry = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.COLLISION,
-                                               package_dirs=list(package_dirs))
-    except Exception as error:
-        raise UrdfError(f"the URDF's collision geometry cannot be read (a mesh file not "
-                        f"found or not readable; give its folder with --package-dir): "
-                        f"{error}") from None
-    return model, geometry
-
-
-def _joint_of_link(model, link: str) -> int:
-    if not model.existFrame(link):
-        raise UrdfError(f"no link {link!r} in the URDF")
-    return int(model.frames[model.getFrameId(link)].parentJoint)
-
-
-def _path(model, joint: int) -> list[int]:
-    out = []
-    while joint > 1:
-        out.append(joint)
-        joint = int(model.parents[joint])
-    return out[::-1]
-
-
-def _visual(model, urdf_text: str, package_dirs: Sequence[str]):
-    """The URDF's visual geometry (feet without collision geometry read it), or None when
-    it cannot be read."""
-    pin = _pin()
-    try:
-        return pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.VISUAL,
-                                           package_dirs=list(package_dirs))
-    except Exception:  # a visual mesh not found: the feet's frames remain
-        return None
-
-
-def _find_feet(model, feet: Sequence[str] | None) -> tuple[int, int]:
-    """The feet's joint ids: the given links (LEFT, RIGHT), or the two lowest leaf joints
-    (left and right told by `gait_planner.model.urdf_frame`)."""
-    if feet:
-        if len(feet) != 2:
-            raise UrdfError(f"--feet takes two links LEFT,RIGHT, got {list(feet)}")
-        ids = [_joint_of_link(model, f) for f in feet]
-        for link, joint in zip(feet, ids):
-            if joint <= 1:
-                raise UrdfError(f"foot link {link!r} is fixed to the floating base, not at "
-                                f"the end of a leg")
-        return ids[0], ids[1]
-    pin = _pin()
-    data = model.createData()
-    pin.forwardKinematics(model, data, pin.neutral(model))
-    leaves = [j for j in range(2, model.njoints) if j not in set(model.parents[2:])]
-    if len(leaves) < 2:
-        raise UrdfError(f"no two feet found: the tree has {len(leaves)} leaf joint(s) below "
-                        f"the base; name the feet with --feet LEFT_LINK,RIGHT_LINK")
-    left, right = sorted(leaves, key=lambda j: data.oMi[j].translation[2])[:2]
-    if set(_path(model, left)) & set(_path(model, right)):
-        raise UrdfError(f"the two lowest leaves {model.names[left]!r} and "
-                        f"{model.names[right]!r} share joints; name the feet with --feet")
-    return left, right
-
-
-def revolute_axis(model, joint: int) -> np.ndarray:
-    """The unit axis (joint frame) of a 1-dof revolute joint; UrdfError otherwise."""
-    joint_model = model.joints[joint]
-    name = model.names[joint]
-    data = joint_model.createData()
-    if joint_model.nv != 1:
-        raise UrdfError(f"joint {name!r} ({joint_model.shortname()}) has {joint_model.nv} "
-                        f"degrees of freedom; a leg's joints must be revolute or continuous")
-    q = np.zeros(joint_model.nq)
-    q[0] = 1.0 if joint_model.nq == 2 else 0.0  # continuous joints: (cos, sin)
-    joint_model.calc(data, q)
-    motion = np.array(data.S).reshape(6, -1)[:, 0]  # (linear, angular)
-    if np.linalg.norm(motion[3:]) < 0.5 or np.linalg.norm(motion[:3]) > 1e-12:
-        raise UrdfError(f"joint {name!r} ({joint_model.shortname()}) is not revolute: a "
-                        f"prismatic or helical joint inside a leg cannot be planned")
-    return motion[3:] / np.linalg.norm(motion[3:])
 
 
 # ----------------------------------------------------------------------------- bodies
@@ -317,9 +203,9 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
                         f"{mirror_tolerance:g}")
     pin = _pin()
     dirs = [str(p) for p in package_dirs]
-    full, geometry = _read(urdf_text, dirs)
-    foot_a, foot_b = _find_feet(full, feet)
-    legs = _path(full, foot_a) + _path(full, foot_b)
+    full, geometry = read_urdf(urdf_text, dirs)
+    foot_a, foot_b = find_feet(full, feet)
+    legs = leg_path(full, foot_a) + leg_path(full, foot_b)
     axes = {full.names[j]: revolute_axis(full, j) for j in legs}  # joint frame: kept by
     # the reduction, which changes placements only
     locked = dict(locked or {})
@@ -335,7 +221,7 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     lock_angles = {full.names[j]: float(q_lock[full.joints[j].idx_q]) for j in others}
     shapes = [geometry]
     if any(all(o.parentJoint != f for o in geometry.geometryObjects) for f in (foot_a, foot_b)):
-        shapes += [g for g in [_visual(full, urdf_text, dirs)] if g is not None]
+        shapes += [g for g in [visual_geometry(full, urdf_text, dirs)] if g is not None]
     model, shapes = pin.buildReducedModel(full, shapes, others, q_lock)
     data = model.createData()
     pin.forwardKinematics(model, data, pin.neutral(model))
@@ -345,7 +231,7 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     frame, foot_ids = walking_frame(model, data, tuple(reduced.values()),
                                     {f: world for f, (_, world) in soles.items()}, axes,
                                     given=bool(feet))
-    left_leg, right_leg = (_path(model, f) for f in foot_ids)
+    left_leg, right_leg = (leg_path(model, f) for f in foot_ids)
     ids = {str(model.names[j]): j for j in left_leg + right_leg}
 
     balls = find_balls(model, list(ids.values()), links)
@@ -373,6 +259,9 @@ def draft_scene(urdf_text: str, *, feet: Sequence[str] | None = None,
     holds, unheld = locked_holds(full, q_lock, legs, owner)
     roles = {side: leg_roles(model, data, leg, axes, frame)
              for side, leg in (("l", left_leg), ("r", right_leg))}
+    if max(frame.snapped) > 1e-9:
+        changes.append(f"walking frame: turned by {frame.snapped[0]:.3g} rad and moved by "
+                       f"{frame.snapped[1] * 1e3:.3g} mm onto the URDF's axes")
     source = {"urdf": urdf_file, **({"package_dirs": list(robot_dirs)} if robot_dirs else {}),
               "locked": lock_angles, **({"holds": holds} if holds else {})}
     return _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half_widths,
@@ -426,7 +315,7 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
     lock_angles = source["locked"]
     mirror = {bodies[left_of[j]].name: bodies[j].name for j in order if j in left_of}
     z_sole = min(float(data.oMi[f].act(p)[2]) for f in foot_ids for p in contacts[f].values())
-    hip = [data.oMi[_path(model, f)[0]].translation[2] for f in foot_ids]
+    hip = [data.oMi[leg_path(model, f)[0]].translation[2] for f in foot_ids]
     leg = float(np.mean(hip)) - z_sole
     root = bodies[1]
     com_world = frame.point(root.com) - np.array([0.0, 0.0, z_sole])  # sole at z = 0

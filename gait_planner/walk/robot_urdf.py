@@ -26,7 +26,9 @@ MuJoCo's compiler:
   refuses a body without a positive inertia.
 * **MuJoCo's compiler options.** Every link stays a body of its own (``fusestatic``
   false), masses and inertias are the URDF's ``<inertial>`` (``inertiafromgeom`` false),
-  mesh paths are kept as resolved (``strippath`` false).
+  a non-physical one (principal moments A + B < C: Romeo's welded RShoulderYawLink; the
+  draft refuses one in a leg) made physical by MuJoCo (``balanceinertia``) rather than
+  refused, mesh paths are kept as resolved (``strippath`` false).
 """
 
 from __future__ import annotations
@@ -106,7 +108,8 @@ def simulation_urdf(robot: RobotUrdf, planned: Iterable[str], feet: Iterable[str
     for old in root.findall("mujoco"):
         root.remove(old)
     ET.SubElement(ET.SubElement(root, "mujoco"), "compiler", fusestatic="false",
-                  inertiafromgeom="false", strippath="false", discardvisual="true")
+                  inertiafromgeom="false", balanceinertia="true", strippath="false",
+                  discardvisual="true")
     return ET.tostring(root, encoding="unicode")
 
 

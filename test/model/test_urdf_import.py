@@ -28,7 +28,6 @@ from hypothesis import strategies as st
 
 from gait_planner.model.angles import configuration, joint_angles
 from gait_planner.model.loader import SceneError, load_scene_file, scene_from_text
-from gait_planner.model.urdf_frame import SNAP
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.rotations import rot_z, rpy_matrix
 from gait_planner.model.scene import InitialPose
@@ -187,15 +186,13 @@ def test_turned_leg_frames_and_a_backward_x_draft_the_plain_scene():
 
 
 @settings(max_examples=25, deadline=None)
-@given(yaw=st.floats(-np.pi, np.pi).filter(  # a heading within SNAP of an axis is snapped
-    lambda y: y == 0.0 or min(abs(y - k * np.pi / 2) for k in range(-2, 3)) > 2 * SNAP),
+@given(yaw=st.floats(-np.pi, np.pi).filter(  # a heading within 1e-4 rad of an axis is it
+    lambda a: abs(a / (np.pi / 2) - round(a / (np.pi / 2))) * np.pi / 2 > 1e-3),
        turns=st.lists(TURN, min_size=8, max_size=8))
 def test_any_leg_link_frames_and_base_heading_draft_the_plain_scene(yaw, turns):
     """The draft does not depend on the URDF's link frames nor on its base's heading: each
     body's link frame in the robot section is the plain one turned, everything else is
-    the plain draft. (A heading within `urdf_frame.SNAP` of the URDF's axes is snapped
-    onto them by design, iCub's feet being 4.7e-5 rad off: its draft is the plain one
-    to that angle, not to round-off.)"""
+    the plain draft."""
     rotations = {"base_link": rot_z(yaw), **dict(zip(LEG_LINKS, turns))}
     plain, plain_links = _draft_data(biped())
     turned, turned_links = _draft_data(turn_link_frames(biped(), rotations))
@@ -225,6 +222,14 @@ def test_the_walking_direction_follows_the_feet_or_the_knees(feet, cue):
         turned, _ = _draft_data(urdf)
         _assert_same(plain, turned)
         assert f"told by {cue}" in draft_scene(urdf).yaml
+
+
+def test_a_heading_within_the_snap_of_an_axis_is_drawn_along_it_and_listed():
+    """A base turned by 5e-5 rad (iCub's feet stand 4.7e-5 rad off its base's axes) walks
+    along the URDF's x; the header lists the turn."""
+    draft = draft_scene(turn_link_frames(biped(), {"base_link": rot_z(5e-5)}))
+    assert "Walking direction" not in draft.yaml
+    assert "#   walking frame: turned by 5e-05 rad and moved by " in draft.yaml
 
 
 def test_an_asymmetric_robot_with_turned_frames_is_refused_naming_the_link():

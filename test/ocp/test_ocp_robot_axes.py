@@ -40,6 +40,7 @@ def test_icub_walks_along_its_base_minus_x_and_passes_every_check(example_robots
                         urdf_file=str(path))
     assert "Walking direction (the scene's x): the URDF's [-1.0, 0.0, 0.0], told by the " \
         "soles" in draft.yaml
+    assert "walking frame: turned by 4.71e-05 rad" in draft.yaml  # its rpy of 1.5708
     scene_file = write_draft(draft, tmp_path / "icub.yaml")
     problem = resolve(PlanRequest(scene=str(scene_file), output_name="icub", compiled=False),
                       find_scene)
