@@ -11,8 +11,9 @@ URDF, drafted (`gait_planner.model.urdf_import`), planned and recorded as a user
   -x, by a step (to 5 %).
 
 Alexander (lower body): its links named LEFT_/RIGHT_, its left and right link frames not
-mirrored, its feet with visual meshes only; at a 0.45 m step (cold, its drafted 0.6688 m
-and 0.6 m do not converge in 600 s) the plan converges and passes every check.
+mirrored, its feet with visual meshes only; at a 0.45 m step the cold plan converges and
+passes every check (its drafted 0.6688 m does not converge in 600 s, nor did 0.6 m in a
+first run of this test).
 
 Slow: without compiling, iCub's problem builds and solves in about 3-4 min on 2 cores
 (refined once to 80 intervals), Alexander's in about 1 min.
