@@ -136,6 +136,14 @@ def test_refusals_name_the_joint_or_link(urdf, named):
     assert time.perf_counter() - start < 5.0  # before anything is built
 
 
+def test_feet_given_against_the_walking_direction_are_refused():
+    with pytest.raises(UrdfError, match="--feet gives the foot below joint 'right_ankle_joint' "
+                                        "as the left one, but the soles"):
+        draft_scene(biped(), feet=["right_foot_link", "left_foot_link"])
+    assert draft_scene(biped(), feet=["left_foot_link", "right_foot_link"]).yaml == \
+        draft_scene(biped()).yaml
+
+
 def test_non_physical_inertia_is_refused():
     urdf = biped().replace('<mass value="1.0"/><inertia ixx="0.02" iyy="0.03" izz="0.04"',
                            '<mass value="1.0"/><inertia ixx="0.02" iyy="0.03" izz="0.09"')
