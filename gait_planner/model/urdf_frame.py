@@ -96,8 +96,9 @@ def walking_frame(model, data, feet: tuple[int, int], soles: dict[int, np.ndarra
     cue, sign = next(((c, s) for c, s in cues if s), ("the URDF's x axis",
                                                      1.0 if ahead[0] >= 0 else -1.0))
     if given and sign < 0 and cue != "the URDF's x axis":
-        raise UrdfError(f"--feet names {model.names[a]!r} the left foot, but {cue} make it "
-                        f"the right one: give the feet as LEFT,RIGHT of the walking direction")
+        raise UrdfError(f"--feet gives the foot below joint {model.names[a]!r} as the left "
+                        f"one, but {cue} make it the right one: give the feet as LEFT,RIGHT "
+                        f"of the walking direction")
     if given:
         sign = 1.0
     forward = _snap(sign * ahead)

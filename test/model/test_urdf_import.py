@@ -8,11 +8,19 @@
 * The angles are the URDF's: zero at the URDF's zero, the scene's joint_angles of that
   configuration return the angles given, the joint names are the URDF's.
 * Each refusal names the joint or link and the rule, in well under a second.
-* The example robots of example-robot-data (a test dependency): G1 and Bolt are drafted
-  (G1's right knee, whose inertia is not its left partner's mirror image in the URDF, is
-  written symmetric and the draft says so); Talos is refused as asymmetric at the default
-  tolerance, the refusal naming --mirror-tolerance and the value that accepts it, and is
-  drafted with that value (the header lists the right links written as mirror images).
+* The draft does not depend on the URDF's link frames nor on its base's heading (#61 item
+  4): a biped whose leg link frames are turned (any rotations, hypothesis), whose base x
+  points backwards or sideways and whose right knee turns about the opposite axis drafts
+  the plain biped's scene (that knee's axis and range negated); the walking direction
+  follows the soles, or the knees when the soles are centred; an asymmetric robot with
+  turned frames is still refused naming the link and the distance; a massless link
+  outside the legs is merged.
+* The example robots of example-robot-data (a test dependency): G1, Bolt, iCub, Alexander
+  and Romeo are drafted (G1's right knee, whose inertia is not its left partner's mirror
+  image in the URDF, is written symmetric and the draft says so); Talos is refused as
+  asymmetric at the default tolerance, the refusal naming --mirror-tolerance and the value
+  that accepts it, and is drafted with that value (the header lists the right links
+  written as mirror images).
 """
 
 from __future__ import annotations
@@ -126,6 +134,14 @@ def test_refusals_name_the_joint_or_link(urdf, named):
     with pytest.raises(UrdfError, match=named):
         draft_scene(urdf)
     assert time.perf_counter() - start < 5.0  # before anything is built
+
+
+def test_feet_given_against_the_walking_direction_are_refused():
+    with pytest.raises(UrdfError, match="--feet gives the foot below joint 'right_ankle_joint' "
+                                        "as the left one, but the soles"):
+        draft_scene(biped(), feet=["right_foot_link", "left_foot_link"])
+    assert draft_scene(biped(), feet=["left_foot_link", "right_foot_link"]).yaml == \
+        draft_scene(biped()).yaml
 
 
 def test_non_physical_inertia_is_refused():
@@ -262,6 +278,9 @@ def test_a_massless_link_outside_the_legs_is_merged_into_the_base():
 @pytest.mark.parametrize("path, joints", [
     ("g1_description/urdf/g1_29dof_rev_1_0.urdf", 12),
     ("bolt_description/robots/bolt.urdf", 6),
+    ("icub_description/robots/icub_reduced.urdf", 12),  # x backwards, right leg turned
+    ("alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf", 12),  # LEFT_/RIGHT_
+    ("romeo_description/urdf/romeo_small.urdf", 12),  # LAnkleRoll/RAnkleRoll
 ])
 def test_example_robots_are_drafted(example_robots, path, joints):
     urdf = (example_robots / path).read_text()
