@@ -90,6 +90,8 @@ EXPECTED_FIELDS = {
         "generalized_force": "sequence<double>",
         "kinetic_energy": "double",
         "potential_energy": "double",
+        "held_joint_names": "sequence<string>",  # a drafted robot's locked joints (#61)
+        "held_joint_impulses": "sequence<double>",  # N m s at an impact node
     },
 }
 
