@@ -3,11 +3,11 @@ example-robot-data wheel, whose base x points backwards, whose right leg link fr
 not its left leg's mirrored and whose right leg links have a mass but no inertia in the
 URDF, drafted (`gait_planner.model.urdf_import`) as a user drafts it: the draft walks along
 the base's -x (its header says the soles told it), its walking frame snapped onto the
-URDF's axes. Its plan is not tested here: since the held efforts (its wrists' 0.45-0.65 N m
-limits), the walking envelope and the leg rows, its drafted plan no longer converges
-(2026-12-06: the time limit of 400 s after 1342 iterations, the friction cone the most
-violated; benchmarks/REPORT.md section 11), and the test process that planned it with
-CasADi's whole-graph derivatives beside the other robots' was killed for memory (13.6 GB).
+URDF's axes. Its plan is not tested here: with the leg rows its drafted plan no longer
+converges (2026-12-06: the time limit of 400 s after 1342 iterations, the friction cone the
+most violated; without the rows it converges, its lower legs touching; benchmarks/HISTORY.md),
+and the test process that planned it with CasADi's whole-graph derivatives beside the other
+robots' was killed for memory (13.6 GB).
 
 Alexander (lower body): its links named LEFT_/RIGHT_, its left and right link frames not
 mirrored, its feet with visual meshes only; at a 0.45 m step the cold plan converges and
