@@ -4,9 +4,9 @@ stance and in swing (the JointTrajectory), the step width (the held contact poin
 /gait_planner/contact_forces) and every published effort's share of the URDF's limit
 (`gait_planner.verify.effort_limits`), the locked joints' apart.
 
-A knee is the second joint of a leg whose axis is the base's pitch axis (y) at the URDF's
-zero pose: hip pitch, then knee, then ankle pitch (G1, Talos, Bolt); its flexion is |angle|
-from that zero, where these robots' legs are straight. A leg is in stance at a node where
+A knee is the one the draft's walking envelope bounds (`urdf_envelope.leg_roles`: a leg's
+second joint about the base's pitch axis at the URDF's zero pose, mid-leg); its flexion is
+|angle| from that zero, where these robots' legs are straight. A leg is in stance at a node where
 its foot alone is on the ground (single support), in swing where it is off the ground.
 
     .venv/bin/python benchmarks/robot_posture.py RUN.mcap [RUN.mcap ...]   # one JSON line each
@@ -20,39 +20,30 @@ import sys
 
 import numpy as np
 
-PITCH_AXIS = 0.9  # |y| of a joint's world axis at the zero pose: a pitch joint
-
-
 def _knees(urdf: str, names) -> dict[str, str]:
-    """{knee joint: "l" or "r"} of the planned joints `names` (module docstring)."""
+    """{knee joint: "l" or "r"} of the planned joints `names`: the draft's envelope's knees
+    (`gait_planner.model.urdf_envelope.leg_roles`) of the legs ending in a planned joint
+    with no planned joint below it, the URDF's axes taken as the walker's."""
     import pinocchio as pin
+
+    from gait_planner.model.urdf_envelope import leg_roles
+    from gait_planner.model.urdf_frame import WalkFrame
+    from gait_planner.model.urdf_read import leg_path, revolute_axis
 
     model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
     data = model.createData()
     pin.forwardKinematics(model, data, pin.neutral(model))
+    planned = [model.getJointId(n) for n in names if model.existJointName(n)]
+    feet = [j for j in planned if not set(model.subtrees[j][1:]) & set(planned)]
+    frame = WalkFrame(np.eye(3), np.zeros(3), "the URDF's axes")
     out = {}
-    for j in range(2, model.njoints):
-        if model.names[j] not in names:
-            continue
-        chain, k = [], j
-        while k > 1:
-            chain.append(k)
-            k = int(model.parents[k])
-        pitch = [i for i in reversed(chain) if abs(_world_axis(model, data, i)[1]) > PITCH_AXIS]
-        if len(pitch) >= 2 and pitch[1] == j:
-            side = "l" if data.oMi[j].translation[1] > 0 else "r"
-            out[model.names[j]] = side
+    for foot in feet:
+        chain = leg_path(model, foot)
+        axes = {model.names[j]: revolute_axis(model, j) for j in chain}
+        knee = leg_roles(model, data, chain, axes, frame).get("knee")
+        if knee:
+            out[knee] = "l" if data.oMi[model.getJointId(knee)].translation[1] > 0 else "r"
     return out
-
-
-def _world_axis(model, data, joint: int) -> np.ndarray:
-    """A 1-dof revolute joint's unit axis in the world at the zero pose, else zeros."""
-    from gait_planner.model.urdf_read import UrdfError, revolute_axis
-
-    try:
-        return data.oMi[joint].rotation @ revolute_axis(model, joint)
-    except UrdfError:
-        return np.zeros(3)
 
 
 def posture(path: str) -> dict:
