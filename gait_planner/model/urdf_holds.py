@@ -30,6 +30,9 @@ from typing import Sequence
 
 import numpy as np
 
+from gait_planner.model.urdf_errors import UrdfError
+from gait_planner.model.urdf_read import revolute_axis
+
 __all__ = ["locked_holds"]
 
 
@@ -54,8 +57,11 @@ def locked_holds(full, q_lock: np.ndarray, legs: Sequence[int], owner: dict[int,
             continue
         name, joint = full.names[j], full.joints[j]
         limit = float(full.effortLimit[joint.idx_v]) if joint.nv == 1 else 0.0
-        axis = _revolute_axis(joint)
-        if not 0.0 < limit < 1e10 or axis is None:
+        try:
+            axis = revolute_axis(full, j)
+        except UrdfError:  # prismatic, planar, ...: no torque to bound
+            continue
+        if not 0.0 < limit < 1e10:
             continue
         body = _owner(full, j, leg_set)
         below = set(full.subtrees[j])
@@ -83,20 +89,6 @@ def locked_holds(full, q_lock: np.ndarray, legs: Sequence[int], owner: dict[int,
             "mass": round(float(inertia.mass), 12), "com": _round(c),
             "inertia": _round([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])}
     return holds, skipped
-
-
-def _revolute_axis(joint) -> np.ndarray | None:
-    """The unit axis (joint frame) of a 1-dof revolute or continuous joint, else None."""
-    if joint.nv != 1:
-        return None
-    data = joint.createData()
-    q = np.zeros(joint.nq)
-    q[0] = 1.0 if joint.nq == 2 else 0.0  # continuous: (cos, sin)
-    joint.calc(data, q)
-    motion = np.array(data.S).reshape(6, -1)[:, 0]  # (linear, angular)
-    if np.linalg.norm(motion[3:]) < 0.5 or np.linalg.norm(motion[:3]) > 1e-12:
-        return None
-    return motion[3:] / np.linalg.norm(motion[3:])
 
 
 def _owner(full, j: int, legs: set[int]) -> int:
