@@ -22,6 +22,7 @@ RANK = {
     "verify": 6,  # the independent verifier
     "parameter_path": 6,  # a request continued from a kept plan along its parameters
     "strategies": 7,  # how a request is planned: start, continuation, restarts, refinement
+    "transitions": 7.5,  # a transition from a given state onto a planned gait
     "walk": 8,  # MuJoCo
     "viz": 9,  # pictures: rerun, figures
     "pipeline": 10,  # plan, join, record: what the adapters call

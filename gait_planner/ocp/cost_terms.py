@@ -66,7 +66,7 @@ class CostTerms:
         terms = []
         for n in self.lam_nodes:
             lam, offset = self.lam_of_node[n], 0
-            w = 0.5 * (self.h[n - 1] + self.h[n])
+            w = 0.5 * ((self.h[n - 1] if n > 0 else 0.0) + self.h[n])
             for bc in self.contacts[self.phase_of_interval[n]]:
                 offset += bc.n_multipliers
                 if bc.full:

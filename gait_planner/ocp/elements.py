@@ -51,47 +51,67 @@ class Layout:
     step scales with;
     A, along, up, B, M: the configuration mirror and its position masks
     (`ocp.mirror.mirror_parts`), the torque and increment mirrors (`ocp.mirror`; M None
-    where the increments have no mirror image)."""
+    where the increments have no mirror image); transition: the ends are given, not
+    mirror images (`ocp.transition`): every node 0..N has unknowns of its own, the
+    contact multipliers are those of nodes 0..N-1, and p ends with the start's momentum
+    (k,) and the last interval's scaling."""
 
     def __init__(self, mb: Multibody, N: int, lam_sizes: list[int], n_scalings: int,
                  scaling_of_interval: np.ndarray, A: np.ndarray, along: np.ndarray,
-                 up: np.ndarray, B: np.ndarray, M: np.ndarray | None):
+                 up: np.ndarray, B: np.ndarray, M: np.ndarray | None,
+                 transition: bool = False):
         self.mb, self.N, self.lam_sizes = mb, N, list(lam_sizes)
         self.scaling_of_interval = scaling_of_interval
         self.A, self.along, self.up, self.B, self.M = A, along, up, B, M
-        self.n_u, self.n_tau = mb.ndof * (N - 1), mb.nt * (N - 1)
+        self.transition = transition
+        self.free = N + 1 if transition else N - 1  # nodes with unknowns of their own
+        self.first_lam_node = 0 if transition else 1
+        self.n_u, self.n_tau = mb.ndof * self.free, mb.nt * self.free
         self.n_lam = int(sum(self.lam_sizes))
         self.nx = self.n_u + self.n_tau + self.n_lam + n_scalings
-        self.step_index = mb.k * (N - 1)  # of the step length in p; mu follows it
+        self.step_index = mb.k * self.free  # of the step length in p; mu follows it
         self.mu_index = self.step_index + 1
         self.ground_index = self.step_index + 2 + np.arange(len(PARAMETERS))
         self.inverse_speed_index = int(self.ground_index[-1]) + 1
         self.np = self.inverse_speed_index + 1
+        if transition:  # the start's momentum (k,), then the last interval's scaling
+            self.momentum_index = self.np + np.arange(mb.k)
+            self.end_scaling_index = self.np + mb.k
+            self.np += mb.k + 1
 
     # ---- indices ------------------------------------------------------------------------
 
+    @property
+    def imaged(self) -> bool:
+        """Whether nodes N-1 and N are the mirror images of nodes 0 and 1 read from
+        images of x and p (`images`)."""
+        return self.M is not None and not self.transition
+
     def source(self, m: int) -> int:
         """The free node (or interval) whose unknowns give node m (or interval m): itself, or
-        for the mirror images N-1 and N (interval N-1), node 0 and 1 (interval 0)."""
-        return m - (self.N - 1) if m >= self.N - 1 else m
+        for the mirror images N-1 and N (interval N-1) of a periodic half cycle, node 0 and
+        1 (interval 0)."""
+        return m - (self.N - 1) if m >= self.N - 1 and not self.transition else m
 
     def u_index(self, node: int) -> np.ndarray:
         """Indices into (x, its images) of node `node`'s u: its own, or for N-1 and N the
         images of u_0 and u_1 (`images`), or without images u_0 and u_1 themselves."""
         nd = self.mb.ndof
-        if node >= self.N - 1 and self.M is not None:
+        if node >= self.N - 1 and self.imaged:
             return self.nx + (node - (self.N - 1)) * nd + np.arange(nd)
         return np.arange(nd) + self.source(node) * nd
 
     def lam_index(self, node: int) -> np.ndarray:
-        """Indices into x of node `node`'s contact multipliers (1 <= node <= N-1)."""
-        start = self.n_u + self.n_tau + sum(self.lam_sizes[: node - 1])
-        return np.arange(start, start + self.lam_sizes[node - 1])
+        """Indices into x of node `node`'s contact multipliers (1 <= node <= N-1; a
+        transition's from node 0)."""
+        j = node - self.first_lam_node
+        start = self.n_u + self.n_tau + sum(self.lam_sizes[:j])
+        return np.arange(start, start + self.lam_sizes[j])
 
     def qref_index(self, node: int) -> np.ndarray:
         """Indices into (p, its images) of node `node`'s reference (see `u_index`)."""
         k = self.mb.k
-        if node >= self.N - 1 and self.M is not None:
+        if node >= self.N - 1 and self.imaged:
             return self.np + (node - (self.N - 1)) * k + np.arange(k)
         return np.arange(k) + self.source(node) * k
 
@@ -102,7 +122,7 @@ class Layout:
     def tau_index(self, node: int) -> np.ndarray:
         """Indices into (x, its images) of node `node`'s torques (see `u_index`)."""
         nt = self.mb.nt
-        if node == self.N - 1 and self.M is not None:
+        if node == self.N - 1 and self.imaged:
             return self.nx + 2 * self.mb.ndof + np.arange(nt)
         return self.n_u + np.arange(nt) + self.source(node) * nt
 
@@ -120,8 +140,8 @@ class Layout:
 
     def mirrored(self, image: bool) -> bool:
         """Whether an element of a mirror image node (or interval) is a variant of its own:
-        only where its unknowns have no images (`images`)."""
-        return image and self.M is None
+        only where its unknowns have no images (`images`); a transition has no images."""
+        return image and self.M is None and not self.transition
 
     # ---- mirror images ------------------------------------------------------------------
 
@@ -133,7 +153,7 @@ class Layout:
         references A qref_0 + s e + c and A qref_1 + s e + c (s the step length, e and c
         the shift and lift of `ocp.mirror.configuration_mirror` from p's ground), entry i
         being p_sign[i] p[p_source[i]] + p_along[i] s + p_up[i] rise(s)."""
-        if self.M is None:
+        if not self.imaged:
             return None
         nd, k = self.mb.ndof, self.mb.k
 

@@ -187,45 +187,54 @@ class PathRows:
         return ca.vertcat(*out)
 
     def _node_rows(self):
-        """Declares, at each node 1..N-1, the rows that depend on its configuration and
-        contact multipliers alone as node elements (`_node_rows_element`): the contact term
-        of its dynamics rows, its friction cones and its torso lean and height (their
-        entries of q; the bounds are the rows' constant parts)."""
+        """Declares, at each node 1..N-1 (a transition's from node 0), the rows that depend
+        on its configuration and contact multipliers alone as node elements
+        (`_node_rows_element`): the contact term of its dynamics rows (a transition's node
+        0: of its start_momentum rows), its friction cones and its torso lean and height
+        (their entries of q; the bounds are the rows' constant parts; not at a
+        transition's given node 0)."""
         N, nd = self.N, self.mb.ndof
         first, row = {}, 0
         for name, e in self._eq + self._ineq:
             first[name], row = row, row + int(e.shape[0])
         cone_row = first.get("friction_cone", 0)
-        nodes: dict[tuple[int, bool], list[tuple[int, np.ndarray]]] = {}
-        for n in range(1, N):
+        nodes: dict[tuple[int, bool, bool], list[tuple[int, np.ndarray]]] = {}
+        for n in range(0 if self.transition else 1, N):
             k = int(self.phase_of_interval[n])
             rows = []
             if self.rows[k].shape[0]:
-                j = [m for m in range(1, N) if self.phase_of_interval[m] == k].index(n)
-                rows += list(first[f"dynamics[{self._phase_name(k)}]"] + j * nd + np.arange(nd))
+                if n == 0:
+                    rows += list(first["start_momentum"] + np.arange(nd))
+                else:
+                    j = [m for m in range(1, N) if self.phase_of_interval[m] == k].index(n)
+                    rows += list(first[f"dynamics[{self._phase_name(k)}]"] + j * nd
+                                 + np.arange(nd))
                 cones = sum(len(bc.points) + (2 if bc.full and not bc.planar else 0)
                             for bc in self.contacts[k])
                 rows += list(cone_row + np.arange(cones))
                 cone_row += cones
-            rows += [first[name] + n - 1 for name in ("torso_lean", "torso_height")
-                     if name in first]
+            posture = n > 0
+            if posture:
+                rows += [first[name] + n - 1 for name in ("torso_lean", "torso_height")
+                         if name in first]
             if rows:
-                nodes.setdefault((k, self.layout.mirrored(n == N - 1)), []).append(
+                nodes.setdefault((k, self.layout.mirrored(n == N - 1), posture), []).append(
                     (n, np.array(rows)))
-        for (k, mirrored), chosen in nodes.items():
+        for (k, mirrored, posture), chosen in nodes.items():
             self.elements.append(ElementGroup(
-                self._node_rows_element(k, mirrored),
+                self._node_rows_element(k, mirrored, posture),
                 np.stack([np.concatenate([self.layout.u_index(n), self.layout.lam_index(n)])
                           for n, _ in chosen], 1),
                 np.stack([np.append(self.layout.node_p_index(n), self.layout.mu_index)
                           for n, _ in chosen], 1),
                 np.stack([rows for _, rows in chosen], 1), np.array(self._cone_constants)))
 
-    def _node_rows_element(self, k: int, mirrored: bool) -> ca.Function:
+    def _node_rows_element(self, k: int, mirrored: bool, posture: bool = True) -> ca.Function:
         """`_node_rows` of a node of phase k as an SX Function of z = (u_n, lambda_n),
         pz = (qref_n, step length, ground, mu) and c = `_cone_constants`: the contact term
         P(q_n)^T C^T lambda_n / FORCE_SCALE (ndof,) if the phase holds contacts, the
-        friction cones, then the torso's d3_z and height if they are limited."""
+        friction cones, then (with posture) the torso's d3_z and height if they are
+        limited."""
         mb, s, nd, kq, G = self.mb, self.settings, self.mb.ndof, self.mb.k, len(PARAMETERS)
         contacts = self.contacts[k]
         z = ca.SX.sym("z", nd + sum(bc.n_multipliers for bc in contacts))
@@ -244,7 +253,8 @@ class PathRows:
         out = [mb.null_space_transpose(q, ca.mtimes(C.T, ca.vertcat(*held)))
                / FORCE_SCALE] + cones if contacts else []
         root = mb.block(mb.scene.root.body).start
-        out += [self._uprightness(q)] if self._lean_bound > 0 else []
-        out += [q[root + 2]] if s.torso_height_min > 0 else []
-        name = f"node_rows_phase{k}" + ("_mirrored" if mirrored else "")
+        out += [self._uprightness(q)] if self._lean_bound > 0 and posture else []
+        out += [q[root + 2]] if s.torso_height_min > 0 and posture else []
+        name = f"node_rows_phase{k}" + ("_mirrored" if mirrored else "") + \
+            ("" if posture else "_contacts")
         return ca.Function(name, [z, pz, c], [ca.vertcat(*out)], ["z", "pz", "c"], ["r"])

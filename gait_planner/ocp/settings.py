@@ -125,6 +125,9 @@ class GaitSettings:
     refinements: how many times a converged plan that misses the continuous-dynamics
     certificate is planned again on a grid twice as fine, from itself
     (`gait_planner.strategies.plan_certified`, `gait_planner.ocp.refine`; 0 = never);
+    start_momentum: empty for a periodic half cycle; else the problem is a transition
+    (`gait_planner.ocp.transition`) whose node 0 is given with this discrete momentum
+    (k,) N s, director coordinates; end_scaling: a transition's last interval's sigma.
     solve: how the problem is solved, not what it is (`SolveOptions`).
     """
 
@@ -163,6 +166,8 @@ class GaitSettings:
     phase_joint_limits: tuple[tuple[str, tuple[tuple[str, float, float], ...]], ...] = ()
     posture: str = "paper"
     refinements: int = 2
+    start_momentum: tuple[float, ...] = ()
+    end_scaling: float = 0.0
     solve: SolveOptions = SolveOptions()
 
     def with_solve(self, **changes) -> "GaitSettings":

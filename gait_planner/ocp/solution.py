@@ -100,6 +100,19 @@ def central_rates(scene, q: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.n
     return velocity, acceleration
 
 
+def end_rates(scene: Scene, q: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Joint-angle velocities and accelerations (n, na) of a motion q (n, k) with given
+    ends: `central_rates` at the inner nodes, one-sided differences at the two ends (whose
+    outer neighbours are not part of the motion), their accelerations the nearest inner
+    node's."""
+    velocity, acceleration = central_rates(scene, q, times)
+    theta = np.unwrap(joint_angles(scene, q), axis=0)
+    h = np.diff(times)
+    first, last = (theta[1] - theta[0]) / h[0], (theta[-1] - theta[-2]) / h[-1]
+    return (np.vstack([first, velocity, last]),
+            np.vstack([acceleration[:1], acceleration, acceleration[-1:]]))
+
+
 def node_kinetic_energy(mass_diagonal: np.ndarray, q: np.ndarray, h: np.ndarray) -> np.ndarray:
     """Kinetic energy (n,) J at the nodes of configurations q (n, k) with interval lengths
     h (n-1,) s: each interval's 1/2 v^T M v with v = (q_{n+1} - q_n) / h_n and the director
@@ -136,19 +149,25 @@ def build_result(tr: Transcription, settings: GaitSettings, x: np.ndarray, p: np
                 forces[name][n] = f
             rolls[bc.body][n] = bc.roll_moment(own)
             inner += bc.n_multipliers
-    _mirror_forces(tr, forces, rolls, N - 1, 0)
-    _mirror_forces(tr, forces, rolls, 1, N)
+    if not tr.transition:  # nodes 0 and N: the images of N-1 and 1 (a transition's are given)
+        _mirror_forces(tr, forces, rolls, N - 1, 0)
+        _mirror_forces(tr, forces, rolls, 1, N)
 
     half = 0.5 * (np.concatenate([[0.0], h]) + np.concatenate([h, [0.0]]))  # w_n; ends h/2
     gen = half[:, None] * np.array(mb.actuation_force.map(N + 1)(q.T, tau.T)).T
     angles = joint_angles(scene, q)
-    rates = joint_rates(scene, configuration_mirror(mb, ground), q, times, step)
+    if tr.transition:
+        rates = end_rates(scene, q, times)
+    else:
+        rates = joint_rates(scene, configuration_mirror(mb, ground), q, times, step)
 
     viol = violations(tr, g)
     constraint = max(float(np.abs(np.array(mb.constraints.map(N + 1)(q.T))).max()),
                      *(v for k, v in viol.items() if not k.startswith("dynamics")
-                       and k in ("contact_hold", "contact_establish", "pin_x")))
-    dynamics = FORCE_SCALE * max((v for k, v in viol.items() if k.startswith("dynamics")),
+                       and k in ("contact_hold", "contact_establish", "pin_x",
+                                 "end_scaling")))
+    dynamics = FORCE_SCALE * max((v for k, v in viol.items()
+                                  if k.startswith("dynamics") or k == "start_momentum"),
                                  default=0.0)
     worst = max(viol, key=viol.get) if viol else ""
     success = status in SOLVED and max(viol.values(), default=0.0) <= CONSTRAINT_LIMIT
@@ -178,7 +197,9 @@ def build_result(tr: Transcription, settings: GaitSettings, x: np.ndarray, p: np
         potential_energy=q @ mech.gravity_gradient, phase_scaling=x[-int(tr.S.shape[0]):].copy(),
         duration=float(times[N - 1] - times[0]), stats=stats, ground=ground,
         settings={
-            "periodicity": "nodes N-1, N mirror nodes 0, 1 (paper eqs. 7-9)",
+            "periodicity": ("none: node 0 given, nodes N-1, N the gait's (ocp.transition)"
+                            if tr.transition else
+                            "nodes N-1, N mirror nodes 0, 1 (paper eqs. 7-9)"),
             "initial_guess": origin,
             "intervals_per_phase": ",".join(str(i) for i in s.intervals),
             "base_time_step": repr(s.base_time_step),

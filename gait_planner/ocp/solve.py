@@ -184,7 +184,7 @@ def _first_call(built: _Built, solver: ca.Function, s: GaitSettings) -> None:
     2026-11-29). The instance keeps no state between calls: the plans after it are the
     same, bit for bit."""
     tr, (lbx, ubx, lbg, ubg) = built.tr, built.bounds
-    qref = GUESSES["kinematic"](tr, s.step_length, ground_of(tr.mb.scene, s))[: tr.N - 1]
+    qref = GUESSES["kinematic"](tr, s.step_length, ground_of(tr.mb.scene, s))[: tr.layout.free]
     cb = built.callback
     cb.deadline, cb.report, cb.stop = -np.inf, None, None
     solver(x0=np.clip(guess_x(tr, s.scaling_bounds[1]), lbx, ubx),
@@ -323,7 +323,7 @@ class Planner:
         built = self._build(scene, settings)
         nx, ng = int(built.tr.x.shape[0]), int(built.tr.g.shape[0])
         if plan.x.shape != (nx,) or plan.lam_x.shape != (nx,) or plan.lam_g.shape != (ng,) \
-                or plan.qref.shape != (built.tr.N - 1, built.tr.mb.k):
+                or plan.qref.shape != (built.tr.layout.free, built.tr.mb.k):
             raise ValueError(f"a plan of {plan.x.size} variables and {plan.lam_g.size} "
                              f"constraints cannot start a problem of {nx} and {ng}")
 

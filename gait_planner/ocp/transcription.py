@@ -68,7 +68,14 @@ ROTATION_INCREMENT_MAX = np.pi
 
 
 class Transcription(PathRows, HeldRows, CostTerms):
-    """The NLP of one (scene, settings) pair: variables, constraints and their meaning."""
+    """The NLP of one (scene, settings) pair: variables, constraints and their meaning.
+
+    With settings.start_momentum the NLP is a transition (`gait_planner.ocp.transition`):
+    not periodic, but with given ends. Every node 0..N has unknowns of its own (u_0,
+    u_{N-1} and u_N are fixed at zero by their bounds, so q_0 = qref_0 is the start and
+    q_{N-1}, q_N = qref_{N-1}, qref_N join the gait); node 0 has a dynamics row of its own,
+    `_start_row`, and contact multipliers; the last interval has a sigma of its own, held
+    at the gait's by the row end_scaling; no pin_x and no speed row."""
 
     def __init__(self, mech: DiscreteMechanics, settings: GaitSettings):
         self.mech, self.mb, self.settings = mech, mech.mb, settings
@@ -96,29 +103,38 @@ class Transcription(PathRows, HeldRows, CostTerms):
         # nodes' vector passes (`ocp.derivatives`); otherwise (the compass) they are
         # variants of their own that mirror the configuration they compute.
         self.M = increment_mirror(mb)
+        self.transition = bool(settings.start_momentum)
 
-        nsig = scene.gait.n_scalings
-        self.U = ca.MX.sym("u", mb.ndof, N - 1)
-        self.T = ca.MX.sym("tau", mb.nt, N - 1)
+        nsig = scene.gait.n_scalings + self.transition  # a transition's last interval: its own
+        scaling = np.array([phases[k].scaling for k in self.phase_of_interval])
+        if self.transition:
+            scaling[N - 1] = nsig - 1
+        free = N + 1 if self.transition else N - 1  # nodes with unknowns of their own
+        self.U = ca.MX.sym("u", mb.ndof, free)
+        self.T = ca.MX.sym("tau", mb.nt, free)
         self.S = ca.MX.sym("sigma", nsig)
-        self.lam_nodes = list(range(1, N))
+        self.lam_nodes = list(range(0 if self.transition else 1, N))
         self.lam_sizes = [sum(bc.n_multipliers for bc in self.contacts[self.phase_of_interval[n]])
                           for n in self.lam_nodes]
         self.L = ca.MX.sym("lambda", int(sum(self.lam_sizes)))
-        self.layout = Layout(mb, N, self.lam_sizes, nsig,
-                             np.array([phases[k].scaling for k in self.phase_of_interval]),
-                             self.A, along, up, self.B, self.M)
-        self.Qref = ca.MX.sym("qref", mb.k, N - 1)
+        self.layout = Layout(mb, N, self.lam_sizes, nsig, scaling, self.A, along, up, self.B,
+                             self.M, self.transition)
+        self.Qref = ca.MX.sym("qref", mb.k, free)
         self.step, self.mu = ca.MX.sym("step_length"), ca.MX.sym("mu")
         self.inverse_speed = ca.MX.sym("inverse_speed")
+        self.start_momentum = ca.MX.sym("start_momentum", mb.k if self.transition else 0)
+        self.end_scaling = ca.MX.sym("end_scaling", 1 if self.transition else 0)
 
-        q_free = mb.reparametrise.map(N - 1)(self.U, self.Qref)
-        q_end = [self.layout.image(q_free[:, j], self.step, self.ground_p) for j in (0, 1)]
-        self.Q = ca.horzcat(q_free, *q_end)  # (k, N+1)
+        q_free = mb.reparametrise.map(free)(self.U, self.Qref)
         tau = TORQUE_SCALE * self.T
-        self.TAU = ca.horzcat(tau, ca.mtimes(ca.DM(self.B), tau[:, 0:2]))  # (nt, N+1) nodes
+        if self.transition:
+            self.Q, self.TAU = q_free, tau  # (k, N+1), (nt, N+1)
+        else:
+            q_end = [self.layout.image(q_free[:, j], self.step, self.ground_p) for j in (0, 1)]
+            self.Q = ca.horzcat(q_free, *q_end)  # (k, N+1)
+            self.TAU = ca.horzcat(tau, ca.mtimes(ca.DM(self.B), tau[:, 0:2]))  # (nt, N+1) nodes
         select = np.zeros((N, nsig))
-        select[np.arange(N), [phases[k].scaling for k in self.phase_of_interval]] = 1.0
+        select[np.arange(N), scaling] = 1.0
         self.h = settings.base_time_step * ca.mtimes(ca.DM(select), self.S)  # (N,)
         self.lam_of_node = {}
         offset = 0
@@ -184,6 +200,28 @@ class Transcription(PathRows, HeldRows, CostTerms):
             name = f"dynamics[{self._phase_name(k)}]"
             self._eq.append((name, ca.vec(out)))
             self._without_elements[name] = ca.MX(out.numel(), 1)  # contact part: _node_rows
+        if self.transition:
+            self._start_row()
+
+    def _start_row(self):
+        """A transition's node 0 (`ocp.transition`): the discrete Legendre transform
+        p_0 = -D1 L_d(q_0, q_1, h_0) - f-_0 - C^T lambda_0 of the given momentum p_0, the
+        start's, reduced by P(q_0)^T and divided by w_0 = h_0 / 2 (rows in units of
+        FORCE_SCALE, as `_dynamics`): node 0's discrete Euler-Lagrange equation with
+        D2 L_d(q_{-1}, q_0) + f+_{-1} replaced by p_0 (DMOC's initial condition; paper
+        section 4). lambda_0 are the contact multipliers of the first phase at node 0:
+        the impulse of contacts that the start's velocity would break (a plastic strike)
+        and their forces over the half interval. Their term is `_node_rows`' element."""
+        mb, q0, h0 = self.mb, self.Q[:, 0], self.h[0]
+        r = (self.start_momentum + self.mech.discrete_lagrangian_d1(q0, self.Q[:, 1], h0)
+             + mb.actuation_force(q0, 0.5 * h0 * self.TAU[:, 0]))
+        own = mb.null_space_transpose(q0, r) / (0.5 * h0 * FORCE_SCALE)
+        k = self.phase_of_interval[0]
+        contact = mb.null_space_transpose(
+            q0, ca.mtimes(self.rows_of[k](self.ground_p).T, self._row_multipliers(0))) \
+            / FORCE_SCALE if self.rows[k].shape[0] else 0.0
+        self._eq.append(("start_momentum", own + contact))
+        self._without_elements["start_momentum"] = own
 
     def node_multipliers(self, x: np.ndarray) -> dict[int, np.ndarray]:
         """The scaled contact multipliers (entries of L, FORCE_SCALE N) of each node
@@ -273,9 +311,14 @@ class Transcription(PathRows, HeldRows, CostTerms):
                     est.append(ca.mtimes(E, self.Q[:, n]) - e)
         if est:
             self._eq.append(("contact_establish", ca.vertcat(*est)))
-        first = self.contacts[0][0].points[0]
-        self._eq.append(("pin_x", ca.mtimes(ca.DM(mb.contact_rows(first)[0:1]), self.Q[:, 0])))
-        if self.settings.speed > 0:  # an equality: before the first inequality group
+        if self.transition:  # the last interval's length is the gait's first
+            self._eq.append(("end_scaling", self.S[-1] - self.end_scaling))
+        else:
+            first = self.contacts[0][0].points[0]
+            self._eq.append(("pin_x", ca.mtimes(ca.DM(mb.contact_rows(first)[0:1]),
+                                                self.Q[:, 0])))
+        if self.settings.speed > 0 and not self.transition:  # an equality: before the first
+            # inequality group
             self._eq.append(("speed", speed_row(self.step, ca.sum1(self.h[0 : N - 1]),
                                                 self.inverse_speed)))
         cones = []
@@ -329,7 +372,7 @@ class Transcription(PathRows, HeldRows, CostTerms):
         c = np.array([self.settings.base_time_step, constant])
         if first_row is not False:
             size = int(fn.size1_out(0))
-            groups = ((False, range(N - 1)),) if self.M is not None else \
+            groups = ((False, range(N - 1)),) if not self.layout.mirrored(True) else \
                 ((False, range(N - 2)), (True, [N - 2]))
             for next_mirrored, intervals in groups:
                 rows = None if first_row is None else np.stack(
@@ -368,7 +411,7 @@ class Transcription(PathRows, HeldRows, CostTerms):
     @property
     def p(self):
         return ca.vertcat(ca.vec(self.Qref), self.step, self.mu, self.ground_p,
-                          self.inverse_speed)
+                          self.inverse_speed, self.start_momentum, self.end_scaling)
 
     def duration(self, x: np.ndarray) -> float:
         """The half cycle's duration (s) at the NLP's x (nx,), as `speed_row` counts it
@@ -380,15 +423,17 @@ class Transcription(PathRows, HeldRows, CostTerms):
     def parameters(self, qref: np.ndarray, settings: GaitSettings) -> np.ndarray:
         """The numeric p of a request (`settings`, of this problem's `shape_of`) with the
         references qref (N-1, k): step length, friction coefficient, its ground's
-        parameters (`Ground.parameters`) and 1 / speed (0 with free durations)."""
+        parameters (`Ground.parameters`) and 1 / speed (0 with free durations); a
+        transition's qref (N+1, k), then its start momentum and last interval's scaling."""
         ground = ground_of(self.mb.scene, settings)
         if ground.form != self.gs.form:
             raise ValueError(f"a request on {ground.form} cannot use a problem built for "
                              f"{self.gs.form}")
         inverse = 1.0 / settings.speed if settings.speed > 0 else 0.0
+        ends = [settings.start_momentum, [settings.end_scaling]] if self.transition else []
         return np.concatenate([np.asarray(qref, dtype=float).reshape(-1),
                                [settings.step_length, settings.friction_coefficient],
-                               ground.parameters, [inverse]])
+                               ground.parameters, [inverse], *ends])
 
     @property
     def g_without_elements(self):
@@ -410,14 +455,18 @@ class Transcription(PathRows, HeldRows, CostTerms):
         n_in = sum(int(e.shape[0]) for _, e in self._ineq)
         nx = int(self.x.shape[0])
         lbx, ubx = np.full(nx, -np.inf), np.full(nx, np.inf)
-        rotations = np.tile(self.mb.rotation_mask, self.N - 1)  # U is stored column by column
+        free = self.layout.free
+        rotations = np.tile(self.mb.rotation_mask, free)  # U is stored column by column
         lbx[: rotations.size][rotations] = -ROTATION_INCREMENT_MAX
         ubx[: rotations.size][rotations] = ROTATION_INCREMENT_MAX
         nsig = int(self.S.shape[0])
         lbx[-nsig:], ubx[-nsig:] = self.settings.scaling_bounds
-        start = self.mb.ndof * (self.N - 1)  # T (nt, N - 1) follows U, column by column
+        if self.transition:  # the given ends: q_n = qref_n
+            for n in (0, self.N - 1, self.N):
+                lbx[self.layout.u_index(n)] = ubx[self.layout.u_index(n)] = 0.0
+        start = self.mb.ndof * free  # T (nt, free) follows U, column by column
         for name, limit in self.settings.effort_limits:  # |tau| <= the joint's effort limit
-            rows = start + self.mb.joint_slices[name].start + self.mb.nt * np.arange(self.N - 1)
+            rows = start + self.mb.joint_slices[name].start + self.mb.nt * np.arange(free)
             lbx[rows], ubx[rows] = -limit / TORQUE_SCALE, limit / TORQUE_SCALE  # T = tau / scale
         lbg = np.concatenate([np.zeros(n_eq), np.zeros(n_in)])
         ubg = np.concatenate([np.zeros(n_eq)] + [
@@ -444,7 +493,9 @@ def shape_of(settings: GaitSettings) -> GaitSettings:
     so that two requests of one shape share one problem (`Transcription.parameters`)."""
     height = math.copysign(1.0, settings.step_height) if settings.step_height else 0.0
     return dataclasses.replace(settings, step_length=1.0, friction_coefficient=1.0, slope=0.0,
-                               step_height=height, speed=1.0 if settings.speed > 0 else 0.0)
+                               step_height=height, speed=1.0 if settings.speed > 0 else 0.0,
+                               start_momentum=(0.0,) * len(settings.start_momentum),
+                               end_scaling=1.0 if settings.start_momentum else 0.0)
 
 
 def speed_row(step, duration, inverse_speed):

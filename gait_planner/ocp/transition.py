@@ -1,0 +1,187 @@
+"""Transitions: a plan that begins at a given state and joins a periodic gait (issue #62).
+
+A periodic half cycle begins mid-stride with the gait's own velocity; a robot that is
+elsewhere cannot start it. A transition is the same DMOCC problem (the discretisation,
+contacts, cones, limits and cost of `ocp.transcription`) over the gait's phases with given
+ends instead of mirror periodicity (`Transcription` with settings.start_momentum):
+
+* its node 0 is the start's configuration q_0 and its first step comes from the start's
+  momentum p_0 by the discrete Legendre transform (`Transcription._start_row`), as DMOC
+  imposes initial conditions (paper section 4);
+* its nodes N-1 and N are the gait's nodes 0 and 1 one half cycle on (mirrored, a step
+  further, `join_targets`), and its last interval is as long as the gait's first, so that
+  every node of the joined motion (`join`) satisfies the discrete equations.
+
+A start is a `StartState`: the periodic plan's own node 0 with its discrete momentum
+(`start_of_plan`: the transition from it is that plan), or a measured configuration and
+velocity (`start_of_velocity`: p_0 = M q_dot, the continuous Legendre transform, first order
+in h against the discrete one). `check_start` refuses a start the first phase's contacts
+cannot hold, naming the contact or joint and by how much, before anything is built.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from gait_planner.dynamics.discrete import DiscreteMechanics
+from gait_planner.model.angles import angle_names, joint_angles
+from gait_planner.model.multibody import Multibody
+from gait_planner.model.scene import Scene
+from gait_planner.ocp.mirror import configuration_mirror, mirror_parts
+from gait_planner.ocp.settings import GaitSettings, ground_of
+from gait_planner.ocp.solution import end_rates
+from gait_planner.result import PlanResult
+
+# How far (m) a contact point of the first phase may be from the ground, and how far any
+# point may be below it, for a start to be planned.
+CONTACT_TOLERANCE = 0.005
+# How far (rad) a start's joint angle may lie outside the scene's range.
+ANGLE_TOLERANCE = np.radians(1.0)
+# Largest residual of the joint constraints (m) of a start's configuration.
+CONSTRAINT_TOLERANCE = 1e-6
+
+
+class StartError(ValueError):
+    """A start state the transition cannot plan from; the message names what and by how
+    much."""
+
+
+@dataclass(frozen=True)
+class StartState:
+    """Where a transition begins: q (k,) director coordinates (m, -) satisfying the joint
+    constraints, momentum (k,) N s its discrete momentum p-_0 (director coordinates), and
+    where it came from, in words."""
+
+    q: np.ndarray
+    momentum: np.ndarray
+    origin: str
+
+
+def start_of_plan(plan: PlanResult) -> StartState:
+    """The first node of a periodic half cycle `plan` with its discrete momentum
+    p-_0 = D2 L_d(q_{-1}, q_0, h_{-1}) + h_{-1}/2 B(q_0)^T tau_0, q_{-1} the mirror image of
+    node N-2 a step back (paper eqs. 7-9; `ocp.solution.joint_rates`)."""
+    mb = Multibody(plan.scene)
+    A, shift, lift = configuration_mirror(mb, plan.ground)
+    N = plan.n_nodes - 1
+    h = np.diff(plan.times)
+    before = A @ (plan.q[N - 2] - plan.step_length * shift - lift)
+    p = DiscreteMechanics(mb).momentum(before, plan.q[0], h[N - 2], plan.tau[0])
+    return StartState(plan.q[0].copy(), p, "the periodic plan's first node")
+
+
+def start_of_velocity(scene: Scene, q: np.ndarray, q_dot: np.ndarray,
+                      origin: str) -> StartState:
+    """A measured state: configuration q (k,) and its velocity q_dot (k,) (m/s, 1/s), the
+    momentum p = M q_dot (the director mass matrix is constant)."""
+    mb = Multibody(scene)
+    return StartState(np.asarray(q, float).copy(), mb.mass_diagonal * np.asarray(q_dot, float),
+                      origin)
+
+
+def check_start(scene: Scene, settings: GaitSettings, start: StartState) -> None:
+    """StartError unless the first phase's contacts can hold `start`: its configuration
+    meets the joint constraints, every contact point held in the first phase is within
+    CONTACT_TOLERANCE of the ground and none is below it by more, and every joint
+    angle lies within its range (ANGLE_TOLERANCE); numbers finite."""
+    mb = Multibody(scene)
+    q = np.asarray(start.q, float)
+    if q.shape != (mb.k,) or np.asarray(start.momentum).shape != (mb.k,):
+        raise StartError(f"a start of {scene.name} needs {mb.k} director coordinates and "
+                         f"momenta, got {q.shape} and {np.asarray(start.momentum).shape}")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(start.momentum))):
+        raise StartError("the start state has NaN or infinite entries")
+    residual = float(np.abs(np.array(mb.constraints(q))).max(initial=0.0))
+    if residual > CONSTRAINT_TOLERANCE:
+        raise StartError(f"the start's configuration breaks the joints by {residual:.3g} m "
+                         f"(at most {CONSTRAINT_TOLERANCE:g})")
+    held = set(scene.gait.phases[0].contacts)
+    ground = ground_of(scene, settings)
+    for contact in scene.contacts:
+        point = mb.contact_rows(contact.name) @ q
+        z = float(point[2] - ground.height(point[0]))
+        if contact.name in held and abs(z) > CONTACT_TOLERANCE:
+            where = "above" if z > 0 else "below"
+            raise StartError(
+                f"contact {contact.name} is {abs(z) * 1e3:.1f} mm {where} the ground, where "
+                f"the first phase ({scene.gait.phases[0].name}) holds it (at most "
+                f"{CONTACT_TOLERANCE * 1e3:g} mm)")
+        if z < -CONTACT_TOLERANCE:
+            raise StartError(f"contact {contact.name} is {-z * 1e3:.1f} mm below the ground "
+                             f"(at most {CONTACT_TOLERANCE * 1e3:g} mm)")
+    names = dict(zip(angle_names(scene), joint_angles(scene, q[None, :])[0]))
+    for name, lo, hi in settings.joint_limits:
+        value = names[name]
+        if value < lo - ANGLE_TOLERANCE or value > hi + ANGLE_TOLERANCE:
+            raise StartError(f"joint {name} is at {np.degrees(value):.1f} deg, outside its "
+                             f"range [{np.degrees(lo):.1f}, {np.degrees(hi):.1f}] deg")
+
+
+def stance_offset(scene: Scene, start: StartState, gait: PlanResult) -> float:
+    """How far (m) along x the start's first held contact point is from the gait's at its
+    node 0: the gait is joined that much further on."""
+    mb = Multibody(scene)
+    first = scene.gait.phases[0].contacts[0]
+    row = mb.contact_rows(first)[0]
+    return float(row @ start.q - row @ gait.q[0])
+
+
+def join_targets(gait: PlanResult, offset: float) -> np.ndarray:
+    """(2, k): the gait's nodes 0 and 1 one half cycle on (the mirror image a step
+    further, `ocp.mirror.configuration_mirror`), moved `offset` m along x: the
+    transition's nodes N-1 and N."""
+    mb = Multibody(gait.scene)
+    A, shift, lift = configuration_mirror(mb, gait.ground)
+    along = mirror_parts(mb)[1]
+    return gait.q[0:2] @ A.T + gait.step_length * shift + lift + offset * along
+
+
+def transition_settings(gait_settings: GaitSettings, gait: PlanResult,
+                        start: StartState) -> GaitSettings:
+    """The settings of the transition from `start` onto `gait` (planned with
+    `gait_settings`): the gait's grid (its intervals, refined or not), no refinement, no
+    speed row, the start's momentum and the gait's first interval's scaling."""
+    intervals = tuple(int(i) for i in gait.settings["intervals_per_phase"].split(","))
+    first = float(np.diff(gait.times)[0] / gait_settings.base_time_step)
+    return dataclasses.replace(gait_settings, intervals=intervals, refinements=0, speed=0.0,
+                               step_length=gait.step_length,
+                               start_momentum=tuple(float(v) for v in start.momentum),
+                               end_scaling=first)
+
+
+def join(transition: PlanResult, walked: PlanResult, offset: float) -> PlanResult:
+    """The transition (nodes 0..N) followed by `walked`, the gait joined to K + 1 half
+    cycles (`ocp.walk_on`), from its half cycle 1 on, moved `offset` m along x: one
+    motion whose node N-1 is the transition's (its forces span both neighbouring
+    intervals) and whose later nodes are the gait's. J and the duration are the
+    transition's; settings["transition_nodes"] says where the gait begins."""
+    N = transition.n_nodes - 1
+    along = mirror_parts(Multibody(transition.scene))[1]
+    t0 = transition.times[N - 1] - walked.times[N - 1]
+    q = np.vstack([transition.q[:N], walked.q[N:] + offset * along])
+    times = np.concatenate([transition.times[:N], walked.times[N:] + t0])
+
+    def stack(a, b):
+        return np.concatenate([a[:N], b[N:]])
+
+    forces = {c: stack(f, walked.contact_forces[c]) for c, f in transition.contact_forces.items()}
+    rolls = {b: stack(r, walked.roll_moments[b]) for b, r in transition.roll_moments.items()}
+    velocities, accelerations = end_rates(transition.scene, q, times)
+    return dataclasses.replace(
+        transition, times=times, q=q, tau=stack(transition.tau, walked.tau),
+        joint_angles=joint_angles(transition.scene, q), joint_velocities=velocities,
+        joint_accelerations=accelerations,
+        phases=transition.phases[:N] + walked.phases[N:],
+        active_contacts=transition.active_contacts[:N] + walked.active_contacts[N:],
+        contact_forces=forces, roll_moments=rolls,
+        generalized_force=stack(transition.generalized_force, walked.generalized_force),
+        kinetic_energy=stack(transition.kinetic_energy, walked.kinetic_energy),
+        potential_energy=np.concatenate([transition.potential_energy[:N],
+                                         walked.potential_energy[N:]]),
+        settings=dict(transition.settings, transition_nodes=str(N),
+                      steps=str(int(walked.settings.get("steps", "1")) - 1),
+                      half_cycle_nodes=str(N + 1)))
+
