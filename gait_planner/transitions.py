@@ -37,7 +37,7 @@ def transition_start(tr: Transcription, gait: PlanResult, start: StartState,
     phase scalings; the contact multipliers of `ocp.guess.initial_multipliers`."""
     N = tr.N
     qref = np.vstack([start.q, gait.q[1 : N - 1], targets])
-    x = np.concatenate([np.zeros(tr.U.numel()), gait.tau.ravel() / TORQUE_SCALE,
+    x = np.concatenate([np.zeros(tr.U.numel()), gait.tau[:N].ravel() / TORQUE_SCALE,
                         initial_multipliers(tr), gait.phase_scaling, [end_scaling]])
     zeros_g = np.zeros(int(tr.g.shape[0]))
     return Start(x, np.zeros_like(x), zeros_g, qref,

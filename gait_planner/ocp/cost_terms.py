@@ -17,6 +17,11 @@ import casadi as ca
 
 from gait_planner.ocp.posture import twist_squares
 
+# Weight (cost per (N m)^2) of a transition's torques' distance from the gait's at its
+# join (`CostTerms._join_torques`); 1e-4 as walker2d's torque_smoothness option, which
+# kept its efforts smooth at +1.4 % J (benchmarks/HISTORY.md).
+JOIN_WEIGHT = 1e-4
+
 
 class CostTerms:
     """The cost of a `Transcription` (its `_cost` step)."""
@@ -41,7 +46,7 @@ class CostTerms:
         if s.twist_regularisation > 0:
             twist = ca.sum2(self._interval_terms(twist_squares(self.mb), s.twist_regularisation,
                                                  None))
-        smooth = self._torque_smoothness()
+        smooth = self._torque_smoothness() + self._join_torques()
         if s.cost == "torque_squared":
             self.cost_without_elements = torque + shares + smooth
             return self.cost_without_elements + twist
@@ -60,6 +65,20 @@ class CostTerms:
         tau = self.TAU
         second = tau[:, 2:] - 2 * tau[:, 1:-1] + tau[:, :-2]  # (nt, N-1): nodes 1..N-1
         return w * ca.sum1(ca.sum2(second**2))
+
+    def _join_torques(self):
+        """A transition's (`ocp.transition`) JOIN_WEIGHT sum over nodes n = N-2, N-1 of
+        |tau_n - tau_n^gait|^2: node N-1's torque is free (its equation meets the gait's next
+        node) and without a cost of its own the optimum spent it on a one-node spike
+        (walker2d from a turned start: knee -31, -49, -38 N m at nodes 38-40, the
+        verifier's zigzag); with the gait's own second differences as the target instead
+        of zero the gait stays the optimum from its own first node. 0 for a periodic half
+        cycle."""
+        if not self.transition:
+            return 0.0
+        nt, N = self.mb.nt, self.N
+        gait = ca.reshape(self.end_torque[0 : 2 * nt], nt, 2)
+        return JOIN_WEIGHT * ca.sum1(ca.sum2((self.TAU[:, N - 2 : N] - gait) ** 2))
 
     def _share_squares(self):
         """sum over nodes of w_n s^2 (N^2 s) of the full contacts' along-line shares s."""

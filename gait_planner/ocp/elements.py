@@ -53,8 +53,9 @@ class Layout:
     (`ocp.mirror.mirror_parts`), the torque and increment mirrors (`ocp.mirror`; M None
     where the increments have no mirror image); transition: the ends are given, not
     mirror images (`ocp.transition`): every node 0..N has unknowns of its own, the
-    contact multipliers are those of nodes 0..N-1, and p ends with the start's momentum
-    (k,) and the last interval's scaling."""
+    contact multipliers are those of nodes 0..N-1, the torques those of nodes 0..N-1, and
+    p ends with the start's momentum (k,), the last interval's scaling and the gait's
+    torques at nodes N-2, N-1 and N (3 nt,)."""
 
     def __init__(self, mb: Multibody, N: int, lam_sizes: list[int], n_scalings: int,
                  scaling_of_interval: np.ndarray, A: np.ndarray, along: np.ndarray,
@@ -66,7 +67,7 @@ class Layout:
         self.transition = transition
         self.free = N + 1 if transition else N - 1  # nodes with unknowns of their own
         self.first_lam_node = 0 if transition else 1
-        self.n_u, self.n_tau = mb.ndof * self.free, mb.nt * self.free
+        self.n_u, self.n_tau = mb.ndof * self.free, mb.nt * (N if transition else N - 1)
         self.n_lam = int(sum(self.lam_sizes))
         self.nx = self.n_u + self.n_tau + self.n_lam + n_scalings
         self.step_index = mb.k * self.free  # of the step length in p; mu follows it
@@ -74,10 +75,8 @@ class Layout:
         self.ground_index = self.step_index + 2 + np.arange(len(PARAMETERS))
         self.inverse_speed_index = int(self.ground_index[-1]) + 1
         self.np = self.inverse_speed_index + 1
-        if transition:  # the start's momentum (k,), then the last interval's scaling
-            self.momentum_index = self.np + np.arange(mb.k)
-            self.end_scaling_index = self.np + mb.k
-            self.np += mb.k + 1
+        if transition:  # the start's momentum (k,), the last interval's scaling, tau_N
+            self.np += mb.k + 1 + 3 * mb.nt
 
     # ---- indices ------------------------------------------------------------------------
 

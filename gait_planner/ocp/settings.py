@@ -127,7 +127,8 @@ class GaitSettings:
     (`gait_planner.strategies.plan_certified`, `gait_planner.ocp.refine`; 0 = never);
     start_momentum: empty for a periodic half cycle; else the problem is a transition
     (`gait_planner.ocp.transition`) whose node 0 is given with this discrete momentum
-    (k,) N s, director coordinates; end_scaling: a transition's last interval's sigma.
+    (k,) N s, director coordinates; end_scaling, end_torque: a transition's last
+    interval's sigma and the gait's torques at nodes N-2, N-1 and N (3 nt,) N m.
     solve: how the problem is solved, not what it is (`SolveOptions`).
     """
 
@@ -168,6 +169,7 @@ class GaitSettings:
     refinements: int = 2
     start_momentum: tuple[float, ...] = ()
     end_scaling: float = 0.0
+    end_torque: tuple[float, ...] = ()
     solve: SolveOptions = SolveOptions()
 
     def with_solve(self, **changes) -> "GaitSettings":

@@ -75,7 +75,9 @@ class Transcription(PathRows, HeldRows, CostTerms):
     u_{N-1} and u_N are fixed at zero by their bounds, so q_0 = qref_0 is the start and
     q_{N-1}, q_N = qref_{N-1}, qref_N join the gait); node 0 has a dynamics row of its own,
     `_start_row`, and contact multipliers; the last interval has a sigma of its own, held
-    at the gait's by the row end_scaling; no pin_x and no speed row."""
+    at the gait's by the row end_scaling, and node N's torques are the gait's (parameters,
+    with the gait's at N-2 and N-1 for the cost's `CostTerms._join_torques`); no pin_x and
+    no speed row."""
 
     def __init__(self, mech: DiscreteMechanics, settings: GaitSettings):
         self.mech, self.mb, self.settings = mech, mech.mb, settings
@@ -111,7 +113,7 @@ class Transcription(PathRows, HeldRows, CostTerms):
             scaling[N - 1] = nsig - 1
         free = N + 1 if self.transition else N - 1  # nodes with unknowns of their own
         self.U = ca.MX.sym("u", mb.ndof, free)
-        self.T = ca.MX.sym("tau", mb.nt, free)
+        self.T = ca.MX.sym("tau", mb.nt, N if self.transition else N - 1)
         self.S = ca.MX.sym("sigma", nsig)
         self.lam_nodes = list(range(0 if self.transition else 1, N))
         self.lam_sizes = [sum(bc.n_multipliers for bc in self.contacts[self.phase_of_interval[n]])
@@ -124,11 +126,13 @@ class Transcription(PathRows, HeldRows, CostTerms):
         self.inverse_speed = ca.MX.sym("inverse_speed")
         self.start_momentum = ca.MX.sym("start_momentum", mb.k if self.transition else 0)
         self.end_scaling = ca.MX.sym("end_scaling", 1 if self.transition else 0)
+        self.end_torque = ca.MX.sym("end_torque", 3 * mb.nt if self.transition else 0)
 
         q_free = mb.reparametrise.map(free)(self.U, self.Qref)
         tau = TORQUE_SCALE * self.T
         if self.transition:
-            self.Q, self.TAU = q_free, tau  # (k, N+1), (nt, N+1)
+            self.Q = q_free  # (k, N+1)
+            self.TAU = ca.horzcat(tau, self.end_torque[2 * mb.nt :])  # (nt, N+1)
         else:
             q_end = [self.layout.image(q_free[:, j], self.step, self.ground_p) for j in (0, 1)]
             self.Q = ca.horzcat(q_free, *q_end)  # (k, N+1)
@@ -411,7 +415,8 @@ class Transcription(PathRows, HeldRows, CostTerms):
     @property
     def p(self):
         return ca.vertcat(ca.vec(self.Qref), self.step, self.mu, self.ground_p,
-                          self.inverse_speed, self.start_momentum, self.end_scaling)
+                          self.inverse_speed, self.start_momentum, self.end_scaling,
+                          self.end_torque)
 
     def duration(self, x: np.ndarray) -> float:
         """The half cycle's duration (s) at the NLP's x (nx,), as `speed_row` counts it
@@ -430,7 +435,8 @@ class Transcription(PathRows, HeldRows, CostTerms):
             raise ValueError(f"a request on {ground.form} cannot use a problem built for "
                              f"{self.gs.form}")
         inverse = 1.0 / settings.speed if settings.speed > 0 else 0.0
-        ends = [settings.start_momentum, [settings.end_scaling]] if self.transition else []
+        ends = [settings.start_momentum, [settings.end_scaling], settings.end_torque] \
+            if self.transition else []
         return np.concatenate([np.asarray(qref, dtype=float).reshape(-1),
                                [settings.step_length, settings.friction_coefficient],
                                ground.parameters, [inverse], *ends])
@@ -464,9 +470,10 @@ class Transcription(PathRows, HeldRows, CostTerms):
         if self.transition:  # the given ends: q_n = qref_n
             for n in (0, self.N - 1, self.N):
                 lbx[self.layout.u_index(n)] = ubx[self.layout.u_index(n)] = 0.0
-        start = self.mb.ndof * free  # T (nt, free) follows U, column by column
+        start = self.mb.ndof * free  # T follows U, column by column
+        columns = int(self.T.shape[1])
         for name, limit in self.settings.effort_limits:  # |tau| <= the joint's effort limit
-            rows = start + self.mb.joint_slices[name].start + self.mb.nt * np.arange(free)
+            rows = start + self.mb.joint_slices[name].start + self.mb.nt * np.arange(columns)
             lbx[rows], ubx[rows] = -limit / TORQUE_SCALE, limit / TORQUE_SCALE  # T = tau / scale
         lbg = np.concatenate([np.zeros(n_eq), np.zeros(n_in)])
         ubg = np.concatenate([np.zeros(n_eq)] + [
@@ -495,7 +502,8 @@ def shape_of(settings: GaitSettings) -> GaitSettings:
     return dataclasses.replace(settings, step_length=1.0, friction_coefficient=1.0, slope=0.0,
                                step_height=height, speed=1.0 if settings.speed > 0 else 0.0,
                                start_momentum=(0.0,) * len(settings.start_momentum),
-                               end_scaling=1.0 if settings.start_momentum else 0.0)
+                               end_scaling=1.0 if settings.start_momentum else 0.0,
+                               end_torque=(0.0,) * len(settings.end_torque))
 
 
 def speed_row(step, duration, inverse_speed):

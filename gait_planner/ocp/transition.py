@@ -98,10 +98,16 @@ def check_start(scene: Scene, settings: GaitSettings, start: StartState) -> None
     if residual > CONSTRAINT_TOLERANCE:
         raise StartError(f"the start's configuration breaks the joints by {residual:.3g} m "
                          f"(at most {CONSTRAINT_TOLERANCE:g})")
+    names = dict(zip(angle_names(scene), joint_angles(scene, q[None, :])[0]))
+    for name, lo, hi in settings.joint_limits:
+        value = names[name]
+        if value < lo - ANGLE_TOLERANCE or value > hi + ANGLE_TOLERANCE:
+            raise StartError(f"joint {name} is at {np.degrees(value):.1f} deg, outside its "
+                             f"range [{np.degrees(lo):.1f}, {np.degrees(hi):.1f}] deg")
     held = set(scene.gait.phases[0].contacts)
     ground = ground_of(scene, settings)
     for contact in scene.contacts:
-        point = mb.contact_rows(contact.name) @ q
+        point = mb.point_matrix(contact.body, contact.point) @ q  # world (3,)
         z = float(point[2] - ground.height(point[0]))
         if contact.name in held and abs(z) > CONTACT_TOLERANCE:
             where = "above" if z > 0 else "below"
@@ -112,12 +118,6 @@ def check_start(scene: Scene, settings: GaitSettings, start: StartState) -> None
         if z < -CONTACT_TOLERANCE:
             raise StartError(f"contact {contact.name} is {-z * 1e3:.1f} mm below the ground "
                              f"(at most {CONTACT_TOLERANCE * 1e3:g} mm)")
-    names = dict(zip(angle_names(scene), joint_angles(scene, q[None, :])[0]))
-    for name, lo, hi in settings.joint_limits:
-        value = names[name]
-        if value < lo - ANGLE_TOLERANCE or value > hi + ANGLE_TOLERANCE:
-            raise StartError(f"joint {name} is at {np.degrees(value):.1f} deg, outside its "
-                             f"range [{np.degrees(lo):.1f}, {np.degrees(hi):.1f}] deg")
 
 
 def stance_offset(scene: Scene, start: StartState, gait: PlanResult) -> float:
@@ -143,13 +143,15 @@ def transition_settings(gait_settings: GaitSettings, gait: PlanResult,
                         start: StartState) -> GaitSettings:
     """The settings of the transition from `start` onto `gait` (planned with
     `gait_settings`): the gait's grid (its intervals, refined or not), no refinement, no
-    speed row, the start's momentum and the gait's first interval's scaling."""
+    speed row, the start's momentum, the gait's first interval's scaling and its torques
+    at nodes N-2, N-1 and N (N-1 and N: nodes 0 and 1 mirrored)."""
     intervals = tuple(int(i) for i in gait.settings["intervals_per_phase"].split(","))
     first = float(np.diff(gait.times)[0] / gait_settings.base_time_step)
     return dataclasses.replace(gait_settings, intervals=intervals, refinements=0, speed=0.0,
                                step_length=gait.step_length,
                                start_momentum=tuple(float(v) for v in start.momentum),
-                               end_scaling=first)
+                               end_scaling=first,
+                               end_torque=tuple(float(v) for v in gait.tau[-3:].ravel()))
 
 
 def join(transition: PlanResult, walked: PlanResult, offset: float) -> PlanResult:
@@ -184,4 +186,3 @@ def join(transition: PlanResult, walked: PlanResult, offset: float) -> PlanResul
         settings=dict(transition.settings, transition_nodes=str(N),
                       steps=str(int(walked.settings.get("steps", "1")) - 1),
                       half_cycle_nodes=str(N + 1)))
-

@@ -13,6 +13,7 @@ from gait_planner.verify.actuation import (effort_couples, effort_slots, joint_c
 from gait_planner.verify.recorded import certificate_of_recording
 from gait_planner.verify.ground import RecordedGround
 from gait_planner.verify.joined import verify_joined
+from gait_planner.verify.transition import verify_transition
 from gait_planner.verify.effort_limits import effort_limit_failures, effort_shares
 from gait_planner.verify.legs import judge_legs, legs_of_recording
 from gait_planner.verify.physical import check_physical
@@ -38,6 +39,8 @@ def _metadata_float(meta: dict, key: str) -> float:
 def verify_plan(rec: RecordedPlan) -> VerificationReport:
     """Check an already decoded recording (module docstring); a recording of several
     joined half cycles goes through `gait_planner.verify.joined`."""
+    if "transition_nodes" in rec.metadata:
+        return verify_transition(rec, verify_plan)
     if int(rec.metadata.get("steps", "1")) > 1:
         return verify_joined(rec, verify_plan)
     scene = parse_scene(rec.scene_text)

@@ -1,0 +1,80 @@
+"""Checks of a recording that begins with a transition (metadata ``transition_nodes`` = N,
+`gait_planner.ocp.transition`): a motion from a given start state whose nodes 0 .. N-1 are
+the transition's and whose nodes from N-1 on are the periodic gait, ``steps`` half cycles
+joined by the mirror.
+
+Node N-1 joins the two: it carries the transition's efforts and contact forces (its
+discrete equation spans the transition's last interval and the gait's first), so the
+gait's first half cycle after it is not the gait's own at that node. The gait's second half
+cycle on (nodes 2 (N-1) to the end, when steps >= 2) is the gait itself, mirrored twice
+and two steps on, and gets every check of a (joined) plan, its periodic continuation
+included. The physical checks and the continuous-dynamics certificate run on the whole
+motion, the transition's nodes included; with steps = 1 they are all that is judged (the
+numbers of the periodic checks are then those of the gait's part from node N-1, and the
+report's notes say so).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from gait_planner.verify.physical import check_physical
+from gait_planner.verify.recorded import certificate_of_recording
+from gait_planner.verify.mechanics import parse_scene
+
+
+def from_node(rec, first: int):
+    """The recording from node `first` on, as a plan of its own: nodes renumbered from 0,
+    times from 0, metadata without the transition, and its first node's discrete force
+    that of its first interval (a plan's node 0 carries f-_0 only; in the whole motion
+    that node is inner and carries both intervals')."""
+    n = rec.n_nodes
+    changes = {}
+    for f in dataclasses.fields(rec):
+        value = getattr(rec, f.name)
+        if isinstance(value, (tuple, np.ndarray)) and len(value) == n and f.name != "body_names":
+            changes[f.name] = value[first:]
+        elif isinstance(value, dict) and f.name in ("log_times_ns", "header_stamps_ns"):
+            changes[f.name] = {k: (v[first:] if len(v) == n else v) for k, v in value.items()}
+    t = np.asarray(rec.times, dtype=float)
+    changes["nodes"] = np.arange(n - first)
+    changes["times"] = t[first:] - t[first]
+    meta = {k: v for k, v in rec.metadata.items() if k != "transition_nodes"}
+    changes["metadata"] = meta
+    gen = np.array(rec.generalized_force[first:], dtype=float)
+    gen[0] *= (t[first + 1] - t[first]) / (t[first + 1] - t[first - 1])
+    changes["generalized_force"] = gen
+    return dataclasses.replace(rec, **changes)
+
+
+def verify_transition(rec, verify_plan):
+    """Check a recording that begins with a transition (module docstring); `verify_plan`
+    checks the gait's part."""
+    N, steps = int(rec.metadata["transition_nodes"]), int(rec.metadata["steps"])
+    first = 2 * (N - 1) if steps >= 2 else N - 1
+    tail = from_node(rec, first)
+    # a join node is recorded with the earlier half cycle's phase name (`ocp.walk_on`); as
+    # the first node of the gait's part it is in the gait's first phase, as its node 1
+    tail = dataclasses.replace(tail, phases=(tail.phases[1],) + tuple(tail.phases[1:]))
+    # the gait's part is judged against the gait's J (the transition's is the metadata's)
+    gait = verify_plan(dataclasses.replace(tail, metadata=dict(
+        tail.metadata, steps=str(max(steps - 1, 1)),
+        cost_value=rec.metadata.get("gait_cost_value", rec.metadata["cost_value"]))))
+    scene = parse_scene(rec.scene_text)
+    physical = check_physical(rec, scene, float(rec.metadata["friction_coefficient"]))
+    continuous = certificate_of_recording(rec)
+    failures = [f for f in gait.failures if steps >= 2 and f not in gait.physical.failures
+                and not f.startswith("continuous dynamics:")]
+    failures += list(physical.failures)
+    failures += [f"continuous dynamics: {f}" for f in continuous.failures]
+    notes = list(gait.notes) + [
+        f"a transition of {N} nodes from {rec.metadata.get('initial_guess', 'a given start')}"
+        f" onto the gait: " + (f"every check of a plan ran on the gait from node {first}, "
+                               if steps >= 2 else "the gait's periodic checks need steps >= 2 "
+                               "(not judged); ")
+        + f"the physical and continuous checks on all {rec.n_nodes} nodes"]
+    return dataclasses.replace(gait, path=str(rec.path), n_nodes=rec.n_nodes,
+                               failures=tuple(failures), notes=tuple(notes),
+                               physical=physical, continuous=continuous)

@@ -1,0 +1,115 @@
+"""Transitions (`ocp.transition`, `gait_planner.transitions`): from a given start state onto
+the periodic gait, as one certified motion; starts the first phase cannot hold refused."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from gait_planner.model.angles import configuration
+from gait_planner.model.loader import load_scene
+from gait_planner.model.multibody import Multibody
+from gait_planner.ocp.settings import settings_for
+from gait_planner.ocp.solve import Planner
+from gait_planner.ocp.transition import StartError, StartState, check_start, start_of_plan
+from gait_planner.strategies import plan_certified
+from gait_planner.transitions import plan_transition
+from gait_planner.verify import verify_result
+
+
+@pytest.fixture(scope="module", params=["walker2d", "walker3d"])
+def gait(request):
+    """(scene, settings, planner, the certified periodic plan), derivatives compiled
+    (`make setup` builds the shipped scenes' elements)."""
+    scene = load_scene(request.param)
+    settings = settings_for(scene, compiled=True)
+    planner = Planner()
+    plan, _ = plan_certified(planner, scene, settings)
+    assert plan.success, plan.message
+    return scene, settings, planner, plan
+
+
+def _turned(scene, start: StartState, lateral: float, rate: float) -> StartState:
+    """`start` moved `lateral` m sideways (3D) and given a rigid turn of `rate` rad/s
+    about its first held contact point (roll in 3D, pitch in the plane) on top of its
+    motion: the contacts stay on the ground."""
+    mb = Multibody(scene)
+    q = start.q.copy()
+    contact = next(c for c in scene.contacts if c.name == scene.gait.phases[0].contacts[0])
+    centre = mb.point_matrix(contact.body, contact.point) @ q
+    w = np.array([rate, 0.0, 0.0]) if mb.root_dof == 6 else np.array([0.0, rate, 0.0])
+    q_dot = np.zeros_like(q)
+    for i in range(mb.nb):
+        if mb.root_dof == 6:
+            q[12 * i + 1] += lateral
+        q_dot[12 * i : 12 * i + 3] = np.cross(w, q[12 * i : 12 * i + 3] - centre)
+        for j in range(3):
+            d = slice(12 * i + 3 + 3 * j, 12 * i + 6 + 3 * j)
+            q_dot[d] = np.cross(w, q[d])
+    return StartState(q, start.momentum + mb.mass_diagonal * q_dot, "a turned start")
+
+
+def test_the_transition_from_the_plans_own_first_node_is_that_plan(gait):
+    """From the gait's node 0 with its discrete momentum the gait is feasible; the
+    transition's optimum may differ only by what the transition frees: the torques and
+    contact forces of node 0 and node N-1, which the periodic plan ties by the mirror
+    (walker3d: J 4.5e-7 higher, nodes within 0.43 mm; without the cost on the join's
+    torques, `CostTerms._join_torques`, 2.3e-5 and 2.8 mm)."""
+    scene, settings, planner, plan = gait
+    result = plan_transition(planner, scene, settings, start_of_plan(plan), steps=1)
+    assert result.success, result.message
+    N = plan.n_nodes - 1
+    assert result.n_nodes == 2 * (N - 1) + 2  # the transition, one half cycle, its last two nodes
+    assert result.settings["transition_nodes"] == str(N)
+    assert result.cost_value == pytest.approx(plan.cost_value, rel=1e-5)
+    assert np.abs(result.q[:N] - plan.q[:N]).max() < 1e-3
+    assert np.array_equal(result.q[0], plan.q[0])
+    assert "OK" in result.settings["continuous_dynamics"]
+
+
+def test_a_start_off_the_gait_returns_onto_it(gait):
+    """2 cm sideways (3D) and 0.1 rad/s off the gait's first node: the transition ends
+    on the gait's next half cycle, the joined motion continues it, and the recording
+    passes every check of the verifier."""
+    scene, settings, planner, plan = gait
+    start = _turned(scene, start_of_plan(plan), 0.02, 0.1)
+    result = plan_transition(planner, scene, settings, start, steps=2)
+    assert result.success, result.message
+    N = plan.n_nodes - 1
+    assert np.abs(result.q[0] - start.q).max() < 1e-12  # the start, to round-off
+    # node N-1 is the gait's node 0 mirrored (a step on): the root back at the gait's side
+    assert result.n_nodes == 3 * (N - 1) + 2
+    assert result.q[N - 1, 1] == pytest.approx(-plan.q[0, 1], abs=1e-8)
+    assert np.all(np.diff(result.times) > 0)
+    report = verify_result(result)
+    assert report.ok, report.summary()
+
+
+def test_starts_the_first_phase_cannot_hold_are_refused():
+    scene = load_scene("walker2d")
+    settings = settings_for(scene)
+    mb = Multibody(scene)
+    q = configuration(scene)  # the scene's pose
+    contact = next(c for c in scene.contacts if c.name == scene.gait.phases[0].contacts[0])
+    height = float(mb.point_matrix(contact.body, contact.point)[2] @ q)
+    lowered = q.copy()
+    lowered[2::12] -= height + 0.02  # every body 2 cm lower than the contact on the ground
+    with pytest.raises(StartError, match=rf"{contact.name} is 20.0 mm below the ground"):
+        check_start(scene, settings, StartState(lowered, np.zeros(mb.k), "test"))
+    with pytest.raises(StartError, match="NaN"):
+        check_start(scene, settings, StartState(np.full(mb.k, np.nan), np.zeros(mb.k), "t"))
+    with pytest.raises(StartError, match="director coordinates"):
+        check_start(scene, settings, StartState(q[:-1], np.zeros(mb.k), "test"))
+    broken = q.copy()
+    broken[3] += 0.1  # a director no longer of unit length
+    with pytest.raises(StartError, match="breaks the joints"):
+        check_start(scene, settings, StartState(broken, np.zeros(mb.k), "test"))
+    name, lo, hi = next((n, lo, hi) for n, lo, hi in settings.joint_limits
+                        if n in {j.name for j in scene.joints})
+    pose = scene.initial_pose
+    bent = configuration(scene, dataclasses.replace(
+        pose, joint_angles={**pose.joint_angles, name: (hi + 0.2,)}))
+    with pytest.raises(StartError, match=rf"joint {name} is at {np.degrees(hi + 0.2):.1f} deg"):
+        check_start(scene, settings, StartState(bent, np.zeros(mb.k), "test"))
