@@ -23,7 +23,9 @@ from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.problem import Problem
 from gait_planner.request import PlanRequest
 from gait_planner.result import PlanResult
+from gait_planner.ocp.transition import StartState
 from gait_planner.strategies import plan_certified, plan_free_step
+from gait_planner.transitions import plan_transition
 
 
 @dataclass(frozen=True)
@@ -69,10 +71,16 @@ def prepare(planner: Planner, problem: Problem, rrd: bool = True) -> str:
     return how
 
 
-def plan_problem(planner: Planner, problem: Problem, seed: StoredPlan | None = None
-                 ) -> PlanResult:
+def plan_problem(planner: Planner, problem: Problem, seed: StoredPlan | None = None,
+                 start: StartState | None = None) -> PlanResult:
     """The plan of `problem`, nothing written (`plan_joined` with its steps and start;
-    seed: a gait library's start, `gaitlib.serve.library_start`)."""
+    seed: a gait library's start, `gaitlib.serve.library_start`); with `start`, the
+    transition from it onto the gait and then the gait's steps half cycles
+    (`gait_planner.transitions.plan_transition`; `ocp.transition.StartError` if it cannot
+    start there)."""
+    if start is not None:
+        return plan_transition(planner, problem.scene, problem.settings, start,
+                               steps=problem.steps, warm_start=problem.warm_start)
     return plan_joined(planner, problem.scene, problem.settings, steps=problem.steps,
                        warm_start=problem.warm_start, seed=seed)
 
@@ -99,8 +107,10 @@ def plan_joined(planner: Planner, scene: Scene, settings: GaitSettings, *, steps
 
 def plan_and_record(planner: Planner, problem: Problem, output_dir: str | Path, *,
                     rrd: bool = True, stage: Callable[[str], None] | None = None,
-                    seed: StoredPlan | None = None) -> Outcome:
-    """Plan `problem` (`plan_problem`, from `seed` if given); on success write
+                    seed: StoredPlan | None = None, start: StartState | None = None
+                    ) -> Outcome:
+    """Plan `problem` (`plan_problem`, from `seed` or the state `start` if given); on
+    success write
     <output_dir>/<stem>.mcap (and .rrd).
 
     stage: called with "recording" once the plan is found, before anything is written (an
@@ -109,7 +119,7 @@ def plan_and_record(planner: Planner, problem: Problem, output_dir: str | Path, 
     stem = output_stem(request, problem.scene.name)
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    result = plan_problem(planner, problem, seed)
+    result = plan_problem(planner, problem, seed, start)
     if not result.success:
         return Outcome(result, None, None)
     if stage is not None:

@@ -15,14 +15,17 @@ import dataclasses
 
 import numpy as np
 
+from gait_planner.dynamics.discrete import DiscreteMechanics
+from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.guess import initial_multipliers
+from gait_planner.ocp.mirror import mirror_parts
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import failed_result
 from gait_planner.ocp.solve import Clock, Planner, Start
 from gait_planner.ocp.transcription import TORQUE_SCALE, Transcription
-from gait_planner.ocp.transition import (StartState, check_start, join, join_targets,
-                                         stance_offset, transition_settings)
+from gait_planner.ocp.transition import (StartError, StartState, check_start, join,
+                                         join_targets, stance_offset, transition_settings)
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.result import PlanResult
 from gait_planner.strategies import COLD_ATTEMPTS, WARM_ATTEMPTS, plan_certified
@@ -31,17 +34,18 @@ VARIANTS = ("warm", "cold", "cold_inertia")  # the IPOPT instances a transition 
 
 
 def transition_start(tr: Transcription, gait: PlanResult, start: StartState,
-                     targets: np.ndarray, end_scaling: float) -> Start:
+                     offset: float, end_scaling: float) -> Start:
     """The transition's first iterate: every node at its reference (u = 0), the references
-    the start, the gait's inner nodes 1..N-2 and the targets; the gait's node torques and
-    phase scalings; the contact multipliers of `ocp.guess.initial_multipliers`."""
+    the start, the gait's inner nodes 1..N-2 moved `offset` m along x and the targets
+    (`join_targets`); the gait's node torques and phase scalings; the contact multipliers
+    of `ocp.guess.initial_multipliers`."""
     N = tr.N
-    qref = np.vstack([start.q, gait.q[1 : N - 1], targets])
+    along = mirror_parts(tr.mb)[1]
+    qref = np.vstack([start.q, gait.q[1 : N - 1] + offset * along, join_targets(gait, offset)])
     x = np.concatenate([np.zeros(tr.U.numel()), gait.tau[:N].ravel() / TORQUE_SCALE,
                         initial_multipliers(tr), gait.phase_scaling, [end_scaling]])
     zeros_g = np.zeros(int(tr.g.shape[0]))
-    return Start(x, np.zeros_like(x), zeros_g, qref,
-                 f"from {start.origin}, onto the gait's next half cycle")
+    return Start(x, np.zeros_like(x), zeros_g, qref, f"a transition from {start.origin}")
 
 
 def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
@@ -64,8 +68,7 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
         tr = planner.build(scene, tr_settings, VARIANTS, refinement=True)
     except (ValueError, RuntimeError) as err:
         return failed_result(scene, tr_settings, f"could not build the transition: {err}")
-    first = transition_start(tr, gait, start, join_targets(gait, offset),
-                             tr_settings.end_scaling)
+    first = transition_start(tr, gait, start, offset, tr_settings.end_scaling)
     clock = Clock.begin(settings.solve.max_solve_time)
     reached = planner.attempt(scene, tr_settings, WARM_ATTEMPTS[0], first, clock)
     origin = first.origin
@@ -83,3 +86,37 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     return dataclasses.replace(joined, settings={
         **joined.settings, **certificate_metadata(cert),
         "gait_cost_value": repr(gait.cost_value)})
+
+
+def start_of_recording(scene: Scene, path: str, time: float | None = None) -> StartState:
+    """The state of the recording `path` (an MCAP of this product: a plan's, a
+    transition's) at `time` s from its start (None: its first node): the last node at or
+    before it, with the discrete momentum the recording's own equations give it,
+    p-_n = D2 L_d(q_{n-1}, q_n, h_{n-1}) + f+_{n-1}, f+_{n-1} the share h_{n-1} / (h_{n-1} +
+    h_n) of the published discrete force of node n (at node 0: M (q_1 - q_0) / h_0).
+    StartError if the recording is of another robot or the time outside it."""
+    from gait_planner.io.mcap_reader import read_plan_mcap
+
+    try:
+        rec = read_plan_mcap(path)
+    except (OSError, ValueError) as err:
+        raise StartError(f"cannot read the start's recording {path}: {err}") from None
+    names = tuple(b.name for b in scene.bodies)
+    if tuple(rec.body_names) != names:
+        raise StartError(f"the recording {path} is of bodies {', '.join(rec.body_names)}, "
+                         f"not {scene.name}'s ({', '.join(names)})")
+    times = np.asarray(rec.times, float)
+    t = float(times[0]) if time is None else float(time)
+    if not times[0] <= t <= times[-1]:
+        raise StartError(f"time {t:g} s is outside the recording {path} "
+                         f"({times[0]:g} to {times[-1]:g} s)")
+    n = min(int(np.searchsorted(times, t, side="right")) - 1, len(times) - 2)
+    q, h = np.asarray(rec.q, float), np.diff(times)
+    mb = Multibody(scene)
+    if n == 0:
+        momentum = mb.mass_diagonal * (q[1] - q[0]) / h[0]
+    else:
+        share = h[n - 1] / (h[n - 1] + h[n])
+        momentum = (np.array(DiscreteMechanics(mb).discrete_lagrangian_d2(
+            q[n - 1], q[n], h[n - 1])).ravel() + share * np.asarray(rec.generalized_force[n]))
+    return StartState(q[n].copy(), momentum, f"{path} at {times[n]:.4g} s (node {n})")

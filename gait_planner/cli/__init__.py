@@ -116,6 +116,10 @@ def _add_plan(commands: argparse._SubParsersAction) -> None:
                         "plan is kept there for later ones)")
     parser.add_argument("--urdf", metavar="ROBOT.urdf", help=URDF_HELP + "; the drafted "
                         "scene is written beside --out as NAME.yaml and planned")
+    parser.add_argument("--from", dest="start", metavar="RUN.mcap[:TIME]",
+                        help="begin at the state of a recording of this robot (at TIME s from "
+                        "its start; default its first node): the answer is the transition "
+                        "from it onto the gait, then --steps of the gait's half cycles")
     add_urdf_options(parser)
     parser.set_defaults(handler=_plan)
 
@@ -129,6 +133,7 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     from gait_planner.ocp.warm_starts import WarmStartStore
     from gait_planner.pipeline import plan_and_record, summary
     from gait_planner.problem import resolve
+    from gait_planner.ocp.transition import StartError
     from gait_planner.request import PlanRequest, RequestError
 
     target = Path(out)
@@ -156,10 +161,11 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     print(f"planning {args.scene} ...", file=sys.stderr, flush=True)
     try:  # a compile cache miss is announced by the stage "compiling (...)"
         planner = Planner(progress=print_iteration, stage=print_stage, library=store)
-        outcome = plan_and_record(planner, resolve(request, find_scene),
-                                  target.parent if str(target.parent) else ".",
-                                  rrd=not args.no_rrd)
-    except RequestError as err:
+        problem = resolve(request, find_scene)
+        start = _start_of(getattr(args, "start", None), problem.scene)
+        outcome = plan_and_record(planner, problem, target.parent if str(target.parent) else ".",
+                                  rrd=not args.no_rrd, start=start)
+    except (RequestError, StartError) as err:
         raise CliError(str(err)) from None
     data = summary(outcome)
     if not args.json:
@@ -171,6 +177,20 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
     if args.json:
         print(json.dumps(data, indent=2))
     return data
+
+
+def _start_of(text: str | None, scene):
+    """The start state of --from RUN.mcap[:TIME] (None without it)."""
+    if not text:
+        return None
+    from gait_planner.transitions import start_of_recording
+
+    path, _, time = text.rpartition(":") if ":" in text else (text, "", "")
+    try:
+        seconds = float(time) if time else None
+    except ValueError:
+        path, seconds = text, None
+    return start_of_recording(scene, path or text, seconds)
 
 
 def _walk_plan(mcap: str, steps: int, printed: bool) -> dict:

@@ -70,8 +70,7 @@ def verify_transition(rec, verify_plan):
     failures += list(physical.failures)
     failures += [f"continuous dynamics: {f}" for f in continuous.failures]
     notes = list(gait.notes) + [
-        f"a transition of {N} nodes from {rec.metadata.get('initial_guess', 'a given start')}"
-        f" onto the gait: " + (f"every check of a plan ran on the gait from node {first}, "
+        f"{rec.metadata.get('initial_guess', 'a transition')} ({N} nodes) onto the gait: " + (f"every check of a plan ran on the gait from node {first}, "
                                if steps >= 2 else "the gait's periodic checks need steps >= 2 "
                                "(not judged); ")
         + f"the physical and continuous checks on all {rec.n_nodes} nodes"]
