@@ -1,5 +1,6 @@
 """How a robot's plan walks, read from its recording as a user reads it (issue #61, item 3):
-the base link's pitch and roll range (/tf's world -> base link), the knee's flexion in
+the base link's pitch and roll range (/tf's world -> base link: its z axis's lean forward
+and sideways, positive forward and to the right), the knee's flexion in
 stance and in swing (the JointTrajectory), the step width (the held contact points on
 /gait_planner/contact_forces) and every published effort's share of the URDF's limit
 (`gait_planner.verify.effort_limits`), the locked joints' apart.
@@ -20,11 +21,14 @@ import sys
 
 import numpy as np
 
-def _knees(urdf: str, names) -> dict[str, str]:
+def _knees(urdf: str, names, scene_text: str) -> dict[str, str]:
     """{knee joint: "l" or "r"} of the planned joints `names`: the draft's envelope's knees
     (`gait_planner.model.urdf_envelope.leg_roles`) of the legs ending in a planned joint
-    with no planned joint below it, the URDF's axes taken as the walker's."""
+    with no planned joint below it, the URDF's axes taken as the walker's; a knee's side
+    is that of the draft's foot contacts (foot_l..., foot_r..., the walker's left and right,
+    `scene_text` the recorded scene) on a link below it (iCub's left is its URDF's -y)."""
     import pinocchio as pin
+    import yaml
 
     from gait_planner.model.urdf_envelope import leg_roles
     from gait_planner.model.urdf_frame import WalkFrame
@@ -36,13 +40,16 @@ def _knees(urdf: str, names) -> dict[str, str]:
     planned = [model.getJointId(n) for n in names if model.existJointName(n)]
     feet = [j for j in planned if not set(model.subtrees[j][1:]) & set(planned)]
     frame = WalkFrame(np.eye(3), np.zeros(3), "the URDF's axes")
+    side = {model.frames[model.getFrameId(c["body"])].parentJoint: c["name"][len("foot_")]
+            for c in yaml.safe_load(scene_text)["contacts"]}
     out = {}
     for foot in feet:
         chain = leg_path(model, foot)
         axes = {model.names[j]: revolute_axis(model, j) for j in chain}
         knee = leg_roles(model, data, chain, axes, frame).get("knee")
         if knee:
-            out[knee] = "l" if data.oMi[model.getJointId(knee)].translation[1] > 0 else "r"
+            below = set(model.subtrees[model.getJointId(knee)])
+            out[knee] = next(s for j, s in side.items() if j in below)
     return out
 
 
@@ -55,10 +62,14 @@ def posture(path: str) -> dict:
     N = len(rec.times) - 1
     base = [next(t for t in frames if t.parent == "world") for frames in rec.tf]
     R = np.array([t.matrix()[:3, :3] for t in base])
-    pitch = np.degrees(np.arcsin(np.clip(-R[:, 2, 0], -1, 1)))
-    roll = np.degrees(np.arctan2(R[:, 2, 1], R[:, 2, 2]))
+    # the lean of the base link's z axis (which the envelope bounds), forward and to the
+    # left in the walker's world: the same as its x axis's pitch on robots whose base x is
+    # forward, and not of the wrong sign on iCub's, whose base x points backwards
+    pitch = np.degrees(np.arctan2(R[:, 0, 2], R[:, 2, 2]))
+    roll = np.degrees(np.arctan2(-R[:, 1, 2], R[:, 2, 2]))
     names = list(rec.joint_names)
-    knees = _knees(rec.urdf, [n for n in names if n not in rec.held_joint_names])
+    knees = _knees(rec.urdf, [n for n in names if n not in rec.held_joint_names],
+                   rec.scene_text)
     flexion = {"stance": 0.0, "swing": 0.0}
     width = []
     for n in range(N + 1):

@@ -7,7 +7,10 @@ collision geometry; a foot without any reads its visual geometry (Alexander's fe
 only visual meshes); a foot without either takes the links fixed to it without mass
 (`gait-planner urdf`'s contact frames) as its points. A Collada mesh (.dae) declared
 ``Y_UP`` is turned to z up as its authors' viewers turn it (coal, which reads the meshes
-for Pinocchio, keeps the file's axes: iCub's feet would point sideways).
+for Pinocchio, keeps the file's axes: iCub's feet would point sideways): `turn_y_up` turns
+such a mesh's placement in a Pinocchio geometry model (the importer's, `urdf_read`), so
+everything placed by the model (soles, the lower legs' spheres, `urdf_collision`) sees it
+turned; `read_mesh` turns the vertices of a file read alone (MuJoCo's feet).
 
 `foot_contacts` groups them in the walker's frame (`gait_planner.model.urdf_frame`): with
 points ahead and behind the sole's middle, the rear ones make the ``heel`` and the front
@@ -26,7 +29,7 @@ import numpy as np
 
 from gait_planner.model.urdf_errors import UrdfError
 
-__all__ = ["foot_contacts", "read_mesh", "sole_points"]
+__all__ = ["foot_contacts", "read_mesh", "sole_points", "turn_y_up"]
 
 _SOLE = 1e-3  # m: vertices this close above the lowest one are on the sole
 _POINT_FOOT = 0.02  # m: a sole shorter than this along forward is a point
@@ -96,7 +99,7 @@ def _lowest_points(obj, oMi) -> list[np.ndarray]:
         half = np.array(geom.halfSide)
         corners = [np.array(s) * half for s in itertools.product((-1.0, 1.0), repeat=3)]
     elif hasattr(geom, "vertices"):
-        corners = list(mesh_vertices(obj))
+        corners = list(np.asarray(geom.vertices(), dtype=float))
     else:
         raise UrdfError(f"geometry {obj.name!r} is a {kind}, which the importer does not "
                         f"read (spheres, boxes, capsules, cylinders and meshes)")
@@ -105,11 +108,17 @@ def _lowest_points(obj, oMi) -> list[np.ndarray]:
     return list(local[height <= height.min() + _SOLE])
 
 
-def mesh_vertices(obj) -> np.ndarray:
-    """A mesh geometry object's vertices (n, 3) in its own frame, m (scaled), a Collada
-    file's ``Y_UP`` turned to z up (module docstring)."""
-    vertices = np.asarray(obj.geometry.vertices(), dtype=float)
-    return vertices @ _Y_UP.T if collada_y_up(obj.meshPath) else vertices
+def turn_y_up(geometry):
+    """The Pinocchio geometry model `geometry`, its Collada ``Y_UP`` meshes turned to z up
+    in place (each one's placement followed by the turn; module docstring); call it once
+    per model built."""
+    import pinocchio as pin  # noqa: PLC0415 - only the importer needs it at import time
+
+    turn = pin.SE3(_Y_UP, np.zeros(3))
+    for obj in geometry.geometryObjects:
+        if hasattr(obj.geometry, "vertices") and collada_y_up(obj.meshPath):
+            obj.placement = obj.placement * turn
+    return geometry
 
 
 def read_mesh(path: str, scale) -> np.ndarray:

@@ -1,6 +1,7 @@
 """Reading a URDF for the importer (`gait_planner.model.urdf_import`): the description
 parsed by Pinocchio on a free-flyer with its collision geometry (`read_urdf`; its visual
-geometry on demand, `visual_geometry`), the two feet (`find_feet`), a leg's joints
+geometry on demand, `visual_geometry`; Collada ``Y_UP`` meshes turned to z up in both,
+`urdf_contacts.turn_y_up`), the two feet (`find_feet`), a leg's joints
 (`leg_path`) and a revolute joint's axis (`revolute_axis`). UrdfError names what is
 refused: XML that is not well formed, a closed chain, a joint naming a missing link, a
 mesh that cannot be read, fewer than two feet, feet sharing joints, a leg joint that is
@@ -14,6 +15,7 @@ from typing import Sequence
 
 import numpy as np
 
+from gait_planner.model.urdf_contacts import turn_y_up
 from gait_planner.model.urdf_errors import UrdfError
 
 __all__ = ["find_feet", "leg_path", "read_urdf", "revolute_axis", "visual_geometry"]
@@ -65,7 +67,7 @@ def read_urdf(urdf_text: str, package_dirs: Sequence[str]):
         raise UrdfError(f"the URDF's collision geometry cannot be read (a mesh file not "
                         f"found or not readable; give its folder with --package-dir): "
                         f"{error}") from None
-    return model, geometry
+    return model, turn_y_up(geometry)
 
 
 def _joint_of_link(model, link: str) -> int:
@@ -88,10 +90,11 @@ def visual_geometry(model, urdf_text: str, package_dirs: Sequence[str]):
     it cannot be read."""
     pin = _pin()
     try:
-        return pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.VISUAL,
-                                           package_dirs=list(package_dirs))
+        visual = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.VISUAL,
+                                             package_dirs=list(package_dirs))
     except Exception:  # a visual mesh not found: the feet's frames remain
         return None
+    return turn_y_up(visual)
 
 
 def find_feet(model, feet: Sequence[str] | None) -> tuple[int, int]:

@@ -11,7 +11,10 @@ root their chain hangs from. What is measured:
   the joint that carries each body's link (links fixed to it included), placed by the
   recorded configuration as the continuous certificate places it
   (`gait_planner.verify.robot.urdf_configurations`), distances by coal
-  (``pinocchio.computeDistances``: GJK/EPA on meshes and primitives);
+  (``pinocchio.computeDistances``: GJK/EPA on meshes and primitives); a Collada mesh whose
+  <up_axis> is Y_UP placed as its authors' viewers place it, its y turned to z (coal
+  keeps the file's axes: iCub's shanks would lie across its hips, touching each other
+  standing);
 * a hand-written scene (or meshes that cannot be found, said in `source`): the spheres
   themselves, |c_i - c_j| - r_i - r_j with c = phi + D p.
 
@@ -27,6 +30,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -168,6 +172,10 @@ def _on_urdf(scene: SceneData, legs, q: np.ndarray, urdf: str, angles, dirs):
     model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
     full = pin.buildGeomFromUrdfString(model, urdf, pin.GeometryType.COLLISION,
                                        package_dirs=list(dirs))
+    y_to_z = pin.SE3(pin.utils.rotate("x", math.pi / 2), np.zeros(3))
+    for obj in full.geometryObjects:
+        if _y_up_collada(obj.meshPath):
+            obj.placement = obj.placement * y_to_z
     geometry, side = pin.GeometryModel(), []
     for k, leg in enumerate(legs):
         joints = {model.frames[model.getFrameId(name)].parentJoint: name for name in leg
@@ -194,3 +202,11 @@ def _on_urdf(scene: SceneData, legs, q: np.ndarray, urdf: str, angles, dirs):
         best.append(float(d[k]))
         pairs.append((side[pair.first][1], side[pair.second][1]))
     return np.array(best), pairs
+
+
+def _y_up_collada(path: str) -> bool:
+    """Whether `path` is a Collada file that declares <up_axis>Y_UP</up_axis>."""
+    if not path.lower().endswith(".dae") or not os.path.isfile(path):
+        return False
+    with open(path, encoding="utf-8", errors="replace") as file:
+        return re.search(r"<up_axis>\s*Y_UP\s*<", file.read(20000)) is not None

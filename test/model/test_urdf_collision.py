@@ -1,13 +1,17 @@
 """Spheres fitted to the lower legs' collision geometry (`gait_planner.model.urdf_collision`),
 the leg clearance rows' distances (`gait_planner.ocp.legs`) and the verifier's measure of
-the legs' distance (`gait_planner.verify.legs`), on G1's and Talos's URDFs:
+the legs' distance (`gait_planner.verify.legs`), on G1's, Talos's and iCub's URDFs:
 
 * the fit contains every piece it is given (any triangles, spheres and capsules), whole;
 * the spheres a draft writes contain the URDF's collision geometry at the zero pose
   (its vertices and random points on its triangles, placed by Pinocchio);
 * the rows' sphere distances are coal's distances between the same spheres, and never
   more than coal's distance between the URDF's own collision geometry (the spheres
-  contain it), at random poses of the legs within the draft's ranges.
+  contain it), at random poses of the legs within the draft's ranges;
+* iCub's Collada meshes (<up_axis>Y_UP) are placed turned to z up, as its authors' viewers
+  place them, in the draft's fit and in the verifier: its shanks stand along its legs,
+  apart, not across its hips (before, coal found its standing legs touching and the
+  spheres of radius 21 cm overlapped by 29 cm, so no leg row could hold).
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from hypothesis import strategies as st
 from gait_planner.model.angles import configuration
 from gait_planner.model.loader import scene_from_text
 from gait_planner.model.multibody import Multibody
+from gait_planner.model.urdf_contacts import turn_y_up
 from gait_planner.model.scene import InitialPose
 from gait_planner.model.urdf_collision import fit_spheres
 from gait_planner.model.urdf_import import draft_scene
@@ -34,7 +39,8 @@ from gait_planner.verify.mechanics import parse_scene
 from gait_planner.verify.robot import urdf_configurations
 
 ROBOTS = {"g1": ("g1_description/urdf/g1_29dof_rev_1_0.urdf", {}),
-          "talos": ("talos_data/robots/talos_reduced.urdf", {"mirror_tolerance": 0.06})}
+          "talos": ("talos_data/robots/talos_reduced.urdf", {"mirror_tolerance": 0.06}),
+          "icub": ("icub_description/robots/icub_reduced.urdf", {})}
 
 
 def _inside(points: np.ndarray, spheres: np.ndarray) -> np.ndarray:
@@ -73,8 +79,8 @@ def drafted(request, example_robots):
                         urdf_file=str(path), **options)
     scene = scene_from_text(draft.yaml, f"{request.param}.yaml", path.parent)
     model = pin.buildModelFromXML(urdf, pin.JointModelFreeFlyer())
-    geometry = pin.buildGeomFromUrdfString(model, urdf, pin.GeometryType.COLLISION,
-                                           package_dirs=[str(example_robots.parents[1])])
+    geometry = turn_y_up(pin.buildGeomFromUrdfString(  # iCub's Collada meshes: Y_UP
+        model, urdf, pin.GeometryType.COLLISION, package_dirs=[str(example_robots.parents[1])]))
     return (request.param, urdf, model, geometry, scene, parse_scene(draft.yaml),
             {"robot_package_dirs": str(example_robots.parents[1])})
 
@@ -123,7 +129,7 @@ def test_drafted_spheres_contain_the_urdfs_collision_geometry(drafted):
                 points = M.translation + geom.radius * u / np.linalg.norm(u, axis=1)[:, None]
             assert _inside(points, spheres).all(), f"{name}: {obj.name} sticks out"
             checked += len(points)
-    assert checked > 1000
+    assert checked > 900  # iCub: 996 points on its simple meshes
 
 
 def test_sphere_distances_are_coals_and_bound_the_geometrys(drafted):
@@ -155,6 +161,22 @@ def test_sphere_distances_are_coals_and_bound_the_geometrys(drafted):
         assert ours.min() <= true.smallest + 1e-9
         margins.append(true.smallest - ours.min())
     assert min(margins) >= 0
+
+
+def test_icubs_y_up_shanks_stand_along_its_legs_apart(drafted):
+    """Standing (the draft's pose, the URDF's zero), iCub's lower legs are 45 mm apart by
+    coal on its turned meshes and the spheres 22 mm (G1's and Talos's: 165 and 28 mm,
+    their spheres 122 and 5.5 mm); every sphere smaller than the shank's length."""
+    name, urdf, model, geometry, scene, data_scene, metadata = drafted
+    q, angles = _pose(scene, data_scene)
+    true = leg_clearance(data_scene, q[None], metadata, urdf, angles[None])
+    spheres = leg_sphere_distances(Multibody(scene))(q).full().ravel()
+    assert "coal" in true.source
+    expected = {"g1": (0.1654, 0.1218), "talos": (0.0276, 0.0055), "icub": (0.0451, 0.0221)}
+    np.testing.assert_allclose((true.smallest, spheres.min()), expected[name], atol=2e-4)
+    if name == "icub":
+        assert true.pair == ("l_lower_leg", "r_lower_leg")
+        assert max(s[3] for s in scene.body("l_lower_leg").collision) < 0.06
 
 
 def test_the_drafts_leg_clearance_is_an_option_and_a_negative_one_is_refused(example_robots):

@@ -1,27 +1,40 @@
 """Robots the importer once refused as asymmetric plan (issue #61 item 4). iCub from the
 example-robot-data wheel, whose base x points backwards, whose right leg link frames are
 not its left leg's mirrored and whose right leg links have a mass but no inertia in the
-URDF, drafted (`gait_planner.model.urdf_import`) as a user drafts it: the draft walks along
-the base's -x (its header says the soles told it), its walking frame snapped onto the
-URDF's axes. Its plan is not tested here: with the leg rows its drafted plan no longer
-converges (2026-12-06: the time limit of 400 s after 1342 iterations, the friction cone the
-most violated; without the rows it converges, its lower legs touching; benchmarks/HISTORY.md),
-and the test process that planned it with CasADi's whole-graph derivatives beside the other
-robots' was killed for memory (13.6 GB).
+URDF, drafted (`gait_planner.model.urdf_import`), planned and recorded as a user plans it:
+
+* the draft walks along the base's -x (its header says the soles told it), its walking
+  frame snapped onto the URDF's axes;
+* the plan converges and passes every check of the verifier, the continuous-dynamics
+  certificate on the original URDF included (the right leg's missing inertias certified
+  with the draft's, `gait_planner.verify.robot`);
+* its legs' collision geometry, measured by coal at every node, is at least the draft's
+  leg_clearance apart, each held foot stays on its own side of the mid-plane, and every
+  published effort (its locked wrists' 0.45-0.65 N m included) is within the URDF's limit;
+* the plan walks forward: its root moves along the walker's +x, which is the URDF base's
+  -x, by a step (to 5 %).
+
+Until its Collada meshes were turned to z up (`gait_planner.model.urdf_contacts.turn_y_up`)
+its shanks lay across its hips: the spheres the leg rows keep apart overlapped by 29 cm
+standing and its plan did not converge (400 s, 1342 iterations; benchmarks/HISTORY.md).
 
 Alexander (lower body): its links named LEFT_/RIGHT_, its left and right link frames not
 mirrored, its feet with visual meshes only; at a 0.45 m step the cold plan converges and
 passes every check (its drafted 0.6688 m does not converge in 600 s, nor did 0.6 m in a
 first run of this test).
 
-Slow: without compiling, Alexander's problem builds and solves in about 1 min.
+Slow: without compiling, iCub's problem builds and solves in about 2 min (6 GB of memory:
+run it alone), Alexander's in about 1 min.
 """
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
+import yaml
 
 from gait_planner.cli.robot import write_draft
+from gait_planner.io.mcap_reader import read_plan_mcap
 from gait_planner.model.loader import find_scene
 from gait_planner.model.urdf_import import draft_scene
 from gait_planner.ocp.solve import Planner
@@ -29,6 +42,7 @@ from gait_planner.pipeline import plan_and_record
 from gait_planner.problem import resolve
 from gait_planner.request import PlanRequest
 from gait_planner.verify import verify_recording
+from gait_planner.verify.effort_limits import LIMIT_TOLERANCE, effort_shares
 
 pytestmark = pytest.mark.slow
 
@@ -36,13 +50,41 @@ ICUB = "icub_description/robots/icub_reduced.urdf"
 ALEXANDER = "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"
 
 
-def test_icub_drafts_walking_along_its_base_minus_x(example_robots, tmp_path):
+def test_icub_walks_along_its_base_minus_x_and_passes_every_check(example_robots, tmp_path):
     path = example_robots / ICUB
-    draft = draft_scene(path.read_text(), package_dirs=[str(example_robots.parents[1])],
+    urdf = path.read_text()
+    draft = draft_scene(urdf, package_dirs=[str(example_robots.parents[1])],
                         urdf_file=str(path))
     assert "Walking direction (the scene's x): the URDF's [-1.0, 0.0, 0.0], told by the " \
         "soles" in draft.yaml
     assert "walking frame: turned by 4.71e-05 rad" in draft.yaml  # its rpy of 1.5708
+    scene_file = write_draft(draft, tmp_path / "icub.yaml")
+    problem = resolve(PlanRequest(scene=str(scene_file), output_name="icub", compiled=False),
+                      find_scene)
+    outcome = plan_and_record(Planner(), problem, tmp_path, rrd=False)
+    assert outcome.result.success, outcome.result.message
+    report = verify_recording(outcome.mcap_path)
+    assert report.ok, report.failures
+    clearance = yaml.safe_load(draft.yaml)["gait"]["options"]["leg_clearance"]
+    assert report.legs.source == "the URDF's collision geometry (coal)"
+    assert clearance == 0.01 and report.legs.smallest >= clearance, \
+        (report.legs.pair, report.legs.node, report.legs.smallest)
+    rec = read_plan_mcap(outcome.mcap_path)
+    shares = effort_shares(urdf, rec.joint_names, np.asarray(rec.effort))
+    assert set(draft.locked) <= set(shares)  # the locked wrists judged too
+    worst = max(shares, key=lambda name: shares[name][0])
+    assert shares[worst][0] <= 1.0 + LIMIT_TOLERANCE, (worst, shares[worst])
+    side = {c.name: 1.0 if c.name.startswith("foot_l") else -1.0 for c in
+            outcome.result.scene.contacts}
+    across = min(side[name] * float(np.asarray(rec.contact_points[n])[i][1])
+                 for n in range(len(rec.times)) for i, name in enumerate(rec.contact_names[n])
+                 if name in rec.active_contacts[n])
+    assert across > 0.0, f"a held foot {-across:.3f} m across the mid-plane"
+    scene = outcome.result.scene
+    root = scene.body_index(scene.root.body)
+    q = np.asarray(rec.q)
+    advance = q[-1, 12 * root] - q[0, 12 * root]
+    assert advance == pytest.approx(scene.gait.step_length, rel=0.05)
 
 
 def test_alexander_plans_at_a_shorter_step_and_passes_every_check(example_robots, tmp_path):
