@@ -1,7 +1,9 @@
 """gait_planner: DMOCC gait optimisation of multibody walkers (ROS 2 package).
 
 The Python API (`gait_planner.api`; loaded on first use, so importing a submodule stays
-light): ``from gait_planner import PlanRequest, plan, check, record, summary``.
+light): ``from gait_planner import PlanRequest, plan, check, record, summary``, and for a
+plan that begins at a given state ``start_of_recording`` (or ``start_of_plan``,
+``start_of_velocity``) passed to ``plan(..., start=)``.
 
 One BLAS thread for CasADi's bundled OpenBLAS (read when CasADi first loads its IPOPT
 plugin, so this has to run before the first solver is built): MUMPS then factorises the
@@ -28,7 +30,8 @@ for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
 if platform.machine() in ("x86_64", "AMD64"):
     os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
 
-_API = ("PlanRequest", "PlanResult", "Planner", "RequestError", "check", "plan", "record",
+_API = ("PlanRequest", "PlanResult", "Planner", "RequestError", "StartError", "StartState",
+        "check", "plan", "record", "start_of_plan", "start_of_recording", "start_of_velocity",
         "summary")
 __all__ = list(_API)
 

@@ -31,7 +31,7 @@ from gait_planner.pipeline import plan_problem, summary
 from gait_planner.problem import SceneLookup, resolve
 from gait_planner.request import PlanRequest, RequestError
 from gait_planner.result import PlanResult
-from gait_planner.transitions import start_of_recording
+from gait_planner.transitions import HALVES, start_of_recording
 
 __all__ = ["PlanRequest", "PlanResult", "Planner", "RequestError", "StartError", "StartState",
            "check", "plan", "record", "start_of_plan", "start_of_recording", "start_of_velocity",
@@ -41,7 +41,8 @@ _planner: Planner | None = None
 
 
 def plan(request: PlanRequest | str, planner: Planner | None = None,
-         scenes: SceneLookup = load_scene, start: StartState | None = None) -> PlanResult:
+         scenes: SceneLookup = load_scene, start: StartState | None = None,
+         halves: int = HALVES) -> PlanResult:
     """The plan of `request` (a `PlanRequest`, or a scene's name for its default request
     with compiled derivatives),
     certified against the continuous dynamics, refined while the certificate asks and
@@ -50,15 +51,15 @@ def plan(request: PlanRequest | str, planner: Planner | None = None,
     success False and says why in its message. planner: the process's own by default;
     scenes: finds a scene by its name (`model.loader.load_scene`: the shipped scenes);
     start: a state to begin at (`start_of_recording`, `ocp.transition.start_of_plan`,
-    `start_of_velocity`): the answer is the transition from it onto the request's gait,
-    then request.steps of the gait's half cycles (`StartError` if the first phase's
-    contacts cannot hold it)."""
+    `start_of_velocity`): the answer is the transition of `halves` half cycles (1 to 4)
+    from it onto the request's gait, then request.steps of the gait's half cycles
+    (`StartError` if the first phase's contacts cannot hold it)."""
     global _planner
     if planner is None:
         _planner = planner = _planner or Planner(library=WarmStartStore())
     if isinstance(request, str):
         request = PlanRequest(request, compiled=True)
-    return plan_problem(planner, resolve(request, scenes), start=start)
+    return plan_problem(planner, resolve(request, scenes), start=start, halves=halves)
 
 
 def check(result: PlanResult):

@@ -25,7 +25,7 @@ from gait_planner.request import PlanRequest
 from gait_planner.result import PlanResult
 from gait_planner.ocp.transition import StartState
 from gait_planner.strategies import plan_certified, plan_free_step
-from gait_planner.transitions import plan_transition
+from gait_planner.transitions import HALVES, plan_transition
 
 
 @dataclass(frozen=True)
@@ -72,15 +72,16 @@ def prepare(planner: Planner, problem: Problem, rrd: bool = True) -> str:
 
 
 def plan_problem(planner: Planner, problem: Problem, seed: StoredPlan | None = None,
-                 start: StartState | None = None) -> PlanResult:
+                 start: StartState | None = None, halves: int = HALVES) -> PlanResult:
     """The plan of `problem`, nothing written (`plan_joined` with its steps and start;
     seed: a gait library's start, `gaitlib.serve.library_start`); with `start`, the
-    transition from it onto the gait and then the gait's steps half cycles
-    (`gait_planner.transitions.plan_transition`; `ocp.transition.StartError` if it cannot
-    start there)."""
+    transition of `halves` half cycles from it onto the gait and then the gait's steps
+    half cycles (`gait_planner.transitions.plan_transition`; `ocp.transition.StartError`
+    if it cannot start there)."""
     if start is not None:
         return plan_transition(planner, problem.scene, problem.settings, start,
-                               steps=problem.steps, warm_start=problem.warm_start)
+                               steps=problem.steps, warm_start=problem.warm_start,
+                               halves=halves)
     return plan_joined(planner, problem.scene, problem.settings, steps=problem.steps,
                        warm_start=problem.warm_start, seed=seed)
 
@@ -107,8 +108,8 @@ def plan_joined(planner: Planner, scene: Scene, settings: GaitSettings, *, steps
 
 def plan_and_record(planner: Planner, problem: Problem, output_dir: str | Path, *,
                     rrd: bool = True, stage: Callable[[str], None] | None = None,
-                    seed: StoredPlan | None = None, start: StartState | None = None
-                    ) -> Outcome:
+                    seed: StoredPlan | None = None, start: StartState | None = None,
+                    halves: int = HALVES) -> Outcome:
     """Plan `problem` (`plan_problem`, from `seed` or the state `start` if given); on
     success write
     <output_dir>/<stem>.mcap (and .rrd).
@@ -119,7 +120,7 @@ def plan_and_record(planner: Planner, problem: Problem, output_dir: str | Path, 
     stem = output_stem(request, problem.scene.name)
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    result = plan_problem(planner, problem, seed, start)
+    result = plan_problem(planner, problem, seed, start, halves)
     if not result.success:
         return Outcome(result, None, None)
     if stage is not None:

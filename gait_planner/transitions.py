@@ -23,69 +23,101 @@ from gait_planner.ocp.mirror import mirror_parts
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import failed_result
 from gait_planner.ocp.solve import Clock, Planner, Start
+from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.ocp.transcription import TORQUE_SCALE, Transcription
 from gait_planner.ocp.transition import (StartError, StartState, check_start, join,
-                                         join_targets, stance_offset, transition_settings)
+                                         join_targets, stance_offset, transition_scene,
+                                         transition_settings)
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.result import PlanResult
 from gait_planner.strategies import COLD_ATTEMPTS, WARM_ATTEMPTS, plan_certified
 
 VARIANTS = ("warm", "cold", "cold_inertia")  # the IPOPT instances a transition may use
+MAX_HALVES = 4  # half cycles a transition may take
+# Half cycles by default: walker3d from starts 1.3-1.4 cm and 0.1 rad/s off its first node
+# needed 2 (in one: 2945-3227 iterations, J 40-43 against 21, the certificate missed; in
+# two: 117-170 iterations, every check passed; benchmarks/HISTORY.md, 2026-12-07).
+HALVES = 2
 
 
 def transition_start(tr: Transcription, gait: PlanResult, start: StartState,
-                     offset: float, end_scaling: float) -> Start:
+                     offset: float, end_scaling: float, halves: int = 1) -> Start:
     """The transition's first iterate: every node at its reference (u = 0), the references
-    the start, the gait's inner nodes 1..N-2 moved `offset` m along x and the targets
-    (`join_targets`); the gait's node torques and phase scalings; the contact multipliers
-    of `ocp.guess.initial_multipliers`."""
+    the start, the gait walked `halves` half cycles (`ocp.walk_on`) at the inner nodes
+    1..N-2 moved `offset` m along x, and the targets (`join_targets`); that walk's node
+    torques and the gait's phase scalings for each half cycle; the contact multipliers of
+    `ocp.guess.initial_multipliers`."""
     N = tr.N
     along = mirror_parts(tr.mb)[1]
-    qref = np.vstack([start.q, gait.q[1 : N - 1] + offset * along, join_targets(gait, offset)])
-    x = np.concatenate([np.zeros(tr.U.numel()), gait.tau[:N].ravel() / TORQUE_SCALE,
-                        initial_multipliers(tr), gait.phase_scaling, [end_scaling]])
+    walked = walk_on(gait, halves + 1)
+    qref = np.vstack([start.q, walked.q[1 : N - 1] + offset * along,
+                      join_targets(gait, offset, halves)])
+    x = np.concatenate([np.zeros(tr.U.numel()), walked.tau[:N].ravel() / TORQUE_SCALE,
+                        initial_multipliers(tr), np.tile(gait.phase_scaling, halves),
+                        [end_scaling]])
     zeros_g = np.zeros(int(tr.g.shape[0]))
     return Start(x, np.zeros_like(x), zeros_g, qref, f"a transition from {start.origin}")
 
 
+def last_transition(tr: Transcription, last: StoredPlan, start: StartState, offset: float,
+                    gait: PlanResult, halves: int) -> Start:
+    """A re-plan's first iterate: the last transition's optimum with its multipliers, its
+    inner references moved along x as far as the new start is from the last one, the new
+    start and targets at the ends."""
+    N = tr.N
+    along = mirror_parts(tr.mb)[1]
+    shift = offset - stance_offset(tr.mb.scene, StartState(last.qref[0], start.momentum, ""),
+                                   gait)
+    qref = np.vstack([start.q, last.qref[1 : N - 1] + shift * along,
+                      join_targets(gait, offset, halves)])
+    return Start(last.x, last.lam_x, last.lam_g, qref,
+                 f"a transition from {start.origin}, re-planned from the last transition")
+
+
 def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
-                    start: StartState, *, steps: int = 1, warm_start: bool = True
-                    ) -> PlanResult:
-    """The transition from `start` onto the gait of (scene, settings), followed by `steps`
-    of the gait's half cycles, certified (module docstring). `ocp.transition.StartError`
-    if the start cannot be planned from; a failed plan (of the gait or the transition)
-    has success False and says which in its message."""
+                    start: StartState, *, steps: int = 1, warm_start: bool = True,
+                    halves: int = HALVES) -> PlanResult:
+    """The transition of `halves` half cycles (1 to MAX_HALVES) from `start` onto the gait
+    of (scene, settings), followed by `steps` of the gait's half cycles, certified (module
+    docstring). `ocp.transition.StartError` if the start cannot be planned from; a failed
+    plan (of the gait or the transition) has success False and says which in its
+    message."""
+    if not 1 <= halves <= MAX_HALVES:
+        raise StartError(f"a transition takes 1 to {MAX_HALVES} half cycles, got {halves}")
     from gait_planner.verify.certify import certificate_metadata, certified
 
     check_start(scene, settings, start)
     gait, _ = plan_certified(planner, scene, settings, warm_start=warm_start)
     if not gait.success:
         return dataclasses.replace(gait, message=f"the gait to join: {gait.message}")
-    tr_settings = transition_settings(settings, gait, start)
+    tr_settings = transition_settings(settings, gait, start, halves)
+    tr_scene = transition_scene(scene, halves)
     offset = stance_offset(scene, start, gait)
     planner.stage("building the transition")
     try:
-        tr = planner.build(scene, tr_settings, VARIANTS, refinement=True)
+        tr = planner.build(tr_scene, tr_settings, VARIANTS, refinement=True)
     except (ValueError, RuntimeError) as err:
         return failed_result(scene, tr_settings, f"could not build the transition: {err}")
-    first = transition_start(tr, gait, start, offset, tr_settings.end_scaling)
+    first = transition_start(tr, gait, start, offset, tr_settings.end_scaling, halves)
+    kept = planner.stored_plans(tr_scene, tr_settings) if warm_start else []
+    begin = last_transition(tr, kept[-1], start, offset, gait, halves) if kept else first
     clock = Clock.begin(settings.solve.max_solve_time)
-    reached = planner.attempt(scene, tr_settings, WARM_ATTEMPTS[0], first, clock)
-    origin = first.origin
+    reached = planner.attempt(tr_scene, tr_settings, WARM_ATTEMPTS[0], begin, clock)
+    origin = begin.origin
     for attempt in COLD_ATTEMPTS if not reached.success else ():
         if planner.stopped() or clock.expired():
             break
         origin += f"; the warm attempt stopped ({reached.status}), then cold"
-        reached = planner.attempt(scene, tr_settings, attempt, first, clock)
+        reached = planner.attempt(tr_scene, tr_settings, attempt, first, clock)
         if reached.success:
             break
-    result = planner.result(scene, tr_settings, reached, clock, origin)
+    result = planner.result(tr_scene, tr_settings, reached, clock, origin)
     if not result.success:
-        return result
-    joined, cert = certified(join(result, walk_on(gait, steps + 1), offset))
+        return dataclasses.replace(result, scene=scene)
+    joined, cert = certified(join(result, walk_on(gait, halves + steps), offset, halves))
     return dataclasses.replace(joined, settings={
         **joined.settings, **certificate_metadata(cert),
-        "gait_cost_value": repr(gait.cost_value)})
+        "gait_cost_value": repr(gait.cost_value), "gait_duration": repr(gait.duration)})
 
 
 def start_of_recording(scene: Scene, path: str, time: float | None = None) -> StartState:

@@ -263,8 +263,9 @@ def test_scene_from_urdf_takes_the_mirror_tolerance_its_refusal_names(example_ro
 
 def test_plan_from_a_recordings_state_joins_the_gait(tmp_path, capsys):
     """`plan --from RUN.mcap:TIME`: from the state of a 3-half-cycle plan where its third
-    half cycle begins (the first stance again, two steps on) the transition joins the
-    gait with the gait's J (the state is the gait's own, with its discrete momentum);
+    half cycle begins (the first stance again, two steps on) the transition (two half
+    cycles by default) joins the gait with twice the gait's J (the state is the gait's
+    own, with its discrete momentum);
     from the middle of its first half cycle, where the right heel is in the air, the
     request is refused naming the contact."""
     from gait_planner.io.mcap_reader import read_plan_mcap
@@ -281,8 +282,8 @@ def test_plan_from_a_recordings_state_joins_the_gait(tmp_path, capsys):
                  f"{gait}:{float(rec.times[2 * (N - 1)]) + 1e-9!r}", "--out", str(out), "--no-rrd",
                  "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["success"] and data["nodes"] == 3 * (N - 1) + 2
-    assert data["cost_value"] == pytest.approx(planned["cost_value"], rel=1e-5)
+    assert data["success"] and data["nodes"] == 4 * (N - 1) + 2
+    assert data["cost_value"] == pytest.approx(2 * planned["cost_value"], rel=1e-5)
     assert verify_recording(out).ok
     code = main(["plan", "--scene", "walker2d", "--from", f"{gait}:{float(rec.times[N // 2])!r}",
                  "--out", str(tmp_path / "refused.mcap"), "--no-rrd"])

@@ -77,12 +77,23 @@ from gait_planner.ocp.mirror import contact_partners
 from gait_planner.ocp.settings import GaitSettings
 
 
+def next_half_mirrored(scene: Scene) -> bool:
+    """Whether the half cycle after the scene's gait is its gait's mirror image: a periodic
+    half cycle's is; a transition of K half cycles (`ocp.transition.transition_scene`, its
+    copies' phases named "<phase>~<j>") is followed by the gait's half cycle K, the mirror
+    image for odd K."""
+    copies = 1 + max((int(p.name.rsplit("~", 1)[1]) - 1 for p in scene.gait.phases
+                      if "~" in p.name), default=0)
+    return copies % 2 == 1
+
+
 def required_clearances(scene: Scene, held: Sequence[frozenset[str] | set[str]], margin: float,
                         ramp_nodes: float) -> dict[int, dict[str, float]]:
     """Swing points and their required heights (m) at the nodes 1..P of a half cycle.
 
     held (P,): the contact points held in each interval 0..P-1; interval i + P holds the
-    mirror partners of interval i's points (the next half cycle) and i - P likewise, so
+    mirror partners of interval i's points (the next half cycle; its own points after a
+    transition of an even number of half cycles, `next_half_mirrored`) and i - P likewise, so
     node P (the image of node 0) and the points released or struck across the cycle
     boundary are handled. margin m: swing_clearance; ramp_nodes: swing_clearance_ramp /
     base_time_step (<= 1: the full margin from the first swing node on).
@@ -95,10 +106,11 @@ def required_clearances(scene: Scene, held: Sequence[frozenset[str] | set[str]],
     keeps the full margin."""
     period = len(held)
     partner = contact_partners(scene)
+    flips = next_half_mirrored(scene)
 
     def is_held(point: str, interval: int) -> bool:
         turns, inner = divmod(interval, period)
-        return (partner[point] if turns % 2 else point) in held[inner]
+        return (partner[point] if turns % 2 and flips else point) in held[inner]
 
     ramp = max(float(ramp_nodes), 1.0)
     out: dict[int, dict[str, float]] = {}
@@ -125,7 +137,8 @@ def strike_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]]
     (P,) as there. Only intervals with a strike are listed, points in the scene's order."""
     period = len(held)
     partner = contact_partners(scene)
-    after = list(held[1:]) + [{partner[p] for p in held[0]}]
+    after = list(held[1:]) + [{partner[p] for p in held[0]} if next_half_mirrored(scene)
+                              else set(held[0])]
     out = {}
     for n in range(period):
         points = tuple(c.name for c in scene.contacts

@@ -67,18 +67,22 @@ class CostTerms:
         return w * ca.sum1(ca.sum2(second**2))
 
     def _join_torques(self):
-        """A transition's (`ocp.transition`) JOIN_WEIGHT sum over nodes n = N-2, N-1 of
-        |tau_n - tau_n^gait|^2: node N-1's torque is free (its equation meets the gait's next
-        node) and without a cost of its own the optimum spent it on a one-node spike
-        (walker2d from a turned start: knee -31, -49, -38 N m at nodes 38-40, the
-        verifier's zigzag); with the gait's own second differences as the target instead
-        of zero the gait stays the optimum from its own first node. 0 for a periodic half
-        cycle."""
+        """A transition's (`ocp.transition`) JOIN_WEIGHT sum over nodes n = 1..N-1 of
+        |e_{n+1} - 2 e_n + e_{n-1}|^2, e_n = tau_n - tau_n^gait the torques' departure from
+        the gait walked as far (`end_torque`, node N's the gait's own): a start off the
+        gait is corrected smoothly, and from the gait's own first node the gait costs
+        nothing. Node N-1's torque is free (its equation meets the gait's next node):
+        without a cost the optimum spent it on a one-node spike (walker2d from a turned
+        start: knee -31, -49, -38 N m at nodes 38-40), and with the distance from the
+        gait's torques at the last 2 or 4 nodes only, walker3d's two-half-cycle
+        transitions zigzagged where that window began (the verifier's check).
+        0 for a periodic half cycle."""
         if not self.transition:
             return 0.0
         nt, N = self.mb.nt, self.N
-        gait = ca.reshape(self.end_torque[0 : 2 * nt], nt, 2)
-        return JOIN_WEIGHT * ca.sum1(ca.sum2((self.TAU[:, N - 2 : N] - gait) ** 2))
+        off = self.TAU - ca.reshape(self.end_torque, nt, N + 1)
+        second = off[:, 2:] - 2 * off[:, 1:-1] + off[:, :-2]  # nodes 1..N-1
+        return JOIN_WEIGHT * ca.sum1(ca.sum2(second**2))
 
     def _share_squares(self):
         """sum over nodes of w_n s^2 (N^2 s) of the full contacts' along-line shares s."""

@@ -55,7 +55,7 @@ class Layout:
     mirror images (`ocp.transition`): every node 0..N has unknowns of its own, the
     contact multipliers are those of nodes 0..N-1, the torques those of nodes 0..N-1, and
     p ends with the start's momentum (k,), the last interval's scaling and the gait's
-    torques at nodes N-2, N-1 and N (3 nt,)."""
+    torques at nodes 0..N ((N + 1) nt,), `ocp.cost_terms`."""
 
     def __init__(self, mb: Multibody, N: int, lam_sizes: list[int], n_scalings: int,
                  scaling_of_interval: np.ndarray, A: np.ndarray, along: np.ndarray,
@@ -76,7 +76,7 @@ class Layout:
         self.inverse_speed_index = int(self.ground_index[-1]) + 1
         self.np = self.inverse_speed_index + 1
         if transition:  # the start's momentum (k,), the last interval's scaling, tau_N
-            self.np += mb.k + 1 + 3 * mb.nt
+            self.np += mb.k + 1 + (N + 1) * mb.nt
 
     # ---- indices ------------------------------------------------------------------------
 

@@ -128,7 +128,7 @@ class GaitSettings:
     start_momentum: empty for a periodic half cycle; else the problem is a transition
     (`gait_planner.ocp.transition`) whose node 0 is given with this discrete momentum
     (k,) N s, director coordinates; end_scaling, end_torque: a transition's last
-    interval's sigma and the gait's torques at nodes N-2, N-1 and N (3 nt,) N m.
+    interval's sigma and the gait's torques walked as far, nodes 0..N ((N+1) nt,) N m.
     solve: how the problem is solved, not what it is (`SolveOptions`).
     """
 

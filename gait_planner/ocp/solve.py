@@ -297,7 +297,8 @@ class Planner:
             nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
             cb = IterationCallback(nx, ng, bounds[2], bounds[3])
             built = _Built(tr, nlp, bounds, cb, derivatives, used, time.perf_counter() - start)
-            if self.library is not None:
+            if self.library is not None and not tr.transition:  # a transition's optimum
+                # serves the next re-plan of this process, not later processes
                 built.library_key = self.library.key(scene.source, key[2], nx, ng)
                 built.stored = self.library.load(built.library_key, nx, ng)
             self._built[key] = built

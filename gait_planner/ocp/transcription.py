@@ -76,7 +76,7 @@ class Transcription(PathRows, HeldRows, CostTerms):
     q_{N-1}, q_N = qref_{N-1}, qref_N join the gait); node 0 has a dynamics row of its own,
     `_start_row`, and contact multipliers; the last interval has a sigma of its own, held
     at the gait's by the row end_scaling, and node N's torques are the gait's (parameters,
-    with the gait's at N-2 and N-1 for the cost's `CostTerms._join_torques`); no pin_x and
+    with the gait's at the nodes before for the cost's `CostTerms._join_torques`); no pin_x and
     no speed row."""
 
     def __init__(self, mech: DiscreteMechanics, settings: GaitSettings):
@@ -126,13 +126,13 @@ class Transcription(PathRows, HeldRows, CostTerms):
         self.inverse_speed = ca.MX.sym("inverse_speed")
         self.start_momentum = ca.MX.sym("start_momentum", mb.k if self.transition else 0)
         self.end_scaling = ca.MX.sym("end_scaling", 1 if self.transition else 0)
-        self.end_torque = ca.MX.sym("end_torque", 3 * mb.nt if self.transition else 0)
+        self.end_torque = ca.MX.sym("end_torque", (N + 1) * mb.nt if self.transition else 0)
 
         q_free = mb.reparametrise.map(free)(self.U, self.Qref)
         tau = TORQUE_SCALE * self.T
         if self.transition:
             self.Q = q_free  # (k, N+1)
-            self.TAU = ca.horzcat(tau, self.end_torque[2 * mb.nt :])  # (nt, N+1)
+            self.TAU = ca.horzcat(tau, self.end_torque[N * mb.nt :])  # (nt, N+1)
         else:
             q_end = [self.layout.image(q_free[:, j], self.step, self.ground_p) for j in (0, 1)]
             self.Q = ca.horzcat(q_free, *q_end)  # (k, N+1)

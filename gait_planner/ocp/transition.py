@@ -29,8 +29,9 @@ import numpy as np
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.angles import angle_names, joint_angles
 from gait_planner.model.multibody import Multibody
-from gait_planner.model.scene import Scene
-from gait_planner.ocp.mirror import configuration_mirror, mirror_parts
+from gait_planner.model.scene import Phase, Scene
+from gait_planner.ocp.mirror import configuration_mirror, contact_partners, mirror_parts, torque_mirror
+from gait_planner.ocp.walk_on import walk_on
 from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.solution import end_rates
 from gait_planner.result import PlanResult
@@ -129,37 +130,85 @@ def stance_offset(scene: Scene, start: StartState, gait: PlanResult) -> float:
     return float(row @ start.q - row @ gait.q[0])
 
 
-def join_targets(gait: PlanResult, offset: float) -> np.ndarray:
-    """(2, k): the gait's nodes 0 and 1 one half cycle on (the mirror image a step
-    further, `ocp.mirror.configuration_mirror`), moved `offset` m along x: the
-    transition's nodes N-1 and N."""
+def join_targets(gait: PlanResult, offset: float, halves: int = 1) -> np.ndarray:
+    """(2, k): the gait's nodes 0 and 1 `halves` half cycles on (mirrored that many
+    times, a step further each, `ocp.mirror.configuration_mirror`), moved `offset` m along
+    x: the transition's nodes N-1 and N."""
     mb = Multibody(gait.scene)
     A, shift, lift = configuration_mirror(mb, gait.ground)
-    along = mirror_parts(mb)[1]
-    return gait.q[0:2] @ A.T + gait.step_length * shift + lift + offset * along
+    q = gait.q[0:2]
+    for _ in range(halves):
+        q = q @ A.T + gait.step_length * shift + lift
+    return q + offset * mirror_parts(mb)[1]
 
 
-def transition_settings(gait_settings: GaitSettings, gait: PlanResult,
-                        start: StartState) -> GaitSettings:
-    """The settings of the transition from `start` onto `gait` (planned with
-    `gait_settings`): the gait's grid (its intervals, refined or not), no refinement, no
-    speed row, the start's momentum, the gait's first interval's scaling and its torques
-    at nodes N-2, N-1 and N (N-1 and N: nodes 0 and 1 mirrored)."""
-    intervals = tuple(int(i) for i in gait.settings["intervals_per_phase"].split(","))
+def transition_scene(scene: Scene, halves: int) -> Scene:
+    """`scene` with a gait of `halves` half cycles of its own: copy j (j = 0 ..
+    halves-1) of its phases holds the contacts mirrored j times (the partner points for
+    odd j), is named "<phase>~<j+1>" from the second copy on and scales with its own
+    sigmas (the scene's indices + j n_sigma). The scene itself for one half cycle."""
+    if halves == 1:
+        return scene
+    partner, n = contact_partners(scene), scene.gait.n_scalings
+    phases = tuple(
+        Phase(p.name if j == 0 else f"{p.name}~{j + 1}",
+              tuple(partner[c] for c in p.contacts) if j % 2 else p.contacts,
+              p.scaling + j * n, p.intervals)
+        for j in range(halves) for p in scene.gait.phases)
+    return dataclasses.replace(scene, gait=dataclasses.replace(scene.gait, phases=phases))
+
+
+def phase_name(name: str) -> str:
+    """The scene's phase of a phase of `transition_scene`."""
+    return name.split("~")[0]
+
+
+def transition_settings(gait_settings: GaitSettings, gait: PlanResult, start: StartState,
+                        halves: int = 1) -> GaitSettings:
+    """The settings of the transition of `halves` half cycles (`transition_scene`) from
+    `start` onto `gait` (planned with `gait_settings`): the gait's grid (its intervals,
+    refined or not) repeated, each copy but the last one interval short in its last phase
+    (that interval is the next copy's first), the phases' joint ranges mirrored with their
+    copies (`ocp.mirror.torque_mirror`: a roll or yaw range changes sign), no refinement,
+    no speed row, the start's momentum, the gait's first interval's scaling and its
+    torques walked as far, nodes 0..N (`walk_on`; node N's is the transition's)."""
+    one = [int(i) for i in gait.settings["intervals_per_phase"].split(",")]
+    intervals = []
+    for j in range(halves):
+        intervals += one[:-1] + [one[-1] - (j < halves - 1)]
+    limits = tuple(gait_settings.phase_joint_limits)
+    if halves > 1:
+        B = torque_mirror(Multibody(gait.scene))
+        names = angle_names(gait.scene)
+        partner = {names[i]: (names[int(np.argmax(np.abs(B[:, i])))],
+                              float(B[np.argmax(np.abs(B[:, i])), i])) for i in range(len(names))}
+
+        def mirrored(ranges):
+            return tuple((partner[a][0], lo, hi) if partner[a][1] > 0 else
+                         (partner[a][0], -hi, -lo) for a, lo, hi in ranges)
+
+        limits += tuple((f"{phase}~{j + 1}", mirrored(ranges) if j % 2 else ranges)
+                        for j in range(1, halves) for phase, ranges in limits)
+    N = sum(intervals)
+    walked = walk_on(gait, halves + 1)
     first = float(np.diff(gait.times)[0] / gait_settings.base_time_step)
-    return dataclasses.replace(gait_settings, intervals=intervals, refinements=0, speed=0.0,
-                               step_length=gait.step_length,
+    return dataclasses.replace(gait_settings, intervals=tuple(intervals), refinements=0,
+                               speed=0.0, step_length=gait.step_length,
+                               phase_joint_limits=limits,
                                start_momentum=tuple(float(v) for v in start.momentum),
                                end_scaling=first,
-                               end_torque=tuple(float(v) for v in gait.tau[-3:].ravel()))
+                               end_torque=tuple(float(v) for v in
+                                                walked.tau[: N + 1].ravel()))
 
 
-def join(transition: PlanResult, walked: PlanResult, offset: float) -> PlanResult:
-    """The transition (nodes 0..N) followed by `walked`, the gait joined to K + 1 half
-    cycles (`ocp.walk_on`), from its half cycle 1 on, moved `offset` m along x: one
-    motion whose node N-1 is the transition's (its forces span both neighbouring
-    intervals) and whose later nodes are the gait's. J and the duration are the
-    transition's; settings["transition_nodes"] says where the gait begins."""
+def join(transition: PlanResult, walked: PlanResult, offset: float, halves: int = 1
+         ) -> PlanResult:
+    """The transition (nodes 0..N, `halves` half cycles) followed by `walked`, the gait
+    joined to halves + K half cycles (`ocp.walk_on`), from its node N on, moved `offset` m
+    along x: one motion whose node N-1 is the transition's (its forces span both
+    neighbouring intervals) and whose later nodes are the gait's K half cycles, of the
+    gait's scene and phase names. J and the duration are the transition's;
+    settings["transition_nodes"] says where the gait begins."""
     N = transition.n_nodes - 1
     along = mirror_parts(Multibody(transition.scene))[1]
     t0 = transition.times[N - 1] - walked.times[N - 1]
@@ -176,7 +225,8 @@ def join(transition: PlanResult, walked: PlanResult, offset: float) -> PlanResul
         transition, times=times, q=q, tau=stack(transition.tau, walked.tau),
         joint_angles=joint_angles(transition.scene, q), joint_velocities=velocities,
         joint_accelerations=accelerations,
-        phases=transition.phases[:N] + walked.phases[N:],
+        scene=walked.scene,
+        phases=tuple(phase_name(p) for p in transition.phases[:N]) + walked.phases[N:],
         active_contacts=transition.active_contacts[:N] + walked.active_contacts[N:],
         contact_forces=forces, roll_moments=rolls,
         generalized_force=stack(transition.generalized_force, walked.generalized_force),
@@ -184,5 +234,7 @@ def join(transition: PlanResult, walked: PlanResult, offset: float) -> PlanResul
         potential_energy=np.concatenate([transition.potential_energy[:N],
                                          walked.potential_energy[N:]]),
         settings=dict(transition.settings, transition_nodes=str(N),
-                      steps=str(int(walked.settings.get("steps", "1")) - 1),
-                      half_cycle_nodes=str(N + 1)))
+                      transition_half_cycles=str(halves),
+                      steps=str(int(walked.settings.get("steps", "1")) - halves),
+                      half_cycle_nodes=walked.settings.get("half_cycle_nodes",
+                                                           str(walked.n_nodes))))

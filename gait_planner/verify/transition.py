@@ -5,13 +5,14 @@ joined by the mirror.
 
 Node N-1 joins the two: it carries the transition's efforts and contact forces (its
 discrete equation spans the transition's last interval and the gait's first), so the
-gait's first half cycle after it is not the gait's own at that node. The gait's second half
-cycle on (nodes 2 (N-1) to the end, when steps >= 2) is the gait itself, mirrored twice
-and two steps on, and gets every check of a (joined) plan, its periodic continuation
-included. The physical checks and the continuous-dynamics certificate run on the whole
-motion, the transition's nodes included; with steps = 1 they are all that is judged (the
-numbers of the periodic checks are then those of the gait's part from node N-1, and the
-report's notes say so).
+gait's half cycle after it is not the gait's own at that node. The first later half cycle
+in the gait's own orientation (``transition_half_cycles`` K: walk_on's half cycle K + 1
+or K + 2, whichever is even) is the gait itself, mirrored an even number of times and
+steps on, and gets every check of a (joined) plan, its periodic continuation included,
+against the gait's J and duration (metadata ``gait_cost_value``, ``gait_duration``). The
+physical checks and the continuous-dynamics certificate run on the whole motion, the
+transition's nodes included; without such a half cycle (too few steps) they are all that
+is judged, and the report's notes say so.
 """
 
 from __future__ import annotations
@@ -53,26 +54,31 @@ def verify_transition(rec, verify_plan):
     """Check a recording that begins with a transition (module docstring); `verify_plan`
     checks the gait's part."""
     N, steps = int(rec.metadata["transition_nodes"]), int(rec.metadata["steps"])
-    first = 2 * (N - 1) if steps >= 2 else N - 1
+    H, K = int(rec.metadata["half_cycle_nodes"]), int(rec.metadata["transition_half_cycles"])
+    # the gait's first half cycle after the join whose contacts are the gait's own (not
+    # mirrored: an even index of `ocp.walk_on`), if the recording has one
+    own = K + 1 + (K + 1) % 2
+    judged = own < K + steps
+    first = N - 1 + (own - K) * (H - 2) if judged else N - 1
     tail = from_node(rec, first)
     # a join node is recorded with the earlier half cycle's phase name (`ocp.walk_on`); as
     # the first node of the gait's part it is in the gait's first phase, as its node 1
     tail = dataclasses.replace(tail, phases=(tail.phases[1],) + tuple(tail.phases[1:]))
     # the gait's part is judged against the gait's J (the transition's is the metadata's)
     gait = verify_plan(dataclasses.replace(tail, metadata=dict(
-        tail.metadata, steps=str(max(steps - 1, 1)),
-        cost_value=rec.metadata.get("gait_cost_value", rec.metadata["cost_value"]))))
+        tail.metadata, steps=str(max(K + steps - own, 1)),
+        cost_value=rec.metadata["gait_cost_value"], duration=rec.metadata["gait_duration"])))
     scene = parse_scene(rec.scene_text)
     physical = check_physical(rec, scene, float(rec.metadata["friction_coefficient"]))
     continuous = certificate_of_recording(rec)
-    failures = [f for f in gait.failures if steps >= 2 and f not in gait.physical.failures
+    failures = [f for f in gait.failures if judged and f not in gait.physical.failures
                 and not f.startswith("continuous dynamics:")]
     failures += list(physical.failures)
     failures += [f"continuous dynamics: {f}" for f in continuous.failures]
     notes = list(gait.notes) + [
         f"{rec.metadata.get('initial_guess', 'a transition')} ({N} nodes) onto the gait: " + (f"every check of a plan ran on the gait from node {first}, "
-                               if steps >= 2 else "the gait's periodic checks need steps >= 2 "
-                               "(not judged); ")
+                               if judged else "the gait's periodic checks need a half cycle "
+                               "of the gait's own orientation after the join (not judged); ")
         + f"the physical and continuous checks on all {rec.n_nodes} nodes"]
     return dataclasses.replace(gait, path=str(rec.path), n_nodes=rec.n_nodes,
                                failures=tuple(failures), notes=tuple(notes),
