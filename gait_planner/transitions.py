@@ -76,12 +76,14 @@ def last_transition(tr: Transcription, last: StoredPlan, start: StartState, offs
 
 def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
                     start: StartState, *, steps: int = 1, warm_start: bool = True,
-                    halves: int = HALVES) -> PlanResult:
+                    halves: int = HALVES, from_last: bool = True) -> PlanResult:
     """The transition of `halves` half cycles (1 to MAX_HALVES) from `start` onto the gait
     of (scene, settings), followed by `steps` of the gait's half cycles, certified (module
-    docstring). `ocp.transition.StartError` if the start cannot be planned from; a failed
-    plan (of the gait or the transition) has success False and says which in its
-    message."""
+    docstring). warm_start: the gait from the planner's store (`strategies.
+    plan_certified`); from_last: the transition from the planner's last transition of this
+    shape if it has one (`last_transition`), else from the gait. `ocp.transition.
+    StartError` if the start cannot be planned from; a failed plan (of the gait or the
+    transition) has success False and says which in its message."""
     if not 1 <= halves <= MAX_HALVES:
         raise StartError(f"a transition takes 1 to {MAX_HALVES} half cycles, got {halves}")
     from gait_planner.verify.certify import certificate_metadata, certified
@@ -99,7 +101,7 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     except (ValueError, RuntimeError) as err:
         return failed_result(scene, tr_settings, f"could not build the transition: {err}")
     first = transition_start(tr, gait, start, offset, tr_settings.end_scaling, halves)
-    kept = planner.stored_plans(tr_scene, tr_settings) if warm_start else []
+    kept = planner.stored_plans(tr_scene, tr_settings) if from_last else []
     begin = last_transition(tr, kept[-1], start, offset, gait, halves) if kept else first
     clock = Clock.begin(settings.solve.max_solve_time)
     reached = planner.attempt(tr_scene, tr_settings, WARM_ATTEMPTS[0], begin, clock)
