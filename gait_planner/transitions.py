@@ -26,8 +26,8 @@ from gait_planner.ocp.solve import Clock, Planner, Start
 from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.ocp.transcription import TORQUE_SCALE, Transcription
 from gait_planner.ocp.transition import (StartError, StartState, check_start, join,
-                                         join_targets, stance_offset, transition_scene,
-                                         transition_settings)
+                                         join_targets, mirrored_result, mirrored_start,
+                                         stance_offset, transition_scene, transition_settings)
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.result import PlanResult
 from gait_planner.strategies import COLD_ATTEMPTS, WARM_ATTEMPTS, plan_certified
@@ -79,7 +79,9 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
                     halves: int = HALVES, from_last: bool = True) -> PlanResult:
     """The transition of `halves` half cycles (1 to MAX_HALVES) from `start` onto the gait
     of (scene, settings), followed by `steps` of the gait's half cycles, certified (module
-    docstring). warm_start: the gait from the planner's store (`strategies.
+    docstring). A start the first phase cannot hold but its mirror image can (on the
+    other foot: every other strike of a walk) is planned mirrored and the answer mirrored
+    back (`mirrored_start`, `mirrored_result`). warm_start: the gait from the planner's store (`strategies.
     plan_certified`); from_last: the transition from the planner's last transition of this
     shape if it has one (`last_transition`), else from the gait. `ocp.transition.
     StartError` if the start cannot be planned from; a failed plan (of the gait or the
@@ -88,7 +90,15 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
         raise StartError(f"a transition takes 1 to {MAX_HALVES} half cycles, got {halves}")
     from gait_planner.verify.certify import certificate_metadata, certified
 
-    check_start(scene, settings, start)
+    try:
+        check_start(scene, settings, start)
+        mirrored = False
+    except StartError as err:  # on the other foot? planned as its mirror image
+        start, mirrored = mirrored_start(scene, start), True
+        try:
+            check_start(scene, settings, start)
+        except StartError:
+            raise err from None
     gait, _ = plan_certified(planner, scene, settings, warm_start=warm_start)
     if not gait.success:
         return dataclasses.replace(gait, message=f"the gait to join: {gait.message}")
@@ -116,7 +126,8 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     result = planner.result(tr_scene, tr_settings, reached, clock, origin)
     if not result.success:
         return dataclasses.replace(result, scene=scene)
-    joined, cert = certified(join(result, walk_on(gait, halves + steps), offset, halves))
+    joined = join(result, walk_on(gait, halves + steps), offset, halves)
+    joined, cert = certified(mirrored_result(joined) if mirrored else joined)
     return dataclasses.replace(joined, settings={
         **joined.settings, **certificate_metadata(cert),
         "gait_cost_value": repr(gait.cost_value), "gait_duration": repr(gait.duration)})

@@ -121,6 +121,36 @@ def check_start(scene: Scene, settings: GaitSettings, start: StartState) -> None
                              f"(at most {CONTACT_TOLERANCE * 1e3:g} mm)")
 
 
+def mirrored_start(scene: Scene, start: StartState) -> StartState:
+    """The mirror image of `start` about y = 0 (`ocp.mirror.configuration_mirror`'s A,
+    no step): q' = A q, p' = A p (a signed permutation; partner bodies have equal masses
+    and inertias, so M A = A M): a start on the other foot as one on the first phase's."""
+    A = configuration_mirror(Multibody(scene))[0]
+    return StartState(A @ start.q, A @ start.momentum, f"{start.origin}, mirrored")
+
+
+def mirrored_result(result: PlanResult) -> PlanResult:
+    """`result` mirrored about y = 0, every node: configurations, torques (partner
+    joints), discrete forces, contact forces (partner points, y negated), roll moments
+    (partner bodies, negated) and held contacts (partner points); phase names kept, as
+    `ocp.walk_on` keeps them."""
+    scene = result.scene
+    mb = Multibody(scene)
+    A, B = configuration_mirror(mb)[0], torque_mirror(mb)
+    partner, mirror = contact_partners(scene), dict(scene.gait.mirror)
+    S = np.array([1.0, -1.0, 1.0])
+    q = result.q @ A.T
+    velocities, accelerations = end_rates(scene, q, result.times)
+    return dataclasses.replace(
+        result, q=q, tau=result.tau @ B.T, joint_angles=joint_angles(scene, q),
+        joint_velocities=velocities, joint_accelerations=accelerations,
+        generalized_force=result.generalized_force @ A.T,
+        contact_forces={partner[c]: f * S for c, f in result.contact_forces.items()},
+        roll_moments={mirror.get(b, b): -r for b, r in result.roll_moments.items()},
+        active_contacts=tuple(tuple(partner[c] for c in a) for a in result.active_contacts),
+        settings=dict(result.settings, transition_mirrored="true"))
+
+
 def stance_offset(scene: Scene, start: StartState, gait: PlanResult) -> float:
     """How far (m) along x the start's first held contact point is from the gait's at its
     node 0: the gait is joined that much further on."""

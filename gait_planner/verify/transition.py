@@ -56,8 +56,10 @@ def verify_transition(rec, verify_plan):
     N, steps = int(rec.metadata["transition_nodes"]), int(rec.metadata["steps"])
     H, K = int(rec.metadata["half_cycle_nodes"]), int(rec.metadata["transition_half_cycles"])
     # the gait's first half cycle after the join whose contacts are the gait's own (not
-    # mirrored: an even index of `ocp.walk_on`), if the recording has one
-    own = K + 1 + (K + 1) % 2
+    # mirrored: an even index of `ocp.walk_on`; odd if the whole motion is mirrored, a start
+    # on the other foot), if the recording has one
+    parity = 1 if rec.metadata.get("transition_mirrored") == "true" else 0
+    own = K + 1 + (K + 1 + parity) % 2
     judged = own < K + steps
     first = N - 1 + (own - K) * (H - 2) if judged else N - 1
     tail = from_node(rec, first)

@@ -16,7 +16,8 @@ from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.transition import StartError, StartState, check_start, start_of_plan
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.strategies import plan_certified
-from gait_planner.transitions import plan_transition
+from gait_planner.io.mcap_writer import write_plan_mcap
+from gait_planner.transitions import plan_transition, start_of_recording
 from gait_planner.verify import verify_result
 
 
@@ -117,6 +118,25 @@ def test_a_start_one_half_cycle_cannot_mend_takes_two():
     assert result.success, result.message
     assert result.settings["transition_half_cycles"] == "2"
     assert result.cost_value < 2.02 * plan.cost_value
+    report = verify_result(result)
+    assert report.ok, report.summary()
+
+
+def test_a_start_on_the_other_foot_is_planned_as_its_mirror_image(gait, tmp_path):
+    """The state a walk's recording has where its second half cycle begins (the other
+    foot flat): planned mirrored and mirrored back, the answer begins at that state and
+    is the gait walked on (J the gait's), and passes every check."""
+    scene, settings, planner, plan = gait
+    walked = walk_on(plan, 3)
+    path = write_plan_mcap(walked, tmp_path / "walked.mcap")
+    N = plan.n_nodes - 1
+    start = start_of_recording(scene, str(path), float(walked.times[N - 1]) + 1e-9)
+    result = plan_transition(planner, scene, settings, start, steps=2, halves=1)
+    assert result.success, result.message
+    assert result.settings["transition_mirrored"] == "true"
+    assert np.abs(result.q[0] - walked.q[N - 1]).max() < 1e-12
+    assert result.active_contacts[0] == walked.active_contacts[N - 1]
+    assert result.cost_value == pytest.approx(plan.cost_value, rel=1e-5)
     report = verify_result(result)
     assert report.ok, report.summary()
 
