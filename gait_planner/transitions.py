@@ -81,11 +81,11 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     of (scene, settings), followed by `steps` of the gait's half cycles, certified (module
     docstring). A start the first phase cannot hold but its mirror image can (on the
     other foot: every other strike of a walk) is planned mirrored and the answer mirrored
-    back (`mirrored_start`, `mirrored_result`). warm_start: the gait from the planner's store (`strategies.
-    plan_certified`); from_last: the transition from the planner's last transition of this
-    shape if it has one (`last_transition`), else from the gait. `ocp.transition.
-    StartError` if the start cannot be planned from; a failed plan (of the gait or the
-    transition) has success False and says which in its message."""
+    back (`mirrored_start`, `mirrored_result`). warm_start: the gait from the planner's
+    store (`strategies.plan_certified`); from_last: the transition from the planner's last
+    transition of this shape if it has one (`last_transition`), else from the gait.
+    `ocp.transition.StartError` if the start cannot be planned from; a failed plan (of the
+    gait or the transition) has success False and says which in its message."""
     if not 1 <= halves <= MAX_HALVES:
         raise StartError(f"a transition takes 1 to {MAX_HALVES} half cycles, got {halves}")
     from gait_planner.verify.certify import certificate_metadata, certified

@@ -197,7 +197,8 @@ def build_result(tr: Transcription, settings: GaitSettings, x: np.ndarray, p: np
         potential_energy=q @ mech.gravity_gradient, phase_scaling=x[-int(tr.S.shape[0]):].copy(),
         duration=float(times[N - 1] - times[0]), stats=stats, ground=ground,
         settings={
-            "periodicity": ("none: node 0 given, nodes N-1, N the gait's (ocp.transition)"
+            "periodicity": ("none: the first node given, the last two the gait's "
+                            "(ocp.transition)"
                             if tr.transition else
                             "nodes N-1, N mirror nodes 0, 1 (paper eqs. 7-9)"),
             "initial_guess": origin,

@@ -30,7 +30,8 @@ from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.angles import angle_names, joint_angles
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Phase, Scene
-from gait_planner.ocp.mirror import configuration_mirror, contact_partners, mirror_parts, torque_mirror
+from gait_planner.ocp.mirror import (configuration_mirror, contact_partners, mirror_parts,
+                                     torque_mirror)
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.solution import end_rates
@@ -188,11 +189,6 @@ def transition_scene(scene: Scene, halves: int) -> Scene:
     return dataclasses.replace(scene, gait=dataclasses.replace(scene.gait, phases=phases))
 
 
-def phase_name(name: str) -> str:
-    """The scene's phase of a phase of `transition_scene`."""
-    return name.split("~")[0]
-
-
 def transition_settings(gait_settings: GaitSettings, gait: PlanResult, start: StartState,
                         halves: int = 1) -> GaitSettings:
     """The settings of the transition of `halves` half cycles (`transition_scene`) from
@@ -237,7 +233,8 @@ def join(transition: PlanResult, walked: PlanResult, offset: float, halves: int 
     joined to halves + K half cycles (`ocp.walk_on`), from its node N on, moved `offset` m
     along x: one motion whose node N-1 is the transition's (its forces span both
     neighbouring intervals) and whose later nodes are the gait's K half cycles, of the
-    gait's scene and phase names. J and the duration are the transition's;
+    gait's scene; the transition's phases keep their copies' names ("<phase>~<j>",
+    `transition_scene`), the gait's are `walk_on`'s. J and the duration are the transition's;
     settings["transition_nodes"] says where the gait begins."""
     N = transition.n_nodes - 1
     along = mirror_parts(Multibody(transition.scene))[1]
@@ -256,7 +253,7 @@ def join(transition: PlanResult, walked: PlanResult, offset: float, halves: int 
         joint_angles=joint_angles(transition.scene, q), joint_velocities=velocities,
         joint_accelerations=accelerations,
         scene=walked.scene,
-        phases=tuple(phase_name(p) for p in transition.phases[:N]) + walked.phases[N:],
+        phases=transition.phases[:N] + walked.phases[N:],
         active_contacts=transition.active_contacts[:N] + walked.active_contacts[N:],
         contact_forces=forces, roll_moments=rolls,
         generalized_force=stack(transition.generalized_force, walked.generalized_force),

@@ -285,45 +285,48 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
                  f"generalized_force at node {mismatch_at[1]}: off by {mismatch:.3e} "
                  f"(relative; limit {L['actuation']:.0e})")
 
-    # ---- periodicity
-    if "N-1" not in meta.get("periodicity", "N-1"):
-        notes.append(f"the recording declares periodicity {meta['periodicity']!r}; these "
-                     f"checks pair nodes N-1, N with 0, 1 (paper eqs. 7-9)")
+    # ---- periodicity (a transition's recording declares none: `verify.transition`)
+    periodic = "N-1" in meta.get("periodicity", "N-1")
+    if not periodic:
+        notes.append(f"the recording declares periodicity {meta['periodicity']!r}; the checks "
+                     f"that pair nodes N-1, N with 0, 1 (paper eqs. 7-9) are not run")
     step = _metadata_float(meta, "step_length")
     rise = ground.rise(step)
-    if ground.stairs and not abs(ground.tread - step) <= L["time"] * step:
-        fail(f"the stairs' tread depth {ground.tread!r} m (metadata stair_tread) differs from "
-             f"the step length {step!r} m: the mirror images would not land a tread further "
-             f"on each half cycle")
-    period = max(float(np.abs(q[N - 1] - mech.mirror(q[0], step, rise)).max()),
-                 float(np.abs(q[N] - mech.mirror(q[1], step, rise)).max()))
-    if not period <= L["periodicity"]:
-        fail(f"nodes N-1, N are not the mirror images of nodes 0, 1 shifted by the step "
-             f"length {step:g} m and the rise {rise:g} m ({ground.describe()}): off by "
-             f"{period:.3e} m (limit {L['periodicity']:.0e} m)")
-    partner = {c: next(d for d, (bd, pd) in scene.contacts.items()
-                       if bd == scene.mirror[bc] and pd == pc)
-               for c, (bc, pc) in scene.contacts.items()}
-    force_scale = max([1.0] + [_norm(F) for fs in forces for F in fs.values()])
-    periodic_force = 0.0
-    for src, dst in ((N - 1, 0), (1, N)):
-        expected = {partner[c]: MIRROR * F for c, F in forces[src].items()}
-        if set(expected) != set(forces[dst]):
-            fail(f"node {dst} lists contacts {sorted(forces[dst])}, the mirror image of node "
-                 f"{src} {sorted(expected)}")
-            continue
-        for c, F in expected.items():
-            periodic_force = max(periodic_force, _norm(forces[dst][c] - F) / force_scale)
-    if periodic_force > L["periodic_force"]:
-        fail(f"the contact forces of nodes 0, N are not the mirror images of those of nodes "
-             f"N-1, 1: off by {periodic_force:.3e} (relative; limit {L['periodic_force']:.0e})")
-    periodic_torque = 0.0
-    if torques is not None:
-        periodic_torque = periodic_torque_error(scene, couples_e, N)
-        if periodic_torque > L["actuation"]:
-            fail(f"the joint couples of nodes N-1, N are not the mirror images of those of "
-                 f"nodes 0, 1: off by {periodic_torque:.3e} (relative; limit "
-                 f"{L['actuation']:.0e})")
+    period = periodic_force = periodic_torque = math.nan
+    if periodic:
+        if ground.stairs and not abs(ground.tread - step) <= L["time"] * step:
+            fail(f"the stairs' tread depth {ground.tread!r} m (metadata stair_tread) differs from "
+                 f"the step length {step!r} m: the mirror images would not land a tread further "
+                 f"on each half cycle")
+        period = max(float(np.abs(q[N - 1] - mech.mirror(q[0], step, rise)).max()),
+                     float(np.abs(q[N] - mech.mirror(q[1], step, rise)).max()))
+        if not period <= L["periodicity"]:
+            fail(f"nodes N-1, N are not the mirror images of nodes 0, 1 shifted by the step "
+                 f"length {step:g} m and the rise {rise:g} m ({ground.describe()}): off by "
+                 f"{period:.3e} m (limit {L['periodicity']:.0e} m)")
+        partner = {c: next(d for d, (bd, pd) in scene.contacts.items()
+                           if bd == scene.mirror[bc] and pd == pc)
+                   for c, (bc, pc) in scene.contacts.items()}
+        force_scale = max([1.0] + [_norm(F) for fs in forces for F in fs.values()])
+        periodic_force = 0.0
+        for src, dst in ((N - 1, 0), (1, N)):
+            expected = {partner[c]: MIRROR * F for c, F in forces[src].items()}
+            if set(expected) != set(forces[dst]):
+                fail(f"node {dst} lists contacts {sorted(forces[dst])}, the mirror image of node "
+                     f"{src} {sorted(expected)}")
+                continue
+            for c, F in expected.items():
+                periodic_force = max(periodic_force, _norm(forces[dst][c] - F) / force_scale)
+        if periodic_force > L["periodic_force"]:
+            fail(f"the contact forces of nodes 0, N are not the mirror images of those of nodes "
+                 f"N-1, 1: off by {periodic_force:.3e} (relative; limit {L['periodic_force']:.0e})")
+        periodic_torque = 0.0
+        if torques is not None:
+            periodic_torque = periodic_torque_error(scene, couples_e, N)
+            if periodic_torque > L["actuation"]:
+                fail(f"the joint couples of nodes N-1, N are not the mirror images of those of "
+                     f"nodes 0, 1: off by {periodic_torque:.3e} (relative; limit "
+                     f"{L['actuation']:.0e})")
 
     # ---- time, cost, energy
     duration = float(times[N - 1] - times[0])
@@ -399,7 +402,12 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
 
 def _interval_error(scene: SceneData, rec: RecordedPlan, meta: dict, h: np.ndarray,
                     fail, excesses: list) -> float:
-    """Interval lengths vs base_time_step * sigma of their phase; sigma within bounds."""
+    """Interval lengths vs base_time_step * sigma of their phase; sigma within bounds. A
+    transition's phases (metadata ``transition_half_cycles``, `ocp.transition.
+    transition_scene`) are "<phase>~<j>" from its second half cycle on: copy j's sigma is
+    the scene's index + (j-1) n_sigma, its contacts mirrored for even j (all flipped once
+    more in a motion mirrored, ``transition_mirrored``), and its last interval has a sigma
+    of its own, the last."""
     try:
         sigma = [float(s) for s in meta["phase_scaling"].split(",") if s.strip()]
     except (KeyError, ValueError):
@@ -420,12 +428,24 @@ def _interval_error(scene: SceneData, rec: RecordedPlan, meta: dict, h: np.ndarr
     if math.isnan(base):
         return math.nan
     error = 0.0
+    transition = "transition_half_cycles" in meta
+    n_sigma = 1 + max((i for i, _ in scene.phases.values()), default=0)
+    flipped = meta.get("transition_mirrored") == "true"
+    partner = {c: next(d for d, (bd, pd) in scene.contacts.items()
+                       if bd == scene.mirror[bc] and pd == pc)
+               for c, (bc, pc) in scene.contacts.items()}
     for n, hn in enumerate(h):
-        phase = rec.phases[n]
-        if phase not in scene.phases:
-            fail(f"node {n} is in phase {phase!r}, which the scene does not declare")
+        phase, _, copy = rec.phases[n].partition("~")
+        if phase not in scene.phases or (copy and not (transition and copy.isdigit())):
+            fail(f"node {n} is in phase {rec.phases[n]!r}, which the scene does not declare")
             return math.nan
         index, contacts = scene.phases[phase]
+        j = int(copy) if copy else 1
+        index += (j - 1) * n_sigma
+        if transition and n == len(h) - 1:  # the transition's last interval: its own sigma
+            index = len(sigma) - 1
+        if transition and (j - 1 + flipped) % 2:
+            contacts = tuple(partner[c] for c in contacts)
         if index >= len(sigma):
             fail(f"phase {phase!r} uses sigma_{index + 1}, the metadata gives {len(sigma)}")
             return math.nan
