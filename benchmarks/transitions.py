@@ -109,9 +109,12 @@ def main() -> None:
             chosen = [r for r in rows if r["halves"] == halves and r["from"] == origin
                       and r["success"]]
             if chosen:
-                print(f"K={halves} from {origin}: median {statistics.median(r['iterations'] for r in chosen):.0f} "
-                      f"iterations, solve {statistics.median(r['solve_s'] for r in chosen):.3f} s, "
-                      f"answer {statistics.median(r['answer_s'] for r in chosen):.2f} s "
+                def median(key):
+                    return statistics.median(r[key] for r in chosen)
+
+                print(f"K={halves} from {origin}: median {median('iterations'):.0f} "
+                      f"iterations, solve {median('solve_s'):.3f} s, "
+                      f"answer {median('answer_s'):.2f} s "
                       f"({len(chosen)} converged)")
     if args.json:
         from results_io import write_results

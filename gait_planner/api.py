@@ -42,7 +42,7 @@ _planner: Planner | None = None
 
 def plan(request: PlanRequest | str, planner: Planner | None = None,
          scenes: SceneLookup = load_scene, start: StartState | None = None,
-         halves: int = HALVES) -> PlanResult:
+         halves: int = HALVES, stop: bool = False) -> PlanResult:
     """The plan of `request` (a `PlanRequest`, or a scene's name for its default request
     with compiled derivatives),
     certified against the continuous dynamics, refined while the certificate asks and
@@ -53,13 +53,16 @@ def plan(request: PlanRequest | str, planner: Planner | None = None,
     start: a state to begin at (`start_of_recording`, `ocp.transition.start_of_plan`,
     `start_of_velocity`): the answer is the transition of `halves` half cycles (1 to 4)
     from it onto the request's gait, then request.steps of the gait's half cycles
-    (`StartError` if the first phase's contacts cannot hold it)."""
+    (`StartError` if the first phase's contacts cannot hold it); stop: instead of joining
+    the gait, end standing at rest, both feet flat (from `start`, or the gait's first
+    node)."""
     global _planner
     if planner is None:
         _planner = planner = _planner or Planner(library=WarmStartStore())
     if isinstance(request, str):
         request = PlanRequest(request, compiled=True)
-    return plan_problem(planner, resolve(request, scenes), start=start, halves=halves)
+    return plan_problem(planner, resolve(request, scenes), start=start, halves=halves,
+                        stop=stop)
 
 
 def check(result: PlanResult):

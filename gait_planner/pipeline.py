@@ -72,16 +72,18 @@ def prepare(planner: Planner, problem: Problem, rrd: bool = True) -> str:
 
 
 def plan_problem(planner: Planner, problem: Problem, seed: StoredPlan | None = None,
-                 start: StartState | None = None, halves: int = HALVES) -> PlanResult:
+                 start: StartState | None = None, halves: int = HALVES,
+                 stop: bool = False) -> PlanResult:
     """The plan of `problem`, nothing written (`plan_joined` with its steps and start;
     seed: a gait library's start, `gaitlib.serve.library_start`); with `start`, the
     transition of `halves` half cycles from it onto the gait and then the gait's steps
     half cycles (`gait_planner.transitions.plan_transition`; `ocp.transition.StartError`
-    if it cannot start there)."""
-    if start is not None:
+    if it cannot start there); with `stop`, from `start` (or the gait's first node) to
+    standing at rest in `halves` half cycles."""
+    if start is not None or stop:
         return plan_transition(planner, problem.scene, problem.settings, start,
                                steps=problem.steps, warm_start=problem.warm_start,
-                               halves=halves)
+                               halves=halves, stop=stop)
     return plan_joined(planner, problem.scene, problem.settings, steps=problem.steps,
                        warm_start=problem.warm_start, seed=seed)
 
@@ -109,7 +111,7 @@ def plan_joined(planner: Planner, scene: Scene, settings: GaitSettings, *, steps
 def plan_and_record(planner: Planner, problem: Problem, output_dir: str | Path, *,
                     rrd: bool = True, stage: Callable[[str], None] | None = None,
                     seed: StoredPlan | None = None, start: StartState | None = None,
-                    halves: int = HALVES) -> Outcome:
+                    halves: int = HALVES, stop: bool = False) -> Outcome:
     """Plan `problem` (`plan_problem`, from `seed` or the state `start` if given); on
     success write
     <output_dir>/<stem>.mcap (and .rrd).
@@ -120,7 +122,7 @@ def plan_and_record(planner: Planner, problem: Problem, output_dir: str | Path, 
     stem = output_stem(request, problem.scene.name)
     folder = Path(output_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    result = plan_problem(planner, problem, seed, start, halves)
+    result = plan_problem(planner, problem, seed, start, halves, stop)
     if not result.success:
         return Outcome(result, None, None)
     if stage is not None:

@@ -27,7 +27,8 @@ from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.ocp.transcription import TORQUE_SCALE, Transcription
 from gait_planner.ocp.transition import (StartError, StartState, check_start, join,
                                          join_targets, mirrored_result, mirrored_start,
-                                         stance_offset, transition_scene, transition_settings)
+                                         stance_offset, start_of_plan, transition_scene,
+                                         transition_settings)
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.result import PlanResult
 from gait_planner.strategies import COLD_ATTEMPTS, WARM_ATTEMPTS, plan_certified
@@ -44,17 +45,24 @@ def transition_start(tr: Transcription, gait: PlanResult, start: StartState,
                      offset: float, end_scaling: float, halves: int = 1) -> Start:
     """The transition's first iterate: every node at its reference (u = 0), the references
     the start, the gait walked `halves` half cycles (`ocp.walk_on`) at the inner nodes
-    1..N-2 moved `offset` m along x, and the targets (`join_targets`); that walk's node
-    torques and the gait's phase scalings for each half cycle; the contact multipliers of
-    `ocp.guess.initial_multipliers`."""
+    1..N-2 moved `offset` m along x, and the targets (`join_targets`; a stop has none: its
+    nodes from where it stands on are the walk's node there); that walk's node torques and
+    the gait's phase scalings for each half cycle (a stop's STAND phase: the upper bound);
+    the contact multipliers of `ocp.guess.initial_multipliers`."""
     N = tr.N
     along = mirror_parts(tr.mb)[1]
     walked = walk_on(gait, halves + 1)
-    qref = np.vstack([start.q, walked.q[1 : N - 1] + offset * along,
-                      join_targets(gait, offset, halves)])
+    inner = walked.q[1 : N - 1] + offset * along
+    sigma = np.tile(gait.phase_scaling, halves)
+    if tr.layout.rest:
+        stand = N - tr.settings.intervals[-1]
+        inner[stand - 1 :] = inner[stand - 1]
+        qref = np.vstack([start.q, inner])
+        sigma = np.append(sigma, tr.settings.scaling_bounds[1])
+    else:
+        qref = np.vstack([start.q, inner, join_targets(gait, offset, halves)])
     x = np.concatenate([np.zeros(tr.U.numel()), walked.tau[:N].ravel() / TORQUE_SCALE,
-                        initial_multipliers(tr), np.tile(gait.phase_scaling, halves),
-                        [end_scaling]])
+                        initial_multipliers(tr), sigma, [end_scaling]])
     zeros_g = np.zeros(int(tr.g.shape[0]))
     return Start(x, np.zeros_like(x), zeros_g, qref, f"a transition from {start.origin}")
 
@@ -68,15 +76,16 @@ def last_transition(tr: Transcription, last: StoredPlan, start: StartState, offs
     along = mirror_parts(tr.mb)[1]
     shift = offset - stance_offset(tr.mb.scene, StartState(last.qref[0], start.momentum, ""),
                                    gait)
-    qref = np.vstack([start.q, last.qref[1 : N - 1] + shift * along,
-                      join_targets(gait, offset, halves)])
+    ends = [] if tr.layout.rest else [join_targets(gait, offset, halves)]
+    qref = np.vstack([start.q, last.qref[1 : N - 1] + shift * along, *ends])
     return Start(last.x, last.lam_x, last.lam_g, qref,
                  f"a transition from {start.origin}, re-planned from the last transition")
 
 
 def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
-                    start: StartState, *, steps: int = 1, warm_start: bool = True,
-                    halves: int = HALVES, from_last: bool = True) -> PlanResult:
+                    start: StartState | None, *, steps: int = 1, warm_start: bool = True,
+                    halves: int = HALVES, from_last: bool = True, stop: bool = False
+                    ) -> PlanResult:
     """The transition of `halves` half cycles (1 to MAX_HALVES) from `start` onto the gait
     of (scene, settings), followed by `steps` of the gait's half cycles, certified (module
     docstring). A start the first phase cannot hold but its mirror image can (on the
@@ -84,15 +93,21 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     back (`mirrored_start`, `mirrored_result`). warm_start: the gait from the planner's
     store (`strategies.plan_certified`); from_last: the transition from the planner's last
     transition of this shape if it has one (`last_transition`), else from the gait.
+    stop: the transition ends standing at rest, both feet flat (`ocp.transition.STAND`),
+    instead of joining the gait; steps are not walked then; without a start it begins at
+    the gait's first node.
     `ocp.transition.StartError` if the start cannot be planned from; a failed plan (of the
     gait or the transition) has success False and says which in its message."""
     if not 1 <= halves <= MAX_HALVES:
         raise StartError(f"a transition takes 1 to {MAX_HALVES} half cycles, got {halves}")
     from gait_planner.verify.certify import certificate_metadata, certified
 
+    if start is None and not stop:
+        raise StartError("a transition onto the gait needs a start state")
+    mirrored = False
     try:
-        check_start(scene, settings, start)
-        mirrored = False
+        if start is not None:
+            check_start(scene, settings, start)
     except StartError as err:  # on the other foot? planned as its mirror image
         start, mirrored = mirrored_start(scene, start), True
         try:
@@ -102,8 +117,9 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     gait, _ = plan_certified(planner, scene, settings, warm_start=warm_start)
     if not gait.success:
         return dataclasses.replace(gait, message=f"the gait to join: {gait.message}")
-    tr_settings = transition_settings(settings, gait, start, halves)
-    tr_scene = transition_scene(scene, halves)
+    start = start_of_plan(gait) if start is None else start
+    tr_settings = transition_settings(settings, gait, start, halves, stop)
+    tr_scene = transition_scene(scene, halves, stop)
     offset = stance_offset(scene, start, gait)
     planner.stage("building the transition")
     try:
@@ -114,19 +130,25 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     kept = planner.stored_plans(tr_scene, tr_settings) if from_last else []
     begin = last_transition(tr, kept[-1], start, offset, gait, halves) if kept else first
     clock = Clock.begin(settings.solve.max_solve_time)
-    reached = planner.attempt(tr_scene, tr_settings, WARM_ATTEMPTS[0], begin, clock)
+    # a stop's guess is not near its optimum (it stands where the gait walks on): cold
+    attempts = COLD_ATTEMPTS if stop and not kept else WARM_ATTEMPTS + COLD_ATTEMPTS
+    reached = planner.attempt(tr_scene, tr_settings, attempts[0], begin, clock)
     origin = begin.origin
-    for attempt in COLD_ATTEMPTS if not reached.success else ():
+    for attempt in attempts[1:] if not reached.success else ():
         if planner.stopped() or clock.expired():
             break
-        origin += f"; the warm attempt stopped ({reached.status}), then cold"
+        origin += f"; the {attempt[0][0]} attempt follows ({reached.status})"
         reached = planner.attempt(tr_scene, tr_settings, attempt, first, clock)
         if reached.success:
             break
     result = planner.result(tr_scene, tr_settings, reached, clock, origin)
     if not result.success:
         return dataclasses.replace(result, scene=scene)
-    joined = join(result, walk_on(gait, halves + steps), offset, halves)
+    if stop:
+        joined = dataclasses.replace(result, scene=scene, settings={
+            **result.settings, "transition_half_cycles": str(halves), "transition_stop": "true"})
+    else:
+        joined = join(result, walk_on(gait, halves + steps), offset, halves)
     joined, cert = certified(mirrored_result(joined) if mirrored else joined)
     return dataclasses.replace(joined, settings={
         **joined.settings, **certificate_metadata(cert),

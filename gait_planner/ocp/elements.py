@@ -53,19 +53,22 @@ class Layout:
     (`ocp.mirror.mirror_parts`), the torque and increment mirrors (`ocp.mirror`; M None
     where the increments have no mirror image); transition: the ends are given, not
     mirror images (`ocp.transition`): every node 0..N has unknowns of its own, the
-    contact multipliers are those of nodes 0..N-1, the torques those of nodes 0..N-1, and
+    contact multipliers are those of nodes 0..N-1, the torques those of nodes 0..N-1 (rest:
+    a transition that stops, nodes N-1 and N are node N-2, `source`), and
     p ends with the start's momentum (k,), the last interval's scaling and the gait's
     torques at nodes 0..N ((N + 1) nt,), `ocp.cost_terms`."""
 
     def __init__(self, mb: Multibody, N: int, lam_sizes: list[int], n_scalings: int,
                  scaling_of_interval: np.ndarray, A: np.ndarray, along: np.ndarray,
                  up: np.ndarray, B: np.ndarray, M: np.ndarray | None,
-                 transition: bool = False):
+                 transition: bool = False, rest: bool = False):
         self.mb, self.N, self.lam_sizes = mb, N, list(lam_sizes)
         self.scaling_of_interval = scaling_of_interval
         self.A, self.along, self.up, self.B, self.M = A, along, up, B, M
-        self.transition = transition
-        self.free = N + 1 if transition else N - 1  # nodes with unknowns of their own
+        self.transition, self.rest = transition, rest
+        # nodes with unknowns of their own; a transition that ends at rest: 0..N-2, nodes
+        # N-1 and N being node N-2
+        self.free = N + 1 if transition and not rest else N - 1
         self.first_lam_node = 0 if transition else 1
         self.n_u, self.n_tau = mb.ndof * self.free, mb.nt * (N if transition else N - 1)
         self.n_lam = int(sum(self.lam_sizes))
@@ -90,7 +93,9 @@ class Layout:
         """The free node (or interval) whose unknowns give node m (or interval m): itself, or
         for the mirror images N-1 and N (interval N-1) of a periodic half cycle, node 0 and
         1 (interval 0)."""
-        return m - (self.N - 1) if m >= self.N - 1 and not self.transition else m
+        if self.transition:
+            return min(m, self.N - 2) if self.rest else m
+        return m - (self.N - 1) if m >= self.N - 1 else m
 
     def u_index(self, node: int) -> np.ndarray:
         """Indices into (x, its images) of node `node`'s u: its own, or for N-1 and N the
@@ -119,11 +124,12 @@ class Layout:
         return np.concatenate([self.qref_index(node), [self.step_index], self.ground_index])
 
     def tau_index(self, node: int) -> np.ndarray:
-        """Indices into (x, its images) of node `node`'s torques (see `u_index`)."""
+        """Indices into (x, its images) of node `node`'s torques (see `u_index`; a
+        transition's nodes 0..N-1 have their own, at rest too)."""
         nt = self.mb.nt
         if node == self.N - 1 and self.imaged:
             return self.nx + 2 * self.mb.ndof + np.arange(nt)
-        return self.n_u + np.arange(nt) + self.source(node) * nt
+        return self.n_u + np.arange(nt) + (node if self.transition else self.source(node)) * nt
 
     def scaling_index(self, interval: int) -> int:
         return self.n_u + self.n_tau + self.n_lam + int(self.scaling_of_interval[interval])

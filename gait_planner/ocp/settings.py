@@ -128,7 +128,8 @@ class GaitSettings:
     start_momentum: empty for a periodic half cycle; else the problem is a transition
     (`gait_planner.ocp.transition`) whose node 0 is given with this discrete momentum
     (k,) N s, director coordinates; end_scaling, end_torque: a transition's last
-    interval's sigma and the gait's torques walked as far, nodes 0..N ((N+1) nt,) N m.
+    interval's sigma and the gait's torques walked as far, nodes 0..N ((N+1) nt,) N m;
+    end_at_rest: a transition that stops: its nodes N-1 and N are its node N-2 (at rest).
     solve: how the problem is solved, not what it is (`SolveOptions`).
     """
 
@@ -170,6 +171,7 @@ class GaitSettings:
     start_momentum: tuple[float, ...] = ()
     end_scaling: float = 0.0
     end_torque: tuple[float, ...] = ()
+    end_at_rest: bool = False
     solve: SolveOptions = SolveOptions()
 
     def with_solve(self, **changes) -> "GaitSettings":

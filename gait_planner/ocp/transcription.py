@@ -73,7 +73,8 @@ class Transcription(PathRows, HeldRows, CostTerms):
     With settings.start_momentum the NLP is a transition (`gait_planner.ocp.transition`):
     not periodic, but with given ends. Every node 0..N has unknowns of its own (u_0,
     u_{N-1} and u_N are fixed at zero by their bounds, so q_0 = qref_0 is the start and
-    q_{N-1}, q_N = qref_{N-1}, qref_N join the gait); node 0 has a dynamics row of its own,
+    q_{N-1}, q_N = qref_{N-1}, qref_N join the gait; with settings.end_at_rest, a stop,
+    they are node N-2's configuration: at rest); node 0 has a dynamics row of its own,
     `_start_row`, and contact multipliers; the last interval has a sigma of its own, held
     at the gait's by the row end_scaling, and node N's torques are the gait's (parameters,
     with the gait's at the nodes before for the cost's `CostTerms._join_torques`); no pin_x and
@@ -111,7 +112,8 @@ class Transcription(PathRows, HeldRows, CostTerms):
         scaling = np.array([phases[k].scaling for k in self.phase_of_interval])
         if self.transition:
             scaling[N - 1] = nsig - 1
-        free = N + 1 if self.transition else N - 1  # nodes with unknowns of their own
+        rest = self.transition and settings.end_at_rest  # nodes N-1, N: node N-2, at rest
+        free = N + 1 if self.transition and not rest else N - 1  # nodes with unknowns
         self.U = ca.MX.sym("u", mb.ndof, free)
         self.T = ca.MX.sym("tau", mb.nt, N if self.transition else N - 1)
         self.S = ca.MX.sym("sigma", nsig)
@@ -120,7 +122,7 @@ class Transcription(PathRows, HeldRows, CostTerms):
                           for n in self.lam_nodes]
         self.L = ca.MX.sym("lambda", int(sum(self.lam_sizes)))
         self.layout = Layout(mb, N, self.lam_sizes, nsig, scaling, self.A, along, up, self.B,
-                             self.M, self.transition)
+                             self.M, self.transition, rest)
         self.Qref = ca.MX.sym("qref", mb.k, free)
         self.step, self.mu = ca.MX.sym("step_length"), ca.MX.sym("mu")
         self.inverse_speed = ca.MX.sym("inverse_speed")
@@ -130,7 +132,10 @@ class Transcription(PathRows, HeldRows, CostTerms):
 
         q_free = mb.reparametrise.map(free)(self.U, self.Qref)
         tau = TORQUE_SCALE * self.T
-        if self.transition:
+        if rest:
+            self.Q = ca.horzcat(q_free, q_free[:, N - 2], q_free[:, N - 2])  # (k, N+1)
+            self.TAU = ca.horzcat(tau, self.end_torque[N * mb.nt :])  # (nt, N+1)
+        elif self.transition:
             self.Q = q_free  # (k, N+1)
             self.TAU = ca.horzcat(tau, self.end_torque[N * mb.nt :])  # (nt, N+1)
         else:
@@ -467,8 +472,8 @@ class Transcription(PathRows, HeldRows, CostTerms):
         ubx[: rotations.size][rotations] = ROTATION_INCREMENT_MAX
         nsig = int(self.S.shape[0])
         lbx[-nsig:], ubx[-nsig:] = self.settings.scaling_bounds
-        if self.transition:  # the given ends: q_n = qref_n
-            for n in (0, self.N - 1, self.N):
+        if self.transition:  # the given ends: q_n = qref_n (at rest: the start only)
+            for n in (0,) if self.layout.rest else (0, self.N - 1, self.N):
                 lbx[self.layout.u_index(n)] = ubx[self.layout.u_index(n)] = 0.0
         start = self.mb.ndof * free  # T follows U, column by column
         columns = int(self.T.shape[1])

@@ -37,6 +37,7 @@ from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.solution import end_rates
 from gait_planner.result import PlanResult
 
+STAND = "stand"  # the phase a stop ends in: both feet flat (`transition_scene`)
 # How far (m) a contact point of the first phase may be from the ground, and how far any
 # point may be below it, for a start to be planned.
 CONTACT_TOLERANCE = 0.005
@@ -173,31 +174,40 @@ def join_targets(gait: PlanResult, offset: float, halves: int = 1) -> np.ndarray
     return q + offset * mirror_parts(mb)[1]
 
 
-def transition_scene(scene: Scene, halves: int) -> Scene:
+def transition_scene(scene: Scene, halves: int, stop: bool = False) -> Scene:
     """`scene` with a gait of `halves` half cycles of its own: copy j (j = 0 ..
     halves-1) of its phases holds the contacts mirrored j times (the partner points for
     odd j), is named "<phase>~<j+1>" from the second copy on and scales with its own
-    sigmas (the scene's indices + j n_sigma). The scene itself for one half cycle."""
-    if halves == 1:
+    sigmas (the scene's indices + j n_sigma). With `stop` the last copy's last phase is
+    STAND instead: both feet flat (the first phase's contacts and their partners), the
+    phase a stop ends at rest in."""
+    if halves == 1 and not stop:
         return scene
     partner, n = contact_partners(scene), scene.gait.n_scalings
-    phases = tuple(
+    phases = [
         Phase(p.name if j == 0 else f"{p.name}~{j + 1}",
               tuple(partner[c] for c in p.contacts) if j % 2 else p.contacts,
               p.scaling + j * n, p.intervals)
-        for j in range(halves) for p in scene.gait.phases)
-    return dataclasses.replace(scene, gait=dataclasses.replace(scene.gait, phases=phases))
+        for j in range(halves) for p in scene.gait.phases]
+    if stop:
+        first = scene.gait.phases[0].contacts
+        both = tuple(c.name for c in scene.contacts if c.name in first
+                     or partner[c.name] in first)
+        phases[-1] = Phase(STAND, both, halves * n, phases[-1].intervals)
+    return dataclasses.replace(scene, gait=dataclasses.replace(scene.gait, phases=tuple(phases)))
 
 
 def transition_settings(gait_settings: GaitSettings, gait: PlanResult, start: StartState,
-                        halves: int = 1) -> GaitSettings:
+                        halves: int = 1, stop: bool = False) -> GaitSettings:
     """The settings of the transition of `halves` half cycles (`transition_scene`) from
     `start` onto `gait` (planned with `gait_settings`): the gait's grid (its intervals,
     refined or not) repeated, each copy but the last one interval short in its last phase
     (that interval is the next copy's first), the phases' joint ranges mirrored with their
     copies (`ocp.mirror.torque_mirror`: a roll or yaw range changes sign), no refinement,
     no speed row, the start's momentum, the gait's first interval's scaling and its
-    torques walked as far, nodes 0..N (`walk_on`; node N's is the transition's)."""
+    torques walked as far, nodes 0..N (`walk_on`; node N's is the transition's). A stop
+    (`transition_scene`'s STAND) ends at rest, its reference torques held from where it
+    stands."""
     one = [int(i) for i in gait.settings["intervals_per_phase"].split(",")]
     intervals = []
     for j in range(halves):
@@ -217,14 +227,16 @@ def transition_settings(gait_settings: GaitSettings, gait: PlanResult, start: St
                         for j in range(1, halves) for phase, ranges in limits)
     N = sum(intervals)
     walked = walk_on(gait, halves + 1)
+    reference = walked.tau[: N + 1].copy()
+    if stop:
+        reference[N - intervals[-1] :] = reference[N - intervals[-1]]
     first = float(np.diff(gait.times)[0] / gait_settings.base_time_step)
     return dataclasses.replace(gait_settings, intervals=tuple(intervals), refinements=0,
                                speed=0.0, step_length=gait.step_length,
                                phase_joint_limits=limits,
                                start_momentum=tuple(float(v) for v in start.momentum),
-                               end_scaling=first,
-                               end_torque=tuple(float(v) for v in
-                                                walked.tau[: N + 1].ravel()))
+                               end_scaling=first, end_at_rest=stop,
+                               end_torque=tuple(float(v) for v in reference.ravel()))
 
 
 def join(transition: PlanResult, walked: PlanResult, offset: float, halves: int = 1

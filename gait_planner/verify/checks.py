@@ -407,7 +407,8 @@ def _interval_error(scene: SceneData, rec: RecordedPlan, meta: dict, h: np.ndarr
     transition_scene`) are "<phase>~<j>" from its second half cycle on: copy j's sigma is
     the scene's index + (j-1) n_sigma, its contacts mirrored for even j (all flipped once
     more in a motion mirrored, ``transition_mirrored``), and its last interval has a sigma
-    of its own, the last."""
+    of its own, the last; a stop's (``transition_stop``) last phase "stand" holds both
+    feet flat, with the sigma after the copies'."""
     try:
         sigma = [float(s) for s in meta["phase_scaling"].split(",") if s.strip()]
     except (KeyError, ValueError):
@@ -434,12 +435,17 @@ def _interval_error(scene: SceneData, rec: RecordedPlan, meta: dict, h: np.ndarr
     partner = {c: next(d for d, (bd, pd) in scene.contacts.items()
                        if bd == scene.mirror[bc] and pd == pc)
                for c, (bc, pc) in scene.contacts.items()}
+    phases = dict(scene.phases)
+    if transition and meta.get("transition_stop") == "true":  # a stop ends in "stand"
+        first = next(iter(scene.phases.values()))[1]
+        phases["stand"] = (int(meta["transition_half_cycles"]) * n_sigma,
+                           tuple(c for c in scene.contacts if c in first or partner[c] in first))
     for n, hn in enumerate(h):
         phase, _, copy = rec.phases[n].partition("~")
-        if phase not in scene.phases or (copy and not (transition and copy.isdigit())):
+        if phase not in phases or (copy and not (transition and copy.isdigit())):
             fail(f"node {n} is in phase {rec.phases[n]!r}, which the scene does not declare")
             return math.nan
-        index, contacts = scene.phases[phase]
+        index, contacts = phases[phase]
         j = int(copy) if copy else 1
         index += (j - 1) * n_sigma
         if transition and n == len(h) - 1:  # the transition's last interval: its own sigma

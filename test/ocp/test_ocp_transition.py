@@ -167,3 +167,23 @@ def test_starts_the_first_phase_cannot_hold_are_refused():
         pose, joint_angles={**pose.joint_angles, name: (hi + 0.2,)}))
     with pytest.raises(StartError, match=rf"joint {name} is at {np.degrees(hi + 0.2):.1f} deg"):
         check_start(scene, settings, StartState(bent, np.zeros(mb.k), "test"))
+
+
+@pytest.mark.slow
+def test_a_stop_ends_standing_at_rest():
+    """walker2d from its gait's first node to standing in one half cycle (the last phase
+    "stand": both feet flat): the last three nodes equal (at rest, the last node's
+    equation a static equilibrium), every contact point loaded there, and every check
+    passes (about 2000 iterations, 30 s: benchmarks/HISTORY.md)."""
+    scene = load_scene("walker2d")
+    settings = settings_for(scene, compiled=True)
+    planner = Planner()
+    result = plan_transition(planner, scene, settings, None, halves=1, stop=True)
+    assert result.success, result.message
+    assert np.abs(result.q[-1] - result.q[-3]).max() == 0.0
+    assert result.phases[-1] == "stand"
+    assert set(result.active_contacts[-2]) == {c.name for c in scene.contacts}
+    for name in result.active_contacts[-2]:
+        assert result.contact_forces[name][-2][2] > 0.0  # N, every point carries weight
+    report = verify_result(result)
+    assert report.ok, report.summary()
