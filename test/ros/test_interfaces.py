@@ -40,6 +40,12 @@ EXPECTED_FIELDS = {
         "slope": "double",
         "step_height": "double",
         "gait": "string",
+        # a transition from a given or measured state onto the gait (issue #62)
+        "start": "string",
+        "state": "sensor_msgs/JointState",
+        "root_pose": "geometry_msgs/Pose",
+        "root_twist": "geometry_msgs/Twist",
+        "transition_half_cycles": "int32",
     },
     PlanGait.Response: {
         "success": "boolean",
