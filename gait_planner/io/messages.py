@@ -484,8 +484,8 @@ def requested_start(scene, request: Any, joint_state: Any = None,
     (srv/PlanGait.srv): start "" is the periodic gait (None, None); "state" the request's
     `state` (sensor_msgs/JointState), `root_pose` and `root_twist`; "robot" the node's latest
     /joint_states `joint_state` and, from `transforms` (child frame -> the latest
-    geometry_msgs/TransformStamped from ``world``), the root frame the node's recordings
-    publish (`frame_tree`), with `root_twist`. The stamp is the JointState's (0: none).
+    geometry_msgs/TransformStamped from ``world``; None: the node has no /tf subscription),
+    the root frame the node's recordings publish (`frame_tree`), with `root_twist`. The stamp is the JointState's (0: none).
     RequestError for another start (a clear refusal for "standing": `NOT_YET`);
     `ocp.transition.StartError` for a state that cannot be used or a robot state not yet
     received, naming what (`ocp.joint_state.start_of_joint_state`)."""
@@ -510,7 +510,10 @@ def requested_start(scene, request: Any, joint_state: Any = None,
         root = frame_tree(scene).root
         if joint_state is None:
             raise StartError("start \"robot\": no /joint_states received yet")
-        held = dict(transforms or {})
+        if transforms is None:
+            raise StartError("start \"robot\": the node does not subscribe to /tf (tf2_msgs "
+                             "is not installed; `make setup` builds it)")
+        held = dict(transforms)
         if root not in held:
             raise StartError(f"start \"robot\": no transform {WORLD_FRAME} -> {root} received "
                              f"on /tf yet (from {WORLD_FRAME}: "

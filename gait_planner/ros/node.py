@@ -73,7 +73,11 @@ from gait_planner_msgs.msg import ContactForces, MultibodyState
 from gait_planner_msgs.srv import PlanGait
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
-from tf2_msgs.msg import TFMessage
+
+try:
+    from tf2_msgs.msg import TFMessage
+except ImportError:  # ROS 2 wheels from PyPI without `make setup`'s tools/tf2_msgs
+    TFMessage = None
 from trajectory_msgs.msg import JointTrajectory
 
 SERVICE = "/gait_planner/plan_gait"
@@ -144,9 +148,15 @@ class GaitPlannerNode(Node):
         # best effort: matches a reliable publisher as well as a sensor-data one
         self.create_subscription(JointState, TOPIC_JOINT_STATES, self._on_joint_state,
                                  qos_profile_sensor_data, callback_group=group)
-        self.create_subscription(TFMessage, TOPIC_TF, self._on_tf,
-                                 QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT),
-                                 callback_group=group)
+        if TFMessage is None:
+            self._transforms = None  # start "robot" is refused saying why
+            self.get_logger().warning("tf2_msgs is not installed (make setup builds it): no "
+                                      "/tf subscription, start \"robot\" is refused")
+        else:
+            self.create_subscription(
+                TFMessage, TOPIC_TF, self._on_tf,
+                QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT),
+                callback_group=group)
         self._action = PlanGaitActionServer(self, self._worker, self._plan_into, group)
 
     def _on_joint_state(self, msg: JointState) -> None:

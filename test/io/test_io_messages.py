@@ -306,6 +306,8 @@ def test_a_requests_start_fields_become_a_start_state():
     robot = Msg(start="robot", root_twist=still)
     with pytest.raises(StartError, match="no /joint_states received yet"):
         requested_start(scene, robot)
+    with pytest.raises(StartError, match="does not subscribe to /tf"):
+        requested_start(scene, robot, state)
     with pytest.raises(StartError, match=rf"no transform {WORLD_FRAME} -> {scene.root.body} "
                                          r"received on /tf yet \(from world: base\)"):
         requested_start(scene, robot, state, {"base": None})
