@@ -24,6 +24,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gait_planner.model.loader import load_scene
+from gait_planner.ocp.joint_state import start_of_joint_state
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.transition import StartError, StartState, start_of_plan, start_of_velocity
 from gait_planner.ocp.warm_starts import WarmStartStore
@@ -34,8 +35,8 @@ from gait_planner.result import PlanResult
 from gait_planner.transitions import HALVES, start_of_recording
 
 __all__ = ["PlanRequest", "PlanResult", "Planner", "RequestError", "StartError", "StartState",
-           "check", "plan", "record", "start_of_plan", "start_of_recording", "start_of_velocity",
-           "summary"]
+           "check", "plan", "record", "start_of_joint_state", "start_of_plan",
+           "start_of_recording", "start_of_velocity", "summary"]
 
 _planner: Planner | None = None
 
@@ -51,11 +52,11 @@ def plan(request: PlanRequest | str, planner: Planner | None = None,
     success False and says why in its message. planner: the process's own by default;
     scenes: finds a scene by its name (`model.loader.load_scene`: the shipped scenes);
     start: a state to begin at (`start_of_recording`, `ocp.transition.start_of_plan`,
-    `start_of_velocity`): the answer is the transition of `halves` half cycles (1 to 4)
-    from it onto the request's gait, then request.steps of the gait's half cycles
-    (`StartError` if the first phase's contacts cannot hold it); stop: instead of joining
-    the gait, end standing at rest, both feet flat (from `start`, or the gait's first
-    node)."""
+    `start_of_velocity`, `start_of_joint_state`): the answer is the transition of `halves`
+    half cycles (1 to 4) from it onto the request's gait, then request.steps of the gait's
+    half cycles (`StartError` if the first phase's contacts cannot hold it); stop: instead
+    of joining the gait, end standing at rest, both feet flat (from `start`, or the gait's
+    first node)."""
     global _planner
     if planner is None:
         _planner = planner = _planner or Planner(library=WarmStartStore())

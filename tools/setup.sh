@@ -8,7 +8,8 @@
 # 3. pip-installs requirements.txt (pinned ROS 2 wheels from PyPI, numerics, tests);
 # 4. points the ROS message wheels' exported CMake files at this interpreter's include dir and
 #    numpy's include dir (the wheels name their builder's /opt/python/cp311-cp311/... paths);
-# 5. configures, builds and installs msg_defs/ (gait_planner_msgs) into the venv prefix;
+# 5. configures, builds and installs msg_defs/ (gait_planner_msgs) into the venv prefix, and
+#    tools/tf2_msgs (tf2_msgs/TFMessage) when no tf2_msgs is installed (no PyPI wheel);
 # 6. installs gait_planner itself editable (pip install -e . --no-deps).
 #
 # Steps 3, 5 and 6 are skipped when the stamp files under VENV_DIR/.gait_planner_setup/ show that
@@ -124,6 +125,28 @@ if ! is_current msg_defs "$msg_hash" || [[ ! -f "$venv/share/gait_planner_msgs/p
   "$py" -c 'from gait_planner_msgs.srv import PlanGait; from gait_planner_msgs.action import PlanGait as PlanGaitAction; from gait_planner_msgs.msg import ContactForces, MultibodyState' \
     || die "gait_planner_msgs was built but does not import; see $log"
   mark msg_defs "$msg_hash"
+fi
+
+# --- 5b. tf2_msgs/TFMessage, where no tf2_msgs is installed ----------------------------------
+# PyPI has no tf2_msgs wheel; the node subscribes to /tf (PlanGait's start "robot") and its
+# tests publish it, so tools/tf2_msgs (TFMessage alone, ROS 2's definition) is built into
+# the venv when `import tf2_msgs` fails. A full ROS 2 install has the real package.
+if ! "$py" -c 'import tf2_msgs.msg' >/dev/null 2>&1; then
+  say "building tools/tf2_msgs (tf2_msgs/TFMessage, no wheel on PyPI) into $venv"
+  tf_build="$stamps/build/tf2_msgs"
+  tf_log="$stamps/tf2_msgs-build.log"
+  rm -rf "$tf_build"
+  if ! (
+    export AMENT_PREFIX_PATH="$venv${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}"
+    export PATH="$venv/bin:$PATH"
+    cmake -S tools/tf2_msgs -B "$tf_build" -DCMAKE_PREFIX_PATH="$venv" \
+      -DCMAKE_INSTALL_PREFIX="$venv" -DPython3_EXECUTABLE="$py" -DBUILD_TESTING=OFF &&
+    cmake --build "$tf_build" --parallel "$(nproc 2>/dev/null || echo 2)" &&
+    cmake --install "$tf_build"
+  ) >"$tf_log" 2>&1 || ! "$py" -c 'from tf2_msgs.msg import TFMessage' >/dev/null 2>&1; then
+    tail -n 40 "$tf_log" >&2
+    die "building tools/tf2_msgs failed; the full log is $tf_log"
+  fi
 fi
 
 # --- 6. gait_planner, editable ---------------------------------------------------------------

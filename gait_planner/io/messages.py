@@ -1,8 +1,10 @@
 """A `PlanResult` as ROS message layouts: plain nested dicts and lists, no ROS import.
 
-The one place that converts a plan into messages. The MCAP writer serialises these dicts
-(`gait_planner.io.mcap_writer.CdrEncoder`, which refuses a dict whose keys differ from the
-type's fields), and the ROS node copies them into rclpy messages with `fill_message`.
+The one place that converts a plan into messages, and a request's start fields (a state
+given or measured: `requested_start`) into a transition's `StartState`. The MCAP writer
+serialises these dicts (`gait_planner.io.mcap_writer.CdrEncoder`, which refuses a dict
+whose keys differ from the type's fields), and the ROS node copies them into rclpy
+messages with `fill_message`.
 Field names are exactly those of the .msg/.srv definitions (docs/design.md section 7);
 builtin_interfaces/Time and Duration are ``{"sec": int, "nanosec": int}``; arrays are
 lists of Python floats/ints/strs.
@@ -59,8 +61,8 @@ from gait_planner.result import PlanResult
 __all__ = ["check_result", "contact_forces", "contact_points", "fill_message", "foot_wrenches",
            "frame_tree", "joint_states", "published_joints",
            "joint_trajectory", "multibody_states", "node_efforts", "plan_response_fields",
-           "quaternion_msg", "robot_description", "node_stamps_ns", "tf_messages", "tf_static",
-           "time_msg", "walk_response_fields", "WORLD_FRAME"]
+           "quaternion_msg", "requested_start", "robot_description", "node_stamps_ns",
+           "tf_messages", "tf_static", "time_msg", "time_ns", "walk_response_fields", "WORLD_FRAME"]
 
 NS_PER_S = 1_000_000_000
 
@@ -456,6 +458,74 @@ def walk_response_fields(steps: int, walked: Mapping[str, Any] | None,
 def _setting(result: PlanResult, key: str) -> float:
     """A numeric entry of result.settings, NaN where the plan has none."""
     return float(result.settings.get(key, "nan"))
+
+
+# ---------------------------------------------------------------------------- a request's start
+
+# PlanGait's `start`: "" the periodic gait, "state" the request's state, "robot" the node's
+# latest /joint_states and /tf
+START_KINDS = ("", "state", "robot")
+NOT_YET = {"standing": "a plan from standing still (and `stop`) is not implemented yet "
+                       "(issue #62); give start \"state\" or \"robot\" with the robot's state"}
+
+
+def time_ns(stamp: Any) -> int:
+    """ns of a builtin_interfaces/Time (attributes sec, nanosec)."""
+    return int(stamp.sec) * NS_PER_S + int(stamp.nanosec)
+
+
+def _xyz(v: Any) -> list[float]:
+    return [float(v.x), float(v.y), float(v.z)]
+
+
+def requested_start(scene, request: Any, joint_state: Any = None,
+                    transforms: Mapping[str, Any] | None = None):
+    """(StartState or None, stamp ns or None) of a PlanGait request's or goal's start fields
+    (srv/PlanGait.srv): start "" is the periodic gait (None, None); "state" the request's
+    `state` (sensor_msgs/JointState), `root_pose` and `root_twist`; "robot" the node's latest
+    /joint_states `joint_state` and, from `transforms` (child frame -> the latest
+    geometry_msgs/TransformStamped from ``world``; None: the node has no /tf subscription),
+    the root frame the node's recordings publish (`frame_tree`), with `root_twist`. The stamp is the JointState's (0: none).
+    RequestError for another start (a clear refusal for "standing": `NOT_YET`);
+    `ocp.transition.StartError` for a state that cannot be used or a robot state not yet
+    received, naming what (`ocp.joint_state.start_of_joint_state`)."""
+    from gait_planner.ocp.joint_state import start_of_joint_state
+    from gait_planner.ocp.transition import StartError
+    from gait_planner.request import RequestError
+
+    kind = str(getattr(request, "start", "") or "")
+    if kind in NOT_YET:
+        raise RequestError(f"start {kind!r}: {NOT_YET[kind]}")
+    if kind not in START_KINDS:
+        raise RequestError(f"start must be \"\" (the periodic gait), \"state\" or \"robot\", "
+                           f"got {kind!r}")
+    if not kind:
+        return None, None
+    twist = request.root_twist
+    if kind == "state":
+        state, pose = request.state, request.root_pose
+        position, rotation = _xyz(pose.position), pose.orientation
+        origin = "the request's state"
+    else:
+        root = frame_tree(scene).root
+        if joint_state is None:
+            raise StartError("start \"robot\": no /joint_states received yet")
+        if transforms is None:
+            raise StartError("start \"robot\": the node does not subscribe to /tf (tf2_msgs "
+                             "is not installed; `make setup` builds it)")
+        held = dict(transforms)
+        if root not in held:
+            raise StartError(f"start \"robot\": no transform {WORLD_FRAME} -> {root} received "
+                             f"on /tf yet (from {WORLD_FRAME}: "
+                             f"{', '.join(sorted(held)) or 'none'})")
+        state, transform = joint_state, held[root].transform
+        position, rotation = _xyz(transform.translation), transform.rotation
+        origin = f"the robot's /joint_states and /tf {WORLD_FRAME} -> {root}"
+    start = start_of_joint_state(
+        scene, list(state.name), list(state.position), list(state.velocity), position,
+        [float(rotation.x), float(rotation.y), float(rotation.z), float(rotation.w)],
+        _xyz(twist.linear), _xyz(twist.angular), origin)
+    return start, time_ns(state.header.stamp)
 
 
 # ---------------------------------------------------------------------------- rclpy messages

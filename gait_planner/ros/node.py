@@ -21,7 +21,12 @@ recording" in the log). With the parameter walk_steps > 0 the recorded plan is t
 in MuJoCo (`gait_planner.walk`; action phase "walking", then "walking (k of K half cycles
 done)" at each half cycle's end) before the answer, which carries how it went (walk_*
 fields; a fall or a walk that cannot run leaves the plan's success as it is), and the walk's
-summary is logged. SIGINT and SIGTERM stop a running solve within one
+summary is logged. A request's `start` ("state": the state it carries; "robot": the node's
+latest ``/joint_states`` and the world -> root transform of ``/tf``, which the node
+subscribes to, best effort) plans a transition onto the gait first
+(`gait_planner.transitions`; converted by `gait_planner.io.messages.requested_start`), and
+the answer and the topics are stamped with the start state's stamp; a start that cannot be
+used, or a robot state not yet received, is refused naming why. SIGINT and SIGTERM stop a running solve within one
 iteration and end the node (`main`); a killed node leaves the ROS graph within 3 s (its DDS
 lease: `DDS_PROFILE`), so its clients stop waiting for it. At start the node removes
 temporary recording files that killed processes left in its output folder.
@@ -41,7 +46,7 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 
 from gait_planner.gaitlib.index import LibraryError
 from gait_planner.gaitlib.serve import library_start
@@ -52,6 +57,7 @@ from gait_planner.model.loader import SceneError, load_scene, scene_dirs
 from gait_planner.model.urdf_errors import UrdfError
 from gait_planner.ocp.warm_starts import WarmStartStore
 from gait_planner.ocp.solve import STOPPED, Planner
+from gait_planner.ocp.transition import StartError
 from gait_planner.result import PlanStatus
 from gait_planner.pipeline import plan_and_record, prepare
 from gait_planner.problem import resolve
@@ -60,11 +66,18 @@ from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
 from gait_planner.ros.robot_description import RobotScenes
 from gait_planner.ros.worker import Closed, Lapsed, PlanWorker, Stopped
+from gait_planner.transitions import HALVES, MAX_HALVES
 from gait_planner.walk.walk_plan import walk
 from gait_planner.walk.summary import format_summary, half_cycles_done
 from gait_planner_msgs.msg import ContactForces, MultibodyState
 from gait_planner_msgs.srv import PlanGait
+from sensor_msgs.msg import JointState
 from std_msgs.msg import String
+
+try:
+    from tf2_msgs.msg import TFMessage
+except ImportError:  # ROS 2 wheels from PyPI without `make setup`'s tools/tf2_msgs
+    TFMessage = None
 from trajectory_msgs.msg import JointTrajectory
 
 SERVICE = "/gait_planner/plan_gait"
@@ -72,6 +85,8 @@ TOPIC_TRAJECTORY = "/gait_planner/joint_trajectory"
 TOPIC_STATE = "/gait_planner/state"
 TOPIC_FORCES = "/gait_planner/contact_forces"
 TOPIC_DESCRIPTION = "/robot_description"  # a robot's URDF, drafted into a scene on arrival
+TOPIC_JOINT_STATES = "/joint_states"  # the robot's measured joints (PlanGait start "robot")
+TOPIC_TF = "/tf"  # its world -> root transform (start "robot")
 BUSY = "busy: another plan is running (the node plans one request at a time); try again later"
 EXECUTOR_THREADS = 4  # a waiting plan request holds one; busy answers and cancels need others
 EXIT_GRACE = 0.5  # s a stopped plan gets to end at shutdown before the process leaves anyway
@@ -90,6 +105,8 @@ class GaitPlannerNode(Node):
     def __init__(self, *, planner: Planner | None = None, **kwargs):
         # (destroy_node may run before __init__ has ended)
         self._worker, self._action, self._recorder = PlanWorker(), None, None
+        # the robot's latest /joint_states and world -> frame transforms (start "robot")
+        self._joint_state, self._transforms = None, {}
         super().__init__("gait_planner", **kwargs)
         self._worker.on_lapse = self._on_lapse
         parameters.declare(self)
@@ -128,7 +145,30 @@ class GaitPlannerNode(Node):
         self.create_subscription(String, TOPIC_DESCRIPTION,
                                  lambda msg: self._describe(msg.data, TOPIC_DESCRIPTION),
                                  latched, callback_group=group)
+        # best effort: matches a reliable publisher as well as a sensor-data one
+        self.create_subscription(JointState, TOPIC_JOINT_STATES, self._on_joint_state,
+                                 qos_profile_sensor_data, callback_group=group)
+        if TFMessage is None:
+            self._transforms = None  # start "robot" is refused saying why
+            self.get_logger().warning("tf2_msgs is not installed (make setup builds it): no "
+                                      "/tf subscription, start \"robot\" is refused")
+        else:
+            self.create_subscription(
+                TFMessage, TOPIC_TF, self._on_tf,
+                QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT),
+                callback_group=group)
         self._action = PlanGaitActionServer(self, self._worker, self._plan_into, group)
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        self._joint_state = msg
+
+    def _on_tf(self, msg: TFMessage) -> None:
+        """Keep the latest transform from the world frame to each frame (start "robot")."""
+        transforms = dict(self._transforms)
+        for transform in msg.transforms:
+            if transform.header.frame_id.lstrip("/") == messages.WORLD_FRAME:
+                transforms[transform.child_frame_id.lstrip("/")] = transform
+        self._transforms = transforms
 
     def _describe(self, urdf: str, source: str) -> None:
         """Draft the robot of a URDF text (`RobotScenes.describe`); errors are logged, the
@@ -218,16 +258,21 @@ class GaitPlannerNode(Node):
                 request, default_scene=self._param("default_scene"),
                 default_max_solve_time=self._param("max_solve_time"),
                 compiled=self._param("compile_derivatives")), self._scenes)
+            halves = _half_cycles(request.transition_half_cycles)
+            start, start_ns = messages.requested_start(problem.scene, request,
+                                                       self._joint_state, self._transforms)
             library = self._param("gait_library")
-            seed, note = (None, "") if not library or not problem.warm_start else library_start(
+            seed, note = (None, "") if (not library or not problem.warm_start
+                                        or start is not None) else library_start(
                 self._planner, Path(library).expanduser(), problem, self._scenes)
             outcome = plan_and_record(self._planner, problem, self._param("output_dir"),
-                                      rrd=False, stage=self._worker.enter, seed=seed)
+                                      rrd=False, stage=self._worker.enter, seed=seed,
+                                      start=start, halves=halves)
         except Stopped:
             answer.success, answer.message = False, self._stopped_message()
             self.get_logger().info(f"{answer.message}: nothing recorded")
             return PlanStatus.STOPPED
-        except (RequestError, LibraryError, OSError) as err:
+        except (RequestError, StartError, LibraryError, OSError) as err:
             answer.success, answer.message = False, str(err)
             self.get_logger().warning(f"plan request refused: {err}")
             return None
@@ -238,7 +283,9 @@ class GaitPlannerNode(Node):
             return None
         result = outcome.result
         stopped = result.status is PlanStatus.STOPPED
-        stamp = self.get_clock().now().nanoseconds
+        # a transition is stamped with its start state's time (where a controller splices
+        # it in); the periodic gait (or a state without a stamp) with the answer's
+        stamp = start_ns or self.get_clock().now().nanoseconds
         messages.fill_message(answer, messages.plan_response_fields(
             result, str(outcome.mcap_path or ""), stamp) if result.success else {
                 "success": False,
@@ -299,6 +346,16 @@ class GaitPlannerNode(Node):
             self._pub_state.publish(messages.fill_message(MultibodyState(), state))
         for forces in messages.contact_forces(result, start_ns):
             self._pub_forces.publish(messages.fill_message(ContactForces(), forces))
+
+
+def _half_cycles(value: int) -> int:
+    """PlanGait's transition_half_cycles: 0 is `HALVES`; RequestError outside 1..MAX_HALVES."""
+    if value == 0:
+        return HALVES
+    if not 1 <= value <= MAX_HALVES:
+        raise RequestError(f"transition_half_cycles must be 1 to {MAX_HALVES}, or 0 for "
+                           f"{HALVES}, got {value}")
+    return int(value)
 
 
 def serve(node: GaitPlannerNode, executor: MultiThreadedExecutor,

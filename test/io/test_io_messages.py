@@ -274,3 +274,48 @@ def test_fill_message_builds_our_messages(result):
     response = messages.fill_message(PlanGait.Response(),
                                      messages.plan_response_fields(result, "/x.mcap"))
     assert response.mcap_path == "/x.mcap" and len(response.trajectory.points) == result.n_nodes
+
+
+def test_a_requests_start_fields_become_a_start_state():
+    """`requested_start` reads PlanGait's start fields (attributes, as rclpy messages have
+    them): "" is the periodic gait, "state" the request's state with its stamp, "robot"
+    the node's latest joint state and world -> root transform, refused naming the frame
+    while that has not arrived; "standing" and other starts are refused."""
+    from types import SimpleNamespace as Msg
+
+    from gait_planner.io.messages import WORLD_FRAME, frame_tree, quaternion_msg, requested_start
+    from gait_planner.model.angles import angle_names, configuration, joint_angles
+    from gait_planner.model.loader import load_scene
+    from gait_planner.ocp.transition import StartError
+    from gait_planner.request import RequestError
+
+    scene = load_scene("walker3d")
+    q = configuration(scene)
+    root = scene.body_index(frame_tree(scene).root)
+    xyz = lambda v: Msg(x=float(v[0]), y=float(v[1]), z=float(v[2]))  # noqa: E731
+    turn = quaternion_msg(q[12 * root + 3:12 * root + 12].reshape(3, 3).T)
+    rotation = Msg(**turn)
+    state = Msg(name=list(angle_names(scene)), position=list(joint_angles(scene, q)),
+                velocity=[], header=Msg(stamp=Msg(sec=7, nanosec=5)))
+    still = Msg(linear=xyz([0, 0, 0]), angular=xyz([0, 0, 0]))
+    request = Msg(start="state", state=state, root_twist=still, root_pose=Msg(
+        position=xyz(q[12 * root:12 * root + 3]), orientation=rotation))
+    start, stamp = requested_start(scene, request)
+    assert np.abs(start.q - q).max() < 1e-12 and stamp == 7_000_000_005
+    assert requested_start(scene, Msg(start="")) == (None, None)
+    robot = Msg(start="robot", root_twist=still)
+    with pytest.raises(StartError, match="no /joint_states received yet"):
+        requested_start(scene, robot)
+    with pytest.raises(StartError, match="does not subscribe to /tf"):
+        requested_start(scene, robot, state)
+    with pytest.raises(StartError, match=rf"no transform {WORLD_FRAME} -> {scene.root.body} "
+                                         r"received on /tf yet \(from world: base\)"):
+        requested_start(scene, robot, state, {"base": None})
+    held = {scene.root.body: Msg(transform=Msg(translation=xyz(q[12 * root:12 * root + 3]),
+                                               rotation=rotation))}
+    start, stamp = requested_start(scene, robot, state, held)
+    assert np.abs(start.q - q).max() < 1e-12 and stamp == 7_000_000_005
+    with pytest.raises(RequestError, match="'standing': .* not implemented yet"):
+        requested_start(scene, Msg(start="standing"))
+    with pytest.raises(RequestError, match="start must be"):
+        requested_start(scene, Msg(start="walking"))

@@ -40,6 +40,12 @@ EXPECTED_FIELDS = {
         "slope": "double",
         "step_height": "double",
         "gait": "string",
+        # a transition from a given or measured state onto the gait (issue #62)
+        "start": "string",
+        "state": "sensor_msgs/JointState",
+        "root_pose": "geometry_msgs/Pose",
+        "root_twist": "geometry_msgs/Twist",
+        "transition_half_cycles": "int32",
     },
     PlanGait.Response: {
         "success": "boolean",
@@ -179,6 +185,22 @@ def test_plan_gait_request_roundtrips():
     back = roundtrip(request)
     assert back == request
     assert back.step_length == 0.6338 and back.cold_start is True
+
+
+def test_a_request_with_a_start_state_roundtrips():
+    from geometry_msgs.msg import Pose, Twist
+    from sensor_msgs.msg import JointState
+
+    state = JointState(header=header(1700000002.5), name=["hip_r", "knee_r"],
+                       position=[0.25, -1e-9], velocity=[-3.5, 0.0])
+    pose, twist = Pose(), Twist()
+    pose.position.z, pose.orientation.y, pose.orientation.w = 1.02, 0.1, 0.995
+    twist.linear.x, twist.angular.y = 1.2, -0.4
+    request = PlanGait.Request(scene="walker2d", start="state", state=state, root_pose=pose,
+                               root_twist=twist, transition_half_cycles=3)
+    back = roundtrip(request)
+    assert back == request and list(back.state.name) == ["hip_r", "knee_r"]
+    assert back.state.header.stamp == state.header.stamp and back.root_twist.linear.x == 1.2
 
 
 def test_plan_gait_response_roundtrips():
