@@ -90,6 +90,8 @@ def test_a_start_off_the_gait_returns_onto_it(gait):
     assert report.ok, report.summary()
 
 
+@pytest.mark.parametrize("gait", ["walker2d", pytest.param("walker3d", marks=pytest.mark.slow)],
+                         indirect=True)
 def test_two_half_cycles_from_the_plans_own_first_node_are_the_gait_walked(gait):
     """A transition of two half cycles (the second copy of the phases mirrored) from the
     gait's own first node is the gait walked two half cycles: J twice the gait's."""
@@ -105,6 +107,7 @@ def test_two_half_cycles_from_the_plans_own_first_node_are_the_gait_walked(gait)
     assert verify_result(result).ok
 
 
+@pytest.mark.slow
 def test_a_start_one_half_cycle_cannot_mend_takes_two():
     """walker3d 1.3 cm sideways and rolling at -0.099 rad/s: in one half cycle the
     optimum needs about 3000 iterations, J twice the gait's, and misses the certificate
