@@ -29,33 +29,12 @@ import time
 import numpy as np
 
 from gait_planner.model.loader import load_scene
-from gait_planner.model.multibody import Multibody
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
-from gait_planner.ocp.transition import StartState, start_of_plan
+from gait_planner.ocp.transition import start_of_plan, turned_start
 from gait_planner.strategies import plan_certified
 from gait_planner.transitions import plan_transition
 from gait_planner.verify import verify_result
-
-
-def turned(scene, start: StartState, lateral: float, rate: float) -> StartState:
-    """`start` moved `lateral` m sideways (3D) and turning rigidly at `rate` rad/s about
-    its first held contact point, on top of its own motion."""
-    mb = Multibody(scene)
-    q = start.q.copy()
-    contact = scene.contact(scene.gait.phases[0].contacts[0])
-    centre = mb.point_matrix(contact.body, contact.point) @ q
-    w = np.array([rate, 0.0, 0.0]) if mb.root_dof == 6 else np.array([0.0, rate, 0.0])
-    q_dot = np.zeros_like(q)
-    for i in range(mb.nb):
-        if mb.root_dof == 6:
-            q[12 * i + 1] += lateral
-        q_dot[12 * i : 12 * i + 3] = np.cross(w, q[12 * i : 12 * i + 3] - centre)
-        for j in range(3):
-            d = slice(12 * i + 3 + 3 * j, 12 * i + 6 + 3 * j)
-            q_dot[d] = np.cross(w, q[d])
-    return StartState(q, start.momentum + mb.mass_diagonal * q_dot,
-                      f"{lateral * 100:+.1f} cm, {rate:+.3f} rad/s")
 
 
 def main() -> None:
@@ -77,7 +56,8 @@ def main() -> None:
     print(f"gait: {gait.stats.iterations} iterations, J {gait.cost_value:.5f}")
     rng = np.random.default_rng(args.seed)
     starts = [start_of_plan(gait)] + [
-        turned(scene, start_of_plan(gait), rng.uniform(-0.02, 0.02), rng.uniform(-0.1, 0.1))
+        turned_start(scene, start_of_plan(gait), rng.uniform(-0.02, 0.02),
+                     rng.uniform(-0.1, 0.1))
         for _ in range(args.starts)]
     rows = []
     print("| K | start | from | converged | iterations | solve s | answer s | J / (K J_gait) "

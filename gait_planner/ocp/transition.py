@@ -85,6 +85,27 @@ def start_of_velocity(scene: Scene, q: np.ndarray, q_dot: np.ndarray,
                       origin)
 
 
+def turned_start(scene: Scene, start: StartState, lateral: float, rate: float) -> StartState:
+    """`start` moved `lateral` m sideways (3D) and turning rigidly at `rate` rad/s about its
+    first held contact point (roll in 3D, pitch in the plane) on top of its own motion: a
+    start off the gait whose contacts stay on the ground (robustness tests, benchmarks)."""
+    mb = Multibody(scene)
+    q = np.asarray(start.q, float).copy()
+    contact = scene.contact(scene.gait.phases[0].contacts[0])
+    centre = mb.point_matrix(contact.body, contact.point) @ q
+    w = np.array([rate, 0.0, 0.0]) if mb.root_dof == 6 else np.array([0.0, rate, 0.0])
+    q_dot = np.zeros_like(q)
+    for i in range(mb.nb):
+        if mb.root_dof == 6:
+            q[12 * i + 1] += lateral
+        q_dot[12 * i : 12 * i + 3] = np.cross(w, q[12 * i : 12 * i + 3] - centre)
+        for j in range(3):
+            d = slice(12 * i + 3 + 3 * j, 12 * i + 6 + 3 * j)
+            q_dot[d] = np.cross(w, q[d])
+    return StartState(q, start.momentum + mb.mass_diagonal * q_dot,
+                      f"{start.origin} {lateral * 100:+.1f} cm sideways, turning {rate:+.3f} rad/s")
+
+
 def check_start(scene: Scene, settings: GaitSettings, start: StartState) -> None:
     """StartError unless the first phase's contacts can hold `start`: its configuration
     meets the joint constraints, every contact point held in the first phase is within
