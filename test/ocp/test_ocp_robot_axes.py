@@ -57,6 +57,18 @@ ALEXANDER = "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"
 ROMEO = "romeo_description/urdf/romeo_small.urdf"
 
 
+def _planned_and_checked(scene_file, name: str, tmp_path, **request):
+    """(Outcome, report) of the scene file planned cold and recorded as a user plans it,
+    asserted converged and passing every check of the verifier."""
+    problem = resolve(PlanRequest(scene=str(scene_file), output_name=name, compiled=False,
+                                  **request), find_scene)
+    outcome = plan_and_record(Planner(), problem, tmp_path, rrd=False)
+    assert outcome.result.success, outcome.result.message
+    report = verify_recording(outcome.mcap_path)
+    assert report.ok, report.failures
+    return outcome, report
+
+
 def test_icub_walks_along_its_base_minus_x_and_passes_every_check(example_robots, tmp_path):
     path = example_robots / ICUB
     urdf = path.read_text()
@@ -65,13 +77,8 @@ def test_icub_walks_along_its_base_minus_x_and_passes_every_check(example_robots
     assert "Walking direction (the scene's x): the URDF's [-1.0, 0.0, 0.0], told by the " \
         "soles" in draft.yaml
     assert "walking frame: turned by 4.71e-05 rad" in draft.yaml  # its rpy of 1.5708
-    scene_file = write_draft(draft, tmp_path / "icub.yaml")
-    problem = resolve(PlanRequest(scene=str(scene_file), output_name="icub", compiled=False),
-                      find_scene)
-    outcome = plan_and_record(Planner(), problem, tmp_path, rrd=False)
-    assert outcome.result.success, outcome.result.message
-    report = verify_recording(outcome.mcap_path)
-    assert report.ok, report.failures
+    outcome, report = _planned_and_checked(write_draft(draft, tmp_path / "icub.yaml"), "icub",
+                                           tmp_path)
     clearance = yaml.safe_load(draft.yaml)["gait"]["options"]["leg_clearance"]
     assert report.legs.source == "the URDF's collision geometry (coal)"
     assert clearance == 0.01 and report.legs.smallest >= clearance, \
@@ -100,13 +107,8 @@ def test_alexander_plans_at_a_shorter_step_and_passes_every_check(example_robots
                         urdf_file=str(path))
     assert "RIGHT_THIGH: centre of mass moved by 0.136 mm to be LEFT_THIGH's mirror image" \
         in draft.yaml
-    scene_file = write_draft(draft, tmp_path / "alexander.yaml")
-    problem = resolve(PlanRequest(scene=str(scene_file), output_name="alexander",
-                                  step_length=0.45, compiled=False), find_scene)
-    outcome = plan_and_record(Planner(), problem, tmp_path, rrd=False)
-    assert outcome.result.success, outcome.result.message
-    report = verify_recording(outcome.mcap_path)
-    assert report.ok, report.failures
+    _planned_and_checked(write_draft(draft, tmp_path / "alexander.yaml"), "alexander",
+                         tmp_path, step_length=0.45)
 
 
 def test_romeo_plans_within_each_joints_own_speed_limit(example_robots, tmp_path):
@@ -122,12 +124,7 @@ def test_romeo_plans_within_each_joints_own_speed_limit(example_robots, tmp_path
     assert drafted in draft.yaml
     scene_file = tmp_path / "romeo.yaml"
     scene_file.write_text(draft.yaml.replace(drafted, "  scaling_bounds: [0.5, 3.0]\n"))
-    problem = resolve(PlanRequest(scene=str(scene_file), output_name="romeo", compiled=False),
-                      find_scene)
-    outcome = plan_and_record(Planner(), problem, tmp_path, rrd=False)
-    assert outcome.result.success, outcome.result.message
-    report = verify_recording(outcome.mcap_path)
-    assert report.ok, report.failures
+    outcome, _ = _planned_and_checked(scene_file, "romeo", tmp_path)
     rec = read_plan_mcap(outcome.mcap_path)
     speed = np.degrees(np.abs(np.asarray(rec.velocities))).max(axis=0)
     shares = {name: speed[rec.joint_names.index(name)] / limit
