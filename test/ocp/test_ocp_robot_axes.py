@@ -30,7 +30,7 @@ converged in 600 s, the joint speed rows most violated) plans cold and passes ev
 its ankles and hip yaws at their own limits, no joint above its own.
 
 Slow: without compiling, iCub's problem builds and solves in about 2 min (6 GB of memory:
-run it alone), Alexander's in about 1 min, Romeo's in about 2.5 min (5.2 GB).
+run it alone), Alexander's in about 1 min, Romeo's in about 2 min (5.2 GB).
 """
 
 from __future__ import annotations
