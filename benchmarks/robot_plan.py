@@ -51,6 +51,7 @@ ROBOTS = {
     "talos": Robot("talos_data/robots/talos_reduced.urdf", {"mirror_tolerance": 0.06}),
     "icub": Robot("icub_description/robots/icub_reduced.urdf"),  # x backwards (#61 item 4)
     "alexander": Robot("alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"),
+    "romeo": Robot("romeo_description/urdf/romeo_small.urdf"),  # per-joint speeds (#61)
 }
 
 

@@ -21,11 +21,15 @@ def _inertial(mass: float, rpy: str, xyz: str,
 def biped(tilt: float = 0.2, knee_axis: str = "y", foot_geometry: str | None = None,
           knee_type: str = "revolute", knee_mass: float = 1.0, base_y: float = 0.0,
           right_knee_mass: float | None = None, waist_axis: str = "z",
-          arm_com: str = "0 0 0.2", waist_effort: float = 10.0) -> str:
+          arm_com: str = "0 0 0.2", waist_effort: float = 10.0,
+          velocities: dict[str, float] | None = None) -> str:
     """A three-joint-per-leg biped whose hip-roll frame is pitched by `tilt` (as G1's) and
     whose feet carry `foot_geometry` (default: four small spheres at the sole's corners);
     its waist (locked by a draft) turns about `waist_axis`, its arm's centre of mass at
-    `arm_com` from it."""
+    `arm_com` from it; every leg joint's velocity limit 20 rad/s but those `velocities`
+    names (joint -> rad/s)."""
+    speed = {f"{side}_{j}_joint": 20.0 for side in ("left", "right")
+             for j in ("hip_roll", "hip_pitch", "knee", "ankle")} | dict(velocities or {})
     sphere = '<collision><origin xyz="{x} {y} -0.06"/><geometry><sphere radius="0.005"/>' \
              '</geometry></collision>'
     feet = foot_geometry if foot_geometry is not None else "".join(
@@ -41,19 +45,19 @@ def biped(tilt: float = 0.2, knee_axis: str = "y", foot_geometry: str | None = N
   <joint name="{side}_hip_roll_joint" type="revolute">
     <parent link="base_link"/><child link="{side}_hip_link"/>
     <origin xyz="0 {0.1 * sign} -0.1" rpy="0 {-tilt} 0"/><axis xyz="1 0 0"/>
-    <limit lower="-0.5" upper="0.5" effort="80" velocity="20"/></joint>
+    <limit lower="-0.5" upper="0.5" effort="80" velocity="{speed[f'{side}_hip_roll_joint']}"/></joint>
   <joint name="{side}_hip_pitch_joint" type="revolute">
     <parent link="{side}_hip_link"/><child link="{side}_thigh_link"/>
     <origin xyz="0 {0.05 * sign} -0.05" rpy="0 {tilt} 0"/><axis xyz="0 1 0"/>
-    <limit lower="-2" upper="2" effort="100" velocity="20"/></joint>
+    <limit lower="-2" upper="2" effort="100" velocity="{speed[f'{side}_hip_pitch_joint']}"/></joint>
   <joint name="{side}_knee_joint" type="{knee_type}">
     <parent link="{side}_thigh_link"/><child link="{side}_shin_link"/>
     <origin xyz="0 0 -0.3"/><axis xyz="{AXES[knee_axis]}"/>
-    <limit lower="-0.1" upper="2.5" effort="120" velocity="20"/></joint>
+    <limit lower="-0.1" upper="2.5" effort="120" velocity="{speed[f'{side}_knee_joint']}"/></joint>
   <joint name="{side}_ankle_joint" type="revolute">
     <parent link="{side}_shin_link"/><child link="{side}_foot_link"/>
     <origin xyz="0 0 -0.3"/><axis xyz="0 1 0"/>
-    <limit lower="-0.8" upper="0.6" effort="40" velocity="20"/></joint>""")
+    <limit lower="-0.8" upper="0.6" effort="40" velocity="{speed[f'{side}_ankle_joint']}"/></joint>""")
     return f"""<?xml version="1.0"?>
 <robot name="biped">
   <link name="base_link">{_inertial(10.0, xyz=f"0 {base_y} 0.1", rpy="0 0 0", moments=(0.3, 0.2, 0.15))}</link>

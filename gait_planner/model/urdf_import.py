@@ -46,8 +46,9 @@ approximation of it:
   (`gait_planner.ocp.legs`).
 * **Limits.** The URDF's ranges (`joint_limits`, within +-89.5 deg of its zero: the range
   rows take ranges narrower than 180 deg) and efforts (`effort_limits`, hard bounds on the
-  torques) per joint; its slowest velocity limit for every joint (`joint_speed_max`: the
-  planner's speed rows take one bound). The locked joints' efforts are bounded too
+  torques) per joint; its velocity limits per joint (`joint_speed_limits`, a left-right
+  pair's the smaller, a ball's the smallest of its three; `joint_speed_max`, the slowest,
+  where no joint is slower than 600 deg/s, faster than a walk turns any joint). The locked joints' efforts are bounded too
   (`robot.holds`, `gait_planner.model.urdf_holds`).
 * **Walking envelope.** An upright walk (`gait_planner.model.urdf_envelope`): the base
   within 10 deg of upright, hip yaw within +-15 deg, the stance knee within +-45 deg in
@@ -99,6 +100,7 @@ _MIN_MASS = 1e-6  # kg: a moving body lighter than this is massless
 _INERTIA_TOLERANCE = 1e-9  # relative: eigenvalues and triangle inequality
 WALKER3D_LEG = 0.897  # m, walker3d's hip height standing (config/scenes/walker3d.yaml)
 WALKER3D_STEP_RATIO = 0.6338 / WALKER3D_LEG
+WALK_JOINT_SPEED = 600.0  # deg/s: no walk's joint turns faster (the verifier's JOINT_SPEED_MAX)
 
 
 @dataclass(frozen=True)
@@ -304,6 +306,7 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
             efforts[jname] = float(model.effortLimit[jm.idx_v])
         if 0 < model.velocityLimit[jm.idx_v] < 1e10:
             speeds[jname] = round(math.degrees(model.velocityLimit[jm.idx_v]), 6)
+    speed_limits = _speed_limits(model, order[1:], ball_of, left_of, speeds)
     local = {j: {p: bodies[j].local(v) for p, v in bodies[j].points.items()} for j in order}
     mirror_geometry({j: bodies[j].name for j in order}, left_of, twins, local, joints,
                     changes)
@@ -366,7 +369,7 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
             "options": {**_swing_options(leg, half_widths), **envelope,
                         **({"leg_clearance": float(leg_clearance)} if spheres else {}),
                         "joint_limits": limits, "effort_limits": efforts,
-                        **({"joint_speed_max": min(speeds.values())} if speeds else {}),
+                        **_speed_options(speed_limits, joints),
                         "step_length_bounds": [round(0.6 * step, 4), round(1.4 * step, 4)]},
         },
         "robot": {**source, "links": links},
@@ -378,8 +381,9 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
               f"0.01 s sqrt(L / 0.897 m) (walker3d scaled).\n# Joint ranges: the URDF's within "
               f"+-{_RANGE_MAX} deg of its zero pose (the planner's range rows);\n# collision: "
               f"spheres containing the lower legs' collision geometry (leg_clearance between "
-              f"legs);\n# joint_speed_max: the slowest joint's velocity limit (one bound for "
-              f"every joint).\n# Walking envelope (gait_planner.model.urdf_envelope): the base "
+              f"legs);\n# joint_speed_limits: each joint's own velocity limit (a left-right pair's "
+              f"and a ball's: the smaller;\n# joint_speed_max, the slowest, where none is under "
+              f"{WALK_JOINT_SPEED:g} deg/s).\n# Walking envelope (gait_planner.model.urdf_envelope): the base "
               f"link within {UPRIGHT_DEG:g} deg of upright,\n# hip yaw within "
               f"+-{HIP_YAW_DEG:g} deg, the stance knee within +-{STANCE_KNEE_DEG:g} deg in "
               f"single support.\n")
@@ -402,6 +406,38 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
             f"#   {change}\n" for change in changes)
     text = header + yaml.safe_dump(scene, sort_keys=False, width=100, default_flow_style=None)
     return UrdfDraft(text, name, tuple(ids), lock_angles)
+
+
+def _speed_options(limits: dict[str, float], joints) -> dict:
+    """The gait's speed option: ``joint_speed_max`` the slowest limit where every planned
+    joint has one and none is slower than a walk's joints turn (`WALK_JOINT_SPEED`: G1's
+    1146 deg/s, iCub's, Bolt's; one row function for all, as the shipped scenes), else
+    ``joint_speed_limits``, each joint its own (Romeo's hip yaw 18.3 deg/s, Talos's)."""
+    if not limits:
+        return {}
+    if set(limits) == set(joints) and min(limits.values()) >= WALK_JOINT_SPEED:
+        return {"joint_speed_max": min(limits.values())}
+    return {"joint_speed_limits": limits}
+
+
+def _speed_limits(model, joints, ball_of, left_of, speeds) -> dict[str, float]:
+    """{scene joint: deg/s}: each planned joint's URDF velocity limit (`speeds`, by URDF
+    joint), a ball's the smallest of its three joints' (its rows bound the whole relative
+    rotation), a joint and its mirror twin's the smaller of theirs (the half cycle's mirror
+    image walks each leg with the other's rows); joints without a limit left out."""
+    def own(j):
+        names = ([str(model.names[i]) for i in ball_of[j].joints] if j in ball_of
+                 else [str(model.names[j])])
+        values = [speeds[n] for n in names if n in speeds]
+        return min(values) if values else None
+
+    twin = {**left_of, **{l: r for r, l in left_of.items()}}
+    out = {}
+    for j in joints:
+        values = [v for v in (own(j), own(twin[j]) if j in twin else None) if v is not None]
+        if values:
+            out[ball_of[j].name if j in ball_of else str(model.names[j])] = min(values)
+    return out
 
 
 def _swing_options(leg: float, half_widths: dict[int, float]) -> dict[str, float]:

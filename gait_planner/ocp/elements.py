@@ -215,9 +215,10 @@ class Layout:
     def interval_element(self, fn: ca.Function, next_mirrored: bool) -> ca.Function:
         """fn(q_n, q_{n+1}, h_n, c[, ground]) of interval n as an SX Function of
         z = (u_n, u_{n+1}, sigma_n), pz = (qref_n, qref_{n+1}, step length, ground) and
-        c = (base time step, constant)."""
+        c = (base time step, constants: one for most, one per joint for "joint_speeds")."""
         mb, nd, k, G = self.mb, self.mb.ndof, self.mb.k, len(PARAMETERS)
-        z, pz, c = ca.SX.sym("z", 2 * nd + 1), ca.SX.sym("pz", 2 * k + 1 + G), ca.SX.sym("c", 2)
+        z, pz = ca.SX.sym("z", 2 * nd + 1), ca.SX.sym("pz", 2 * k + 1 + G)
+        c = ca.SX.sym("c", fn.size1_in(3))
         ground = pz[2 * k + 1 :]
         q0 = mb.reparametrise(z[0:nd], pz[0:k])
         q1 = mb.reparametrise(z[nd : 2 * nd], pz[k : 2 * k])

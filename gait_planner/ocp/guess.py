@@ -7,7 +7,8 @@ cycle boundary the mirrored path of its partner (q_{n+N-1} = mirror(q_n) + step)
 follows the mean of the contact targets at a slightly lowered height, upright. Each node's
 configuration is then fitted to these targets by Gauss-Newton in the nodal
 reparametrisation about the scene pose, continued from node to node, so every guess
-satisfies all internal and joint constraints exactly.
+satisfies all internal and joint constraints exactly; node 0, fitted from the scene pose,
+is fitted again from node 1 where some joint jumps more than `JUMP_DEG` between them.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.buffered import bind
-from gait_planner.model.angles import configuration
+from gait_planner.model.angles import configuration, joint_angles
 from gait_planner.model.ground import LEVEL, Ground
 from gait_planner.ocp.mirror import contact_partners
 from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
@@ -26,6 +27,7 @@ from gait_planner.ocp.transcription import FORCE_SCALE, Transcription
 LIFT = 0.05  # m, swing lift of a free contact point at the middle of its gap (plus a stair's height)
 DIP = 0.07  # m, root lowered below the scene pose (legs must span a step)
 _W_CONTACT, _W_ROOT, _W_UPRIGHT, _W_SMALL = 1.0, 0.1, 0.3, 1e-3
+JUMP_DEG = 45.0  # a joint angle's jump from node 0 to node 1 that asks for node 0 again
 
 
 def contact_targets(tr: Transcription, q_pose: np.ndarray, step: float,
@@ -125,15 +127,30 @@ def kinematic_guess(tr: Transcription, step: float, ground: Ground = LEVEL) -> n
     residual = _bound(ca.Function("guess_residual", [u, tgt],
                                   [r, ca.densify(ca.jacobian(r, u))]).expand())
 
-    out = np.zeros((tr.N + 1, mb.k))
-    x = np.zeros(mb.ndof)
-    for n in range(tr.N + 1):
+    def node_targets(n):
         pts = [targets[name][n] for name in names]
         root_target = np.array([np.mean([p[0] for p in pts]) + offset,
                                 q_pose[root + 1], q_pose[root + 2] - DIP])
-        t = np.concatenate(pts + [root_target])
-        x = _levenberg_marquardt(residual, x, t)
+        return np.concatenate(pts + [root_target])
+
+    out = np.zeros((tr.N + 1, mb.k))
+    x, xs = np.zeros(mb.ndof), []
+    for n in range(tr.N + 1):
+        x = _levenberg_marquardt(residual, x, node_targets(n))
+        xs.append(x)
         out[n] = np.array(mb.reparametrise(x, qref)).ravel()
+    # node 0 again from node 1's fit: from the scene pose the fit can end in another branch
+    # that meets the targets as well (Romeo's held right foot rolled 80 deg about the line
+    # through its two contact points at node 0 only: a joint angle jumps 87 deg to node
+    # 1); where a joint jumps more than JUMP_DEG, the branch continued from node 1 is kept
+    # if it fits no worse (walker3d's 24 deg jump at node 0 is kept: its shipped plans)
+    if np.abs(np.degrees(joint_angles(mb.scene, out[0]) - joint_angles(mb.scene, out[1]))
+              ).max() > JUMP_DEG:
+        t0 = node_targets(0)
+        again = _levenberg_marquardt(residual, xs[1], t0)
+        first, second = (float(np.sum(residual(v, t0)[0] ** 2)) for v in (xs[0], again))
+        if second <= first:
+            out[0] = np.array(mb.reparametrise(again, qref)).ravel()
     return out
 
 

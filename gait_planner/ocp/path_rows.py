@@ -26,7 +26,9 @@ from gait_planner.ocp.clearance import (approach_schedule, clearance_rows,
 from gait_planner.ocp.elements import ElementGroup
 from gait_planner.ocp.legs import SMOOTHING, leg_clearance_rows
 from gait_planner.ocp.posture import (JOINT_RANGE_ROW_UPPER, joint_limit_constants,
-                                      joint_limit_rows, joint_speed_margins)
+                                      joint_limit_rows, joint_speed_margins,
+                                      joint_speeds_margins)
+from gait_planner.ocp.settings import joint_speed_bounds
 
 FORCE_SCALE = 1000.0  # N: contact multipliers are unknowns in these units
 
@@ -103,10 +105,17 @@ class PathRows:
                 self._ineq.append((name, ca.vec(rows)))
                 self._without_elements[name] = ca.MX(rows.numel(), 1)
                 self._upper[name] = JOINT_RANGE_ROW_UPPER
-        if s.joint_speed_max > 0 and mb.scene.joints:
+        speeds = joint_speed_bounds(mb.scene, s)  # deg/s per joint, 0 = none
+        if any(w > 0 for w in speeds):
             first_row = sum(int(e.shape[0]) for _, e in self._eq + self._ineq)
-            speed = self._interval_terms(joint_speed_margins(mb), math.radians(s.joint_speed_max),
-                                         first_row)
+            if len(set(speeds)) == 1:  # one bound: the function every scene shares
+                speed = self._interval_terms(joint_speed_margins(mb),
+                                             math.radians(speeds[0]), first_row)
+            else:  # a bound per joint (joint_speed_limits), unbounded joints left out
+                bounded = [(j.name, w) for j, w in zip(mb.scene.joints, speeds) if w > 0]
+                speed = self._interval_terms(
+                    joint_speeds_margins(mb, tuple(n for n, _ in bounded)),
+                    np.radians([w for _, w in bounded]), first_row)
             self._ineq.append(("joint_speed", ca.vec(speed)))
             self._without_elements["joint_speed"] = ca.MX(speed.numel(), 1)
         legs = leg_clearance_rows(mb) if s.legs_apart else None

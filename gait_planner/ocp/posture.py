@@ -179,6 +179,25 @@ def joint_speed_margins(mb: Multibody) -> ca.Function:
                        ["q", "q_next", "h", "c"], ["margin"])
 
 
+def joint_speeds_margins(mb: Multibody, joints: tuple[str, ...]) -> ca.Function:
+    """`joint_speed_margins` of the joints named only, each with its own bound: c = (base
+    time step s, w_1 .. w_m rad/s), w_i the bound of joints[i], row i divided by
+    (w_i base_time_step)^2 (the joint_speed_limits option; one bound for every joint is
+    `joint_speed_margins`, whose compiled function the shipped scenes share)."""
+    q0, q1, h = ca.SX.sym("q", mb.k), ca.SX.sym("q_next", mb.k), ca.SX.sym("h")
+    c = ca.SX.sym("c", 1 + len(joints))
+    by_name = {j.name: j for j in mb.scene.joints}
+    rows = []
+    for i, name in enumerate(joints):
+        j, w = by_name[name], c[1 + i]
+        rows.append((8 * ca.sin(0.5 * w * h) ** 2
+                     - ca.sumsqr(_rotation_between(mb, q1, j.parent, j.child)
+                                 - _rotation_between(mb, q0, j.parent, j.child)))
+                    / (w * c[0]) ** 2)
+    return ca.Function("joint_speeds", [q0, q1, h, c], [ca.vertcat(*rows)],
+                       ["q", "q_next", "h", "c"], ["margin"])
+
+
 def twist_squares(mb: Multibody) -> ca.Function:
     """CasADi Function (q_n, q_{n+1}, h_n, c) -> c[1] h_n sum over joints of
     1 - (d2_parent . d2_child)^2 at q_n (J s for the weight c[1] in J; c[0] the base time

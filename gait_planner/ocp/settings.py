@@ -86,6 +86,9 @@ class GaitSettings:
     point slows towards the strike over its swing rather than in one interval
     (`gait_planner.ocp.clearance.approach_schedule`); joint_speed_max deg/s (0 = off):
     every joint's relative rotation over an interval stays below joint_speed_max * h_n;
+    joint_speed_limits ((joint, deg/s), ...) from the option ``joint_speed_limits: {joint:
+    deg/s}``: the joints named keep their own bound instead (a URDF's <limit velocity>,
+    `check_joint_speed_limits`; the rest keep joint_speed_max; `joint_speed_bounds`);
     speed m/s (0 = free durations): the half cycle's mean forward speed step_length / (t_{N-1} - t_0), held by one
     equality row on sigma (`gait_planner.ocp.transcription.speed_row`); `settings_for`
     refuses a speed outside `speed_range`; speed_max m/s (0 = none): the fastest mean
@@ -152,6 +155,7 @@ class GaitSettings:
     strike_speed_max: float = 0.0
     strike_deceleration_max: float = 0.0
     joint_speed_max: float = 0.0
+    joint_speed_limits: tuple[tuple[str, float], ...] = ()
     speed: float = 0.0
     speed_max: float = 0.0
     step_length_free: bool = False
@@ -249,6 +253,34 @@ def check_effort_limits(scene: Scene, limits) -> tuple[tuple[str, float], ...]:
                                 f"got {value!r}")
         out.append((str(name), float(value)))
     return tuple(out)
+
+
+def check_joint_speed_limits(scene: Scene, limits) -> tuple[tuple[str, float], ...]:
+    """((joint, deg/s), ...) of the option ``joint_speed_limits: {joint: deg/s}``: each joint
+    named keeps its relative rotation over an interval below its own limit times h_n (a
+    URDF's <limit velocity>); SettingsError naming an unknown joint or a limit that is not
+    positive."""
+    if not isinstance(limits, Mapping):
+        raise SettingsError(f"joint_speed_limits: need a mapping joint -> deg/s, got {limits!r}")
+    joints = {j.name for j in scene.joints}
+    out = []
+    for name, value in limits.items():
+        if name not in joints:
+            raise SettingsError(f"joint_speed_limits.{name}: not a joint of scene "
+                                f"{scene.name!r} (its joints: {sorted(joints)})")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value) or value <= 0:
+            raise SettingsError(f"joint_speed_limits.{name}: need a positive speed (deg/s), "
+                                f"got {value!r}")
+        out.append((str(name), float(value)))
+    return tuple(out)
+
+
+def joint_speed_bounds(scene: Scene, s: GaitSettings) -> tuple[float, ...]:
+    """deg/s per joint of `scene` (its order; 0 = unbounded): its joint_speed_limits entry,
+    else joint_speed_max."""
+    own = dict(s.joint_speed_limits)
+    return tuple(float(own.get(j.name, s.joint_speed_max)) for j in scene.joints)
 
 
 def widened_scaling_bounds(s: GaitSettings) -> tuple[float, float]:
@@ -364,6 +396,9 @@ def settings_for(scene: Scene, *, step_length: float | None = None, cost: str | 
                 scene, options["phase_joint_limits"])
         if "effort_limits" in options:
             options["effort_limits"] = check_effort_limits(scene, options["effort_limits"])
+        if "joint_speed_limits" in options:
+            options["joint_speed_limits"] = check_joint_speed_limits(
+                scene, options["joint_speed_limits"])
         check_posture(scene, {"posture": options.get("posture", "paper")})
     except PostureError as err:
         raise SettingsError(str(err)) from None

@@ -372,13 +372,13 @@ class Transcription(PathRows, HeldRows, CostTerms):
                 np.stack([rows for _, rows in chosen], 1),
                 np.array([self.settings.base_time_step, 0.0])))
 
-    def _interval_terms(self, fn: ca.Function, constant: float, first_row):
+    def _interval_terms(self, fn: ca.Function, constant, first_row):
         """fn(q_n, q_{n+1}, h_n, c) (r,) of intervals 0..N-2 as an MX (r, N-1), with
-        c = (base time step, constant). Declared as elements of the NLP (`ElementGroup`,
+        c = (base time step, constant) (constant a number or a vector). Declared as elements of the NLP (`ElementGroup`,
         `Layout.interval_element`): rows first_row + r n + (0..r-1) of g, or with first_row None
         terms of the cost; first_row False declares nothing (a term not in the NLP)."""
         N = self.N
-        c = np.array([self.settings.base_time_step, constant])
+        c = np.r_[self.settings.base_time_step, np.atleast_1d(constant)].astype(float)
         if first_row is not False:
             size = int(fn.size1_out(0))
             groups = ((False, range(N - 1)),) if not self.layout.mirrored(True) else \

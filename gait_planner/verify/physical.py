@@ -29,7 +29,8 @@ n . p; stairs: z less the height of the tread under the point).
   speed over the swing's interval j before that one stays below strike_speed_max + a j
   base_time_step.
 * Joint speed: the published JointTrajectory velocities stay below `JOINT_SPEED_MAX`, or
-  the scene's higher joint_speed_max option (`joint_speed_limit`).
+  the scene's higher joint_speed_max option, or a joint's own higher joint_speed_limits
+  entry (`joint_speed_limits`); the joint nearest its bound is reported.
 * Torque smoothness: away from contact switches (a node whose held contacts differ from its
   neighbour's, and the nodes next to it), no joint's published effort zigzags: three
   consecutive first differences alternating in sign, each larger than `ZIGZAG_STEP` of the
@@ -69,9 +70,9 @@ class PhysicalReport:
     edge_clearance_at: tuple[str, int] | None  # (point or foot edge, node n of segment n -> n + 1)
     max_strike_speed: float  # m/s, along the ground, over the interval before a strike
     strike_speed_bound: float  # m/s, the metadata's strike_speed_max (0: none)
-    max_joint_speed: float  # deg/s, published velocities
-    joint_speed_bound: float  # deg/s, `joint_speed_limit`
-    fastest_joint: str
+    max_joint_speed: float  # deg/s, published velocities of `fastest_joint`
+    joint_speed_bound: float  # deg/s, its bound (`joint_speed_limits`)
+    fastest_joint: str  # the joint nearest its bound (the fastest, with one bound)
     max_torque_second_difference: float  # relative to the peak effort, away from switches
     # (that relative to its joint's own peak, joint, node): joints above STRONG_JOINT of the
     # peak effort, away from switches (`own_peak_roughness`)
@@ -90,6 +91,16 @@ def joint_speed_limit(scene: SceneData) -> float:
     declares a higher one (a run's joints turn faster than a walk's)."""
     declared = scene.options.get("joint_speed_max", 0.0)
     return max(JOINT_SPEED_MAX, float(declared) if isinstance(declared, (int, float)) else 0.0)
+
+
+def joint_speed_limits(scene: SceneData, names) -> np.ndarray:
+    """deg/s per published joint of `names`: `joint_speed_limit`, or the joint's own entry of
+    the scene's option joint_speed_limits where it is higher (a drafted robot's URDF
+    velocity limits)."""
+    own = scene.options.get("joint_speed_limits") or {}
+    default = joint_speed_limit(scene)
+    return np.array([max(default, float(own[n])) if isinstance(own.get(n), (int, float))
+                     else default for n in names], dtype=float)
 
 
 def switch_nodes(active: tuple[tuple[str, ...], ...]) -> tuple[int, ...]:
@@ -198,9 +209,11 @@ def check_physical(rec, scene: SceneData, mu: float) -> PhysicalReport:
     failures += approach
 
     speed = np.degrees(np.abs(np.asarray(rec.velocities, dtype=float)))
-    fastest = np.unravel_index(int(speed.argmax()), speed.shape) if speed.size else (0, 0)
-    max_speed = float(speed.max()) if speed.size else 0.0
-    speed_limit = joint_speed_limit(scene)
+    limits = joint_speed_limits(scene, rec.joint_names)
+    share = speed / limits[: speed.shape[1]] if speed.ndim == 2 else speed
+    fastest = np.unravel_index(int(share.argmax()), speed.shape) if speed.size else (0, 0)
+    max_speed = float(speed[fastest]) if speed.size else 0.0
+    speed_limit = float(limits[fastest[1]]) if speed.size else joint_speed_limit(scene)
     if max_speed > speed_limit:
         failures.append(f"joint {rec.joint_names[fastest[1]]} turns at {max_speed:.0f} deg/s "
                         f"at node {fastest[0]} (limit {speed_limit:.0f} deg/s)")
