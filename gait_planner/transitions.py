@@ -1,14 +1,16 @@
 """Planning a transition: from a given start state onto the request's periodic gait
-(`ocp.transition`), then as many of the gait's half cycles as the request's steps ask, as
-one motion, certified against the continuous dynamics like every plan.
+(`ocp.transition`, docs/design.md section 16), then as many of the gait's half cycles as the
+request's steps ask, as one motion, certified against the continuous dynamics like every
+plan; or, with `stop`, to standing at rest.
 
 The gait is planned (or found in the planner's store) first, with `strategies.
 plan_certified`; the transition is then solved on the gait's grid, starting from the gait
-itself: its inner nodes, torques and phase durations, the start at node 0 and the gait's
-next half cycle at nodes N-1 and N. From the gait's own first state that start is the
-optimum (`start_of_plan`).
+itself (its inner nodes, torques and phase durations; the start at node 0 and the gait's
+next half cycle at nodes N-1 and N: from the gait's own first state, `start_of_plan`, that
+is the optimum) or, re-planning, from the planner's last transition of the same shape with
+its multipliers. A start on the other foot is planned as its mirror image; a state of a
+recording is `start_of_recording`'s.
 """
-
 from __future__ import annotations
 
 import dataclasses
