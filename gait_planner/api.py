@@ -32,7 +32,7 @@ from gait_planner.pipeline import plan_problem, summary
 from gait_planner.problem import SceneLookup, resolve
 from gait_planner.request import PlanRequest, RequestError
 from gait_planner.result import PlanResult
-from gait_planner.transitions import HALVES, start_of_recording
+from gait_planner.transitions import start_of_recording
 
 __all__ = ["PlanRequest", "PlanResult", "Planner", "RequestError", "StartError", "StartState",
            "check", "plan", "record", "start_of_joint_state", "start_of_plan",
@@ -43,7 +43,7 @@ _planner: Planner | None = None
 
 def plan(request: PlanRequest | str, planner: Planner | None = None,
          scenes: SceneLookup = load_scene, start: StartState | None = None,
-         halves: int = HALVES, stop: bool = False) -> PlanResult:
+         halves: int | None = None, stop: bool = False) -> PlanResult:
     """The plan of `request` (a `PlanRequest`, or a scene's name for its default request
     with compiled derivatives),
     certified against the continuous dynamics, refined while the certificate asks and

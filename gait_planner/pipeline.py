@@ -25,7 +25,7 @@ from gait_planner.request import PlanRequest
 from gait_planner.result import PlanResult
 from gait_planner.ocp.transition import StartState
 from gait_planner.strategies import plan_certified, plan_free_step
-from gait_planner.transitions import HALVES, plan_transition
+from gait_planner.transitions import plan_transition
 
 
 @dataclass(frozen=True)
@@ -72,14 +72,14 @@ def prepare(planner: Planner, problem: Problem, rrd: bool = True) -> str:
 
 
 def plan_problem(planner: Planner, problem: Problem, seed: StoredPlan | None = None,
-                 start: StartState | None = None, halves: int = HALVES,
+                 start: StartState | None = None, halves: int | None = None,
                  stop: bool = False) -> PlanResult:
     """The plan of `problem`, nothing written (`plan_joined` with its steps and start;
     seed: a gait library's start, `gaitlib.serve.library_start`); with `start`, the
-    transition of `halves` half cycles from it onto the gait and then the gait's steps
-    half cycles (`gait_planner.transitions.plan_transition`; `ocp.transition.StartError`
-    if it cannot start there); with `stop`, from `start` (or the gait's first node) to
-    standing at rest in `halves` half cycles."""
+    transition of `halves` half cycles (None: the default) from it onto the gait and then
+    the gait's steps half cycles (`gait_planner.transitions.plan_transition`;
+    `ocp.transition.StartError` if it cannot start there); with `stop`, from `start` (or
+    the gait's first node) to standing at rest in `halves` half cycles."""
     if start is not None or stop:
         return plan_transition(planner, problem.scene, problem.settings, start,
                                steps=problem.steps, warm_start=problem.warm_start,
@@ -111,7 +111,7 @@ def plan_joined(planner: Planner, scene: Scene, settings: GaitSettings, *, steps
 def plan_and_record(planner: Planner, problem: Problem, output_dir: str | Path, *,
                     rrd: bool = True, stage: Callable[[str], None] | None = None,
                     seed: StoredPlan | None = None, start: StartState | None = None,
-                    halves: int = HALVES, stop: bool = False) -> Outcome:
+                    halves: int | None = None, stop: bool = False) -> Outcome:
     """Plan `problem` (`plan_problem`, from `seed` or the state `start` if given); on
     success write
     <output_dir>/<stem>.mcap (and .rrd).

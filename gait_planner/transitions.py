@@ -41,6 +41,9 @@ MAX_HALVES = 4  # half cycles a transition may take
 # needed 2 (in one: 2945-3227 iterations, J 40-43 against 21, the certificate missed; in
 # two: 117-170 iterations, every check passed; benchmarks/HISTORY.md, 2026-12-07).
 HALVES = 2
+# Half cycles of a stop by default: walker2d's stop in two did not converge (benchmarks/
+# HISTORY.md, 2026-12-07), in one it did once.
+STOP_HALVES = 1
 
 
 def transition_start(tr: Transcription, gait: PlanResult, start: StartState,
@@ -86,9 +89,10 @@ def last_transition(tr: Transcription, last: StoredPlan, start: StartState, offs
 
 def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
                     start: StartState | None, *, steps: int = 1, warm_start: bool = True,
-                    halves: int = HALVES, from_last: bool = True, stop: bool = False
+                    halves: int | None = None, from_last: bool = True, stop: bool = False
                     ) -> PlanResult:
-    """The transition of `halves` half cycles (1 to MAX_HALVES) from `start` onto the gait
+    """The transition of `halves` half cycles (1 to MAX_HALVES; None: HALVES, a stop
+    STOP_HALVES) from `start` onto the gait
     of (scene, settings), followed by `steps` of the gait's half cycles, certified (module
     docstring). A start the first phase cannot hold but its mirror image can (on the
     other foot: every other strike of a walk) is planned mirrored and the answer mirrored
@@ -100,6 +104,7 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     the gait's first node.
     `ocp.transition.StartError` if the start cannot be planned from; a failed plan (of the
     gait or the transition) has success False and says which in its message."""
+    halves = (STOP_HALVES if stop else HALVES) if halves is None else halves
     if not 1 <= halves <= MAX_HALVES:
         raise StartError(f"a transition takes 1 to {MAX_HALVES} half cycles, got {halves}")
     from gait_planner.verify.certify import certificate_metadata, certified

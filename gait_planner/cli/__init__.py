@@ -124,9 +124,10 @@ def _add_plan(commands: argparse._SubParsersAction) -> None:
                         help="end standing at rest, both feet flat, after "
                         "--transition-half-cycles (from --from's state or the gait's first "
                         "node) instead of walking on")
-    parser.add_argument("--transition-half-cycles", dest="halves", type=int, default=2,
+    parser.add_argument("--transition-half-cycles", dest="halves", type=int, default=None,
                         metavar="K", help="half cycles of the transition --from a state "
-                        "(1 to 4; default 2: one cannot mend every start)")
+                        "(1 to 4; default 2: one cannot mend every start; with --to "
+                        "standing 1)")
     add_urdf_options(parser)
     parser.set_defaults(handler=_plan)
 
@@ -172,7 +173,7 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
         start = _start_of(getattr(args, "start", None), problem.scene)
         outcome = plan_and_record(planner, problem, target.parent if str(target.parent) else ".",
                                   rrd=not args.no_rrd, start=start,
-                                  halves=getattr(args, "halves", 2),
+                                  halves=getattr(args, "halves", None),
                                   stop=getattr(args, "stop", None) == "standing")
     except (RequestError, StartError) as err:
         raise CliError(str(err)) from None
