@@ -33,13 +33,21 @@ from gait_planner.ocp.transition import (StartError, StartState, check_start, jo
                                          transition_settings)
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.result import PlanResult
-from gait_planner.strategies import COLD_ATTEMPTS, WARM_ATTEMPTS, plan_certified
+from gait_planner.strategies import COLD_ATTEMPTS, plan_certified
 
-VARIANTS = ("warm", "cold", "cold_inertia")  # the IPOPT instances a transition may use
+VARIANTS = ("cold", "cold_inertia")  # the IPOPT instances a transition may use
+# A transition's first attempt, from the gait or from the last transition: IPOPT's cold
+# variant without its relaxed stage. Its bound push and adaptive barrier beat the warm
+# variant's (built for a previous optimum's active set) here: walker3d, two half cycles,
+# from the gait (no multipliers) from its own first node and a start 1.3 cm and 0.1 rad/s
+# off, 21 and 23 iterations against 279 and 162; re-planned from the last transition with
+# its multipliers, 5 seeded starts, median 16 against 22 (2026-12-07, benchmarks/HISTORY.md).
+FIRST_ATTEMPT = ([("cold", False, False)],)
 MAX_HALVES = 4  # half cycles a transition may take
 # Half cycles by default: walker3d from starts 1.3-1.4 cm and 0.1 rad/s off its first node
-# needed 2 (in one: 2945-3227 iterations, J 40-43 against 21, the certificate missed; in
-# two: 117-170 iterations, every check passed; benchmarks/HISTORY.md, 2026-12-07).
+# needed 2 (in one: 2021-4621 iterations, J 40-43 against 21, the certificate missed or the
+# efforts zigzag; in two: 22-24 iterations, every check passed; benchmarks/HISTORY.md,
+# 2026-12-07).
 HALVES = 2
 # Half cycles of a stop by default: walker2d's stop in two did not converge (benchmarks/
 # HISTORY.md, 2026-12-07), in one it did once.
@@ -137,8 +145,9 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     kept = planner.stored_plans(tr_scene, tr_settings) if from_last else []
     begin = last_transition(tr, kept[-1], start, offset, gait, halves) if kept else first
     clock = Clock.begin(settings.solve.max_solve_time)
-    # a stop's guess is not near its optimum (it stands where the gait walks on): cold
-    attempts = COLD_ATTEMPTS if stop and not kept else WARM_ATTEMPTS + COLD_ATTEMPTS
+    # A stop's guess is not near its optimum (it stands where the gait walks on): the cold
+    # attempts, relaxed first; a transition: FIRST_ATTEMPT, then those.
+    attempts = (() if stop and not kept else FIRST_ATTEMPT) + COLD_ATTEMPTS
     reached = planner.attempt(tr_scene, tr_settings, attempts[0], begin, clock)
     origin = begin.origin
     for attempt in attempts[1:] if not reached.success else ():

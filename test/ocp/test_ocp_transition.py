@@ -94,8 +94,8 @@ def test_two_half_cycles_from_the_plans_own_first_node_are_the_gait_walked(gait)
 @pytest.mark.slow
 def test_a_start_one_half_cycle_cannot_mend_takes_two():
     """walker3d 1.3 cm sideways and rolling at -0.099 rad/s: in one half cycle the
-    optimum needs about 3000 iterations, J twice the gait's, and misses the certificate
-    (benchmarks/HISTORY.md); in two (the default) every check passes."""
+    optimum needs 2000-4600 iterations, J twice the gait's, and misses the certificate or
+    zigzags (benchmarks/HISTORY.md); in two (the default) every check passes."""
     scene = load_scene("walker3d")
     settings = settings_for(scene, compiled=True)
     planner = Planner()
