@@ -80,16 +80,29 @@ def distance(a: dict, b: dict, same_shape: bool = True) -> float:
     return steps + (0.0 if same_shape else ANOTHER_SHAPE)
 
 
+def buildable(a: dict, b: dict) -> bool:
+    """Whether every point of the straight path from a to b is a ground the planner builds:
+    no ramp with stairs (`gait_planner.model.ground.Ground`), so the slope or the stair
+    height stays 0 all the way."""
+    return (a["slope"] == 0.0 and b["slope"] == 0.0) or \
+        (a["step_height"] == 0.0 and b["step_height"] == 0.0)
+
+
 def nearest(planner: Planner, scene: Scene, settings: GaitSettings
             ) -> tuple[StoredPlan, dict, float] | None:
     """The kept optimum (any problem of the grid of `settings`: `Planner.all_plans`)
-    nearest to the request by `distance`: (plan, its point, distance), or None if the
-    planner keeps none."""
+    nearest to the request by `distance` whose path is `buildable`: (plan, its point,
+    distance), or None if the planner keeps none. (A ramp's plan as the start of stairs,
+    as near as the level default by `distance`, made `make setup` fail with "a ramp with
+    stairs is not a ground this planner builds" when the store listed it first,
+    2026-12-07.)"""
     tr = planner.build(scene, settings, ())
     target = point_of(settings)
     best = None
     for plan in planner.all_plans(scene, settings):
         point = start_point(plan, tr.duration(plan.x), settings.speed > 0)
+        if not buildable(point, target):
+            continue
         d = distance(point, target, _shape(plan.step_height, plan.speed)
                      == _shape(settings.step_height, settings.speed))
         if best is None or d < best[2]:

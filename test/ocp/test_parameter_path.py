@@ -147,3 +147,34 @@ def test_a_failed_path_is_planned_cold_and_says_so(monkeypatch):
     assert "along a parameter path (failed after" in origin and "kinematic guess" in origin
     reference = np.load(CONSTANTS)
     assert result.cost_value == pytest.approx(float(reference["ramp_J"]), rel=1e-7)
+
+
+def test_no_path_runs_from_a_ramp_onto_stairs():
+    """A kept ramp plan is never the start of a request on stairs (or a stairs plan of a
+    ramp's): the path between them would cross grounds with both, which the planner does
+    not build; the level default is taken instead, however the store orders them."""
+    from gait_planner.ocp.warm_starts import StoredPlan
+    from gait_planner.parameter_path import buildable
+
+    level = {"slope": 0.0, "step_height": 0.0, "step_length": 0.6, "friction_coefficient": 0.8,
+             "speed": 0.0}
+    assert buildable(level, {**level, "slope": 5.0})
+    assert buildable({**level, "step_height": -0.05}, {**level, "step_height": 0.1})
+    assert not buildable({**level, "slope": 2.5}, {**level, "step_height": 0.025})
+    assert not buildable({**level, "step_height": 0.025}, {**level, "slope": -2.5})
+
+    settings = settings_for(WALKER2D, step_height=0.025)
+    empty = np.zeros(1)
+    ramp = StoredPlan(settings.step_length, settings.friction_coefficient, empty, empty, empty,
+                      empty, slope=2.5)
+    default = StoredPlan(settings.step_length, settings.friction_coefficient, empty, empty,
+                         empty, empty)
+
+    class Kept:  # a planner that keeps the ramp's plan first
+        def build(self, scene, s, variants):
+            return type("Built", (), {"duration": staticmethod(lambda x: 0.6)})()
+
+        def all_plans(self, scene, s):
+            return [ramp, default]
+
+    assert nearest(Kept(), WALKER2D, settings)[0] is default
