@@ -7,6 +7,7 @@
   solves, refinements, walker3d's physical checks, the web viewer's screenshot): `make test`
   runs every other test (``-m "not slow"``, a few minutes on 2 cores), `make test-slow` runs
   these, and CI (`.ci/run`) runs both.
+* After a slow test the freed heap goes back to the system (`_release_memory_after_slow_tests`).
 * The `model` fixture returns a cached factory ``model(name) -> Model`` (scene, Multibody,
   DiscreteMechanics), so each scene's CasADi Functions are built once per session.
 """
@@ -15,7 +16,9 @@ from __future__ import annotations
 
 import gait_planner  # noqa: F401  (first: pins numpy's BLAS kernels before numpy loads)
 
+import ctypes
 import functools
+import gc
 from importlib import metadata
 from pathlib import Path
 from typing import Callable, Iterator, NamedTuple
@@ -43,6 +46,23 @@ def pytest_configure(config: pytest.Config) -> None:
 def strict_numerics() -> Iterator[None]:
     with np.errstate(all="raise", under="ignore"):
         yield
+
+
+# glibc's malloc_trim, None elsewhere: returns the freed heap to the system
+_MALLOC_TRIM = getattr(ctypes.CDLL(None), "malloc_trim", None)
+
+
+@pytest.fixture(autouse=True)
+def _release_memory_after_slow_tests(request) -> Iterator[None]:
+    """After a slow test (whole robots planned: G1's plan peaks at 12 GB), collect and
+    return the freed heap to the system, so that the slow suite's one process does not
+    keep the peaks of every robot before it (it held 19-20 GB of the machine's 24 when
+    test_node_robot started another process planning G1, 2026-12-07)."""
+    yield
+    if request.node.get_closest_marker("slow") is not None:
+        gc.collect()
+        if _MALLOC_TRIM is not None:
+            _MALLOC_TRIM(0)
 
 
 class Model(NamedTuple):
