@@ -304,9 +304,7 @@ def verify_plan(rec: RecordedPlan) -> VerificationReport:
             fail(f"nodes N-1, N are not the mirror images of nodes 0, 1 shifted by the step "
                  f"length {step:g} m and the rise {rise:g} m ({ground.describe()}): off by "
                  f"{period:.3e} m (limit {L['periodicity']:.0e} m)")
-        partner = {c: next(d for d, (bd, pd) in scene.contacts.items()
-                           if bd == scene.mirror[bc] and pd == pc)
-                   for c, (bc, pc) in scene.contacts.items()}
+        partner = scene.contact_partners
         force_scale = max([1.0] + [_norm(F) for fs in forces for F in fs.values()])
         periodic_force = 0.0
         for src, dst in ((N - 1, 0), (1, N)):
@@ -432,9 +430,7 @@ def _interval_error(scene: SceneData, rec: RecordedPlan, meta: dict, h: np.ndarr
     transition = "transition_half_cycles" in meta
     n_sigma = 1 + max((i for i, _ in scene.phases.values()), default=0)
     flipped = meta.get("transition_mirrored") == "true"
-    partner = {c: next(d for d, (bd, pd) in scene.contacts.items()
-                       if bd == scene.mirror[bc] and pd == pc)
-               for c, (bc, pc) in scene.contacts.items()}
+    partner = scene.contact_partners
     phases = dict(scene.phases)
     if transition and meta.get("transition_stop") == "true":  # a stop ends in "stand"
         first = next(iter(scene.phases.values()))[1]

@@ -169,10 +169,7 @@ class PlanSimulation:
             else:
                 self.segments.append([n, n + 1, self.active[n]])
         self.configs = [pin_configuration(self.scene, self.cm.model, row) for row in result.q]
-        contacts = self.scene.contacts
-        self.partner = {c: next(d for d, (bd, pd) in contacts.items()
-                                if bd == self.scene.mirror[bc] and pd == pc)
-                        for c, (bc, pc) in contacts.items()}  # mirror image's contact
+        self.partner = self.scene.contact_partners  # mirror image's contact
         # nodes away from contact switches and from their periodic images (n +- (N - 1))
         switches = switch_nodes(result.active_contacts)
         images = {m for n in switches for m in (n - self.N + 1, n + self.N - 1)

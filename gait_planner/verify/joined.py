@@ -26,17 +26,24 @@ from gait_planner.verify.limits import LIMITS
 from gait_planner.verify.report import VerificationReport
 
 
-def half_cycle(rec, nodes: int):
-    """The recording restricted to its first `nodes` nodes (fewer than it has), as one
-    plan: metadata steps = 1, the last node's discrete force that of its last interval."""
+def node_fields(rec, nodes: slice) -> dict:
+    """The fields of a recording that hold one entry per node (and per node of a topic's
+    log and header times), restricted to `nodes`: changes for `dataclasses.replace`."""
     n = rec.n_nodes
     changes = {}
     for f in dataclasses.fields(rec):
         value = getattr(rec, f.name)
         if isinstance(value, (tuple, np.ndarray)) and len(value) == n and f.name != "body_names":
-            changes[f.name] = value[:nodes]
+            changes[f.name] = value[nodes]
         elif isinstance(value, dict) and f.name in ("log_times_ns", "header_stamps_ns"):
-            changes[f.name] = {k: (v[:nodes] if len(v) == n else v) for k, v in value.items()}
+            changes[f.name] = {k: (v[nodes] if len(v) == n else v) for k, v in value.items()}
+    return changes
+
+
+def half_cycle(rec, nodes: int):
+    """The recording restricted to its first `nodes` nodes (fewer than it has), as one
+    plan: metadata steps = 1, the last node's discrete force that of its last interval."""
+    changes = node_fields(rec, slice(None, nodes))
     changes["metadata"] = dict(rec.metadata, steps="1")
     # a plan's last node carries the discrete force of its last interval only (f+_{N-1});
     # in the joined motion that node is inner and carries both intervals' (w_n B^T tau_n)
@@ -80,9 +87,7 @@ def verify_joined(rec, verify_plan) -> VerificationReport:
     step = float(meta["step_length"])
     rise = RecordedGround.of(meta).rise(step)
     P = angle_mirror(scene, rec.joint_names)
-    partner = {c: next(d for d, (bd, pd) in scene.contacts.items()
-                       if bd == scene.mirror[bc] and pd == pc)
-               for c, (bc, pc) in scene.contacts.items()}
+    partner = scene.contact_partners
     q0, effort0 = np.asarray(rec.q[:H]), np.asarray(rec.effort[:H])
     forces0 = [dict(zip(rec.contact_names[n], np.asarray(rec.contact_force_vectors[n])))
                for n in range(H)]

@@ -63,6 +63,13 @@ class SceneData:
     def body_index(self, name: str) -> int:
         return [b.name for b in self.bodies].index(name)
 
+    @property
+    def contact_partners(self) -> dict[str, str]:
+        """contact -> the contact at the same point of its body's mirror partner."""
+        return {c: next(d for d, (bd, pd) in self.contacts.items()
+                        if bd == self.mirror[bc] and pd == pc)
+                for c, (bc, pc) in self.contacts.items()}
+
 
 def parse_scene(text: str) -> SceneData:
     """The scene attached to a recording, from its YAML text (plain safe loading, by libyaml

@@ -23,7 +23,7 @@ import dataclasses
 
 import numpy as np
 
-from gait_planner.verify.joined import half_cycle
+from gait_planner.verify.joined import half_cycle, node_fields
 from gait_planner.verify.physical import check_physical
 from gait_planner.verify.recorded import certificate_of_recording
 from gait_planner.verify.mechanics import parse_scene
@@ -34,16 +34,9 @@ def from_node(rec, first: int):
     times from 0, metadata without the transition's keys, and its first node's discrete force
     that of its first interval (a plan's node 0 carries f-_0 only; in the whole motion
     that node is inner and carries both intervals')."""
-    n = rec.n_nodes
-    changes = {}
-    for f in dataclasses.fields(rec):
-        value = getattr(rec, f.name)
-        if isinstance(value, (tuple, np.ndarray)) and len(value) == n and f.name != "body_names":
-            changes[f.name] = value[first:]
-        elif isinstance(value, dict) and f.name in ("log_times_ns", "header_stamps_ns"):
-            changes[f.name] = {k: (v[first:] if len(v) == n else v) for k, v in value.items()}
+    changes = node_fields(rec, slice(first, None))
     t = np.asarray(rec.times, dtype=float)
-    changes["nodes"] = np.arange(n - first)
+    changes["nodes"] = np.arange(rec.n_nodes - first)
     changes["times"] = t[first:] - t[first]
     meta = {k: v for k, v in rec.metadata.items() if not k.startswith("transition_")}
     changes["metadata"] = meta
