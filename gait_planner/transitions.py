@@ -87,8 +87,7 @@ def last_transition(tr: Transcription, last: StoredPlan, start: StartState, offs
     start and targets at the ends."""
     N = tr.N
     along = mirror_parts(tr.mb)[1]
-    shift = offset - stance_offset(tr.mb.scene, StartState(last.qref[0], start.momentum, ""),
-                                   gait)
+    shift = offset - stance_offset(tr.mb.scene, last.qref[0], gait)
     ends = [] if tr.layout.rest else [join_targets(gait, offset, halves)]
     qref = np.vstack([start.q, last.qref[1 : N - 1] + shift * along, *ends])
     return Start(last.x, last.lam_x, last.lam_g, qref,
@@ -135,7 +134,7 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     start = start_of_plan(gait) if start is None else start
     tr_settings = transition_settings(settings, gait, start, halves, stop)
     tr_scene = transition_scene(scene, halves, stop)
-    offset = stance_offset(scene, start, gait)
+    offset = stance_offset(scene, start.q, gait)
     planner.stage("building the transition")
     try:
         tr = planner.build(tr_scene, tr_settings, VARIANTS, refinement=True)

@@ -32,7 +32,7 @@ from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Phase, Scene
 from gait_planner.ocp.mirror import (configuration_mirror, contact_partners, mirror_parts,
                                      torque_mirror)
-from gait_planner.ocp.walk_on import walk_on
+from gait_planner.ocp.walk_on import mirror_nodes, walk_on
 from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.solution import end_rates
 from gait_planner.result import PlanResult
@@ -158,29 +158,24 @@ def mirrored_result(result: PlanResult) -> PlanResult:
     (partner bodies, negated) and held contacts (partner points); phase names kept, as
     `ocp.walk_on` keeps them."""
     scene = result.scene
-    mb = Multibody(scene)
-    A, B = configuration_mirror(mb)[0], torque_mirror(mb)
-    partner, mirror = contact_partners(scene), dict(scene.gait.mirror)
-    S = np.array([1.0, -1.0, 1.0])
-    q = result.q @ A.T
+    q, tau, gen, forces, rolls, active = mirror_nodes(
+        Multibody(scene), result.q, result.tau, result.generalized_force,
+        result.contact_forces, result.roll_moments, result.active_contacts)
     velocities, accelerations = end_rates(scene, q, result.times)
     return dataclasses.replace(
-        result, q=q, tau=result.tau @ B.T, joint_angles=joint_angles(scene, q),
+        result, q=q, tau=tau, joint_angles=joint_angles(scene, q),
         joint_velocities=velocities, joint_accelerations=accelerations,
-        generalized_force=result.generalized_force @ A.T,
-        contact_forces={partner[c]: f * S for c, f in result.contact_forces.items()},
-        roll_moments={mirror.get(b, b): -r for b, r in result.roll_moments.items()},
-        active_contacts=tuple(tuple(partner[c] for c in a) for a in result.active_contacts),
-        settings=dict(result.settings, transition_mirrored="true"))
+        generalized_force=gen, contact_forces=forces, roll_moments=rolls,
+        active_contacts=active, settings=dict(result.settings, transition_mirrored="true"))
 
 
-def stance_offset(scene: Scene, start: StartState, gait: PlanResult) -> float:
-    """How far (m) along x the start's first held contact point is from the gait's at its
-    node 0: the gait is joined that much further on."""
+def stance_offset(scene: Scene, q: np.ndarray, gait: PlanResult) -> float:
+    """How far (m) along x the first held contact point of a start's configuration q (k,)
+    is from the gait's at its node 0: the gait is joined that much further on."""
     mb = Multibody(scene)
     first = scene.gait.phases[0].contacts[0]
     row = mb.contact_rows(first)[0]
-    return float(row @ start.q - row @ gait.q[0])
+    return float(row @ q - row @ gait.q[0])
 
 
 def join_targets(gait: PlanResult, offset: float, halves: int = 1) -> np.ndarray:

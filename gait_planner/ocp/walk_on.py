@@ -30,6 +30,18 @@ from gait_planner.result import PlanResult
 _S = np.array([1.0, -1.0, 1.0])
 
 
+def mirror_nodes(mb: Multibody, q, tau, gen, forces: dict, rolls: dict, active: tuple):
+    """The mirror images about y = 0 (no step) of nodes' configurations q (n, k), torques
+    tau (n, nt) (partner joints, `torque_mirror`), discrete forces gen (n, k), contact
+    forces {contact: (n, 3)} (partner points, y negated), roll moments {body: (n,)}
+    (partner bodies, negated) and held contacts (partner points); in that order."""
+    A, B = configuration_mirror(mb)[0], torque_mirror(mb)
+    partner, mirror = contact_partners(mb.scene), dict(mb.scene.gait.mirror)
+    return (q @ A.T, tau @ B.T, gen @ A.T, {partner[c]: f * _S for c, f in forces.items()},
+            {mirror.get(b, b): -r for b, r in rolls.items()},
+            tuple(tuple(partner[c] for c in a) for a in active))
+
+
 def walk_on(result: PlanResult, steps: int) -> PlanResult:
     """`result` (one successful half cycle) joined with its mirror images into `steps`
     half cycles (module docstring); steps = 1 returns `result` itself."""
@@ -42,9 +54,6 @@ def walk_on(result: PlanResult, steps: int) -> PlanResult:
     mb = Multibody(scene)
     A, shift, lift = configuration_mirror(mb, result.ground)
     climb = sum(b.mass for b in scene.bodies) * scene.gravity * result.ground.rise(s)  # J
-    B = torque_mirror(mb)
-    mirror = dict(scene.gait.mirror)
-    partner = contact_partners(scene)
 
     parts: dict[str, list] = {key: [] for key in ("q", "tau", "gen", "times", "kinetic",
                                                   "potential", "active", "phases")}
@@ -68,11 +77,9 @@ def walk_on(result: PlanResult, steps: int) -> PlanResult:
         for b in rolls:
             rolls[b].append(rolls_k[b][keep])
         # the next half cycle: the mirror image of this one, one step further
-        q_k = q_k @ A.T + s * shift + lift
-        tau_k, gen_k = tau_k @ B.T, gen_k @ A.T
-        forces_k = {partner[c]: f * _S for c, f in forces_k.items()}
-        rolls_k = {mirror.get(b, b): -r for b, r in rolls_k.items()}
-        active_k = tuple(tuple(partner[c] for c in a) for a in active_k)
+        q_k, tau_k, gen_k, forces_k, rolls_k, active_k = mirror_nodes(
+            mb, q_k, tau_k, gen_k, forces_k, rolls_k, active_k)
+        q_k = q_k + s * shift + lift
 
     q, times = np.vstack(parts["q"]), np.concatenate(parts["times"])
     h = np.diff(result.times)
