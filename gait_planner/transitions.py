@@ -54,17 +54,17 @@ HALVES = 2
 STOP_HALVES = 1
 
 
-def transition_start(tr: Transcription, gait: PlanResult, start: StartState,
-                     offset: float, end_scaling: float, halves: int = 1) -> Start:
+def transition_start(tr: Transcription, gait: PlanResult, walked: PlanResult,
+                     start: StartState, offset: float, end_scaling: float,
+                     halves: int = 1) -> Start:
     """The transition's first iterate: every node at its reference (u = 0), the references
-    the start, the gait walked `halves` half cycles (`ocp.walk_on`) at the inner nodes
+    the start, the gait walked on (`walked`, `ocp.walk_on`) at the inner nodes
     1..N-2 moved `offset` m along x, and the targets (`join_targets`; a stop has none: its
     nodes from where it stands on are the walk's node there); that walk's node torques and
     the gait's phase scalings for each half cycle (a stop's STAND phase: the upper bound);
     the contact multipliers of `ocp.guess.initial_multipliers`."""
     N = tr.N
     along = mirror_parts(tr.mb)[1]
-    walked = walk_on(gait, halves + 1)
     inner = walked.q[1 : N - 1] + offset * along
     sigma = np.tile(gait.phase_scaling, halves)
     if tr.layout.rest:
@@ -132,7 +132,8 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     if not gait.success:
         return dataclasses.replace(gait, message=f"the gait to join: {gait.message}")
     start = start_of_plan(gait) if start is None else start
-    tr_settings = transition_settings(settings, gait, start, halves, stop)
+    walked = walk_on(gait, halves + max(steps, 1))  # the guess, the references, the answer
+    tr_settings = transition_settings(settings, gait, walked, start, halves, stop)
     tr_scene = transition_scene(scene, halves, stop)
     offset = stance_offset(scene, start.q, gait)
     planner.stage("building the transition")
@@ -140,7 +141,8 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
         tr = planner.build(tr_scene, tr_settings, VARIANTS, refinement=True)
     except (ValueError, RuntimeError) as err:
         return failed_result(scene, tr_settings, f"could not build the transition: {err}")
-    first = transition_start(tr, gait, start, offset, tr_settings.end_scaling, halves)
+    first = transition_start(tr, gait, walked, start, offset, tr_settings.end_scaling,
+                             halves)
     kept = planner.stored_plans(tr_scene, tr_settings) if from_last else []
     begin = last_transition(tr, kept[-1], start, offset, gait, halves) if kept else first
     clock = Clock.begin(settings.solve.max_solve_time)
@@ -163,7 +165,7 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
         joined = dataclasses.replace(result, scene=scene, settings={
             **result.settings, "transition_half_cycles": str(halves), "transition_stop": "true"})
     else:
-        joined = join(result, walk_on(gait, halves + steps), offset, halves)
+        joined = join(result, walked, offset, halves)
     joined, cert = certified(mirrored_result(joined) if mirrored else joined)
     return dataclasses.replace(joined, settings={
         **joined.settings, **certificate_metadata(cert),

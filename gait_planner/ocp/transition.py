@@ -213,15 +213,17 @@ def transition_scene(scene: Scene, halves: int, stop: bool = False) -> Scene:
     return dataclasses.replace(scene, gait=dataclasses.replace(scene.gait, phases=tuple(phases)))
 
 
-def transition_settings(gait_settings: GaitSettings, gait: PlanResult, start: StartState,
-                        halves: int = 1, stop: bool = False) -> GaitSettings:
+def transition_settings(gait_settings: GaitSettings, gait: PlanResult, walked: PlanResult,
+                        start: StartState, halves: int = 1, stop: bool = False
+                        ) -> GaitSettings:
     """The settings of the transition of `halves` half cycles (`transition_scene`) from
     `start` onto `gait` (planned with `gait_settings`): the gait's grid (its intervals,
     refined or not) repeated, each copy but the last one interval short in its last phase
     (that interval is the next copy's first), the phases' joint ranges mirrored with their
     copies (`ocp.mirror.torque_mirror`: a roll or yaw range changes sign), no refinement,
     no speed row, the start's momentum, the gait's first interval's scaling and its
-    torques walked as far, nodes 0..N (`walk_on`; node N's is the transition's). A stop
+    torques walked as far, nodes 0..N (`walked`: the gait joined to at least halves + 1
+    half cycles by `walk_on`; node N's is the transition's). A stop
     (`transition_scene`'s STAND) ends at rest, its reference torques held from where it
     stands."""
     one = [int(i) for i in gait.settings["intervals_per_phase"].split(",")]
@@ -242,7 +244,6 @@ def transition_settings(gait_settings: GaitSettings, gait: PlanResult, start: St
         limits += tuple((f"{phase}~{j + 1}", mirrored(ranges) if j % 2 else ranges)
                         for j in range(1, halves) for phase, ranges in limits)
     N = sum(intervals)
-    walked = walk_on(gait, halves + 1)
     reference = walked.tau[: N + 1].copy()
     if stop:
         reference[N - intervals[-1] :] = reference[N - intervals[-1]]

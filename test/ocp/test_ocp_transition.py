@@ -163,7 +163,8 @@ def test_a_stop_ends_at_rest_in_the_stand_phase(gait):
     is not robust yet: walker2d converged in 2070 iterations from one gait and not in
     3400 from the same gait re-planned warm; benchmarks/HISTORY.md.)"""
     scene, settings, planner, plan = gait
-    tr_settings = transition_settings(settings, plan, start_of_plan(plan), 1, stop=True)
+    tr_settings = transition_settings(settings, plan, walk_on(plan, 2), start_of_plan(plan), 1,
+                                      stop=True)
     tr_scene = transition_scene(scene, 1, stop=True)
     assert tr_scene.gait.phases[-1].name == STAND
     assert set(tr_scene.gait.phases[-1].contacts) == {c.name for c in scene.contacts}
