@@ -2,8 +2,9 @@
 
 The Python API (`gait_planner.api`; loaded on first use, so importing a submodule stays
 light): ``from gait_planner import PlanRequest, plan, check, record, summary``, and for a
-plan that begins at a given state ``start_of_recording`` (or ``start_of_plan``,
-``start_of_velocity``, ``start_of_joint_state``) passed to ``plan(..., start=)``.
+plan that begins at a given state ``standing_start`` or ``start_of_recording`` (or
+``start_of_plan``, ``start_of_velocity``, ``start_of_joint_state``) passed to
+``plan(..., start=)``.
 
 One BLAS thread for CasADi's bundled OpenBLAS (read when CasADi first loads its IPOPT
 plugin, so this has to run before the first solver is built): MUMPS then factorises the
@@ -31,8 +32,8 @@ if platform.machine() in ("x86_64", "AMD64"):
     os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
 
 _API = ("PlanRequest", "PlanResult", "Planner", "RequestError", "StartError", "StartState",
-        "check", "plan", "record", "start_of_joint_state", "start_of_plan", "start_of_recording",
-        "start_of_velocity", "summary")
+        "check", "plan", "record", "standing_start", "start_of_joint_state", "start_of_plan",
+        "start_of_recording", "start_of_velocity", "summary")
 __all__ = list(_API)
 
 from gait_planner.lazy import lazy_exports  # noqa: E402  (after the environment above)

@@ -26,7 +26,8 @@ from pathlib import Path
 from gait_planner.model.loader import load_scene
 from gait_planner.ocp.joint_state import start_of_joint_state
 from gait_planner.ocp.solve import Planner
-from gait_planner.ocp.transition import StartError, StartState, start_of_plan, start_of_velocity
+from gait_planner.ocp.transition import (StartError, StartState, standing_start, start_of_plan,
+                                         start_of_velocity)
 from gait_planner.ocp.warm_starts import WarmStartStore
 from gait_planner.pipeline import plan_problem, summary
 from gait_planner.problem import SceneLookup, resolve
@@ -35,7 +36,7 @@ from gait_planner.result import PlanResult
 from gait_planner.transitions import start_of_recording
 
 __all__ = ["PlanRequest", "PlanResult", "Planner", "RequestError", "StartError", "StartState",
-           "check", "plan", "record", "start_of_joint_state", "start_of_plan",
+           "check", "plan", "record", "standing_start", "start_of_joint_state", "start_of_plan",
            "start_of_recording", "start_of_velocity", "summary"]
 
 _planner: Planner | None = None
@@ -51,7 +52,8 @@ def plan(request: PlanRequest | str, planner: Planner | None = None,
     Raises `RequestError` naming what cannot be planned; a plan that does not converge has
     success False and says why in its message. planner: the process's own by default;
     scenes: finds a scene by its name (`model.loader.load_scene`: the shipped scenes);
-    start: a state to begin at (`start_of_recording`, `ocp.transition.start_of_plan`,
+    start: a state to begin at (`standing_start`: the scene's standing pose at rest, its
+    start phases first; `start_of_recording`, `ocp.transition.start_of_plan`,
     `start_of_velocity`, `start_of_joint_state`): the answer is the transition of `halves`
     half cycles (1 to 4) from it onto the request's gait, then request.steps of the gait's
     half cycles (`StartError` if the first phase's contacts cannot hold it); stop: instead

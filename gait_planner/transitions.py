@@ -18,6 +18,7 @@ import dataclasses
 import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
+from gait_planner.model.angles import blended, configuration
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.guess import initial_multipliers
@@ -54,30 +55,71 @@ HALVES = 2
 STOP_HALVES = 1
 
 
+# A start from standing joined after two half cycles or more makes its first step this
+# share of the gait's step shorter (the stance foot of the gait's copies is placed that much
+# further back): its stance foot stays where it stands through the first half cycle, so the
+# targets fix how far it travels; with the gait's full first step walker2d found no plan
+# from standing in 3400 iterations (the phases' durations at their upper bounds, the
+# friction cones violated by 1.2 kN; benchmarks/HISTORY.md, 2026-12-07). People begin to
+# walk with a shorter step too.
+FIRST_STEP = 0.5
+
+
 def transition_start(tr: Transcription, gait: PlanResult, walked: PlanResult,
                      start: StartState, offset: float, end_scaling: float,
                      halves: int = 1) -> Start:
     """The transition's first iterate: every node at its reference (u = 0), the references
-    the start, the gait walked on (`walked`, `ocp.walk_on`) at the inner nodes
-    1..N-2 moved `offset` m along x, and the targets (`join_targets`; a stop has none: its
-    nodes from where it stands on are the walk's node there); that walk's node torques and
-    the gait's phase scalings for each half cycle (a stop's STAND phase: the upper bound);
-    the contact multipliers of `ocp.guess.initial_multipliers`."""
-    N = tr.N
+    the start, blended into the gait's first node through a standing start's phases
+    (`transition_scene`; `model.angles.blended`, eased), then the gait walked on
+    (`walked`, `ocp.walk_on`) moved `offset` m along x at the inner nodes up to N-2, and
+    the targets (`join_targets`); a stop has none: its nodes blend from where its phases
+    begin into the scene's standing pose, with its first stop phase's first contact point
+    where the walk has it (`standing_guess_node`), at its last phase (at rest); that walk's node
+    torques (held at node 0's through the start phases), the gait's phase scalings for
+    each half cycle, the upper bound for the start and stop phases; the contact
+    multipliers of `ocp.guess.initial_multipliers`."""
+    N, settings, scene = tr.N, tr.settings, tr.mb.scene
     along = mirror_parts(tr.mb)[1]
-    inner = walked.q[1 : N - 1] + offset * along
-    sigma = np.tile(gait.phase_scaling, halves)
+    S = sum(settings.intervals[: len(scene.gait.start)]) if start.standing else 0
+    inner = walked.q[: N - 1 - S] + offset * along
+    lead = [blended(scene, start.q, inner[0], _ease(n / S)) for n in range(S)]
+    inner = np.vstack(lead + list(inner))[1 : N - 1]
+    extra = tr.mb.scene.gait.n_scalings - halves * gait.scene.gait.n_scalings
+    sigma = np.concatenate([np.tile(gait.phase_scaling, halves),
+                            np.full(extra, settings.scaling_bounds[1])])
     if tr.layout.rest:
-        stand = N - tr.settings.intervals[-1]
-        inner[stand - 1 :] = inner[stand - 1]
+        rest = N - settings.intervals[-1]  # where the last stop phase (at rest) begins
+        stand = standing_guess_node(tr, inner[N - sum(settings.intervals[-len(
+            scene.gait.stop):]) - 1])
+        inner = np.array([blended(scene, q, stand, _ease((n + 1) / rest))
+                          for n, q in enumerate(inner)])
         qref = np.vstack([start.q, inner])
-        sigma = np.append(sigma, tr.settings.scaling_bounds[1])
     else:
         qref = np.vstack([start.q, inner, join_targets(gait, offset, halves)])
-    x = np.concatenate([np.zeros(tr.U.numel()), walked.tau[:N].ravel() / TORQUE_SCALE,
+    torques = np.vstack([np.repeat(walked.tau[:1], S, axis=0), walked.tau[: N - S]])
+    x = np.concatenate([np.zeros(tr.U.numel()), torques.ravel() / TORQUE_SCALE,
                         initial_multipliers(tr), sigma, [end_scaling]])
     zeros_g = np.zeros(int(tr.g.shape[0]))
     return Start(x, np.zeros_like(x), zeros_g, qref, f"a transition from {start.origin}")
+
+
+def _ease(s: float) -> float:
+    """A smooth step from 0 to 1 over s in [0, 1], level at both ends: 3 s^2 - 2 s^3."""
+    s = min(max(s, 0.0), 1.0)
+    return s * s * (3.0 - 2.0 * s)
+
+
+def standing_guess_node(tr: Transcription, q: np.ndarray) -> np.ndarray:
+    """(k,): the scene's standing pose moved in x and y so that the first contact point
+    of the stop's first phase is where configuration q (k,) has it: a stop's guess at
+    rest."""
+    scene, mb = tr.mb.scene, tr.mb
+    first = next(p for p in scene.gait.phases if p.name == scene.gait.stop[0].name)
+    contact = scene.contact(first.contacts[0])
+    point = mb.point_matrix(contact.body, contact.point)
+    pose = configuration(scene)
+    move = (point @ q - point @ pose) * np.array([1.0, 1.0, 0.0])
+    return pose + np.tile(np.concatenate([move, np.zeros(9)]), mb.nb)
 
 
 def last_transition(tr: Transcription, last: StoredPlan, start: StartState, offset: float,
@@ -87,7 +129,8 @@ def last_transition(tr: Transcription, last: StoredPlan, start: StartState, offs
     start and targets at the ends."""
     N = tr.N
     along = mirror_parts(tr.mb)[1]
-    shift = offset - stance_offset(tr.mb.scene, last.qref[0], gait)
+    shift = stance_offset(tr.mb.scene, start.q, gait) - stance_offset(tr.mb.scene,
+                                                                       last.qref[0], gait)
     ends = [] if tr.layout.rest else [join_targets(gait, offset, halves)]
     qref = np.vstack([start.q, last.qref[1 : N - 1] + shift * along, *ends])
     return Start(last.x, last.lam_x, last.lam_g, qref,
@@ -106,9 +149,11 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     back (`mirrored_start`, `mirrored_result`). warm_start: the gait from the planner's
     store (`strategies.plan_certified`); from_last: the transition from the planner's last
     transition of this shape if it has one (`last_transition`), else from the gait.
-    stop: the transition ends standing at rest, both feet flat (`ocp.transition.STAND`),
-    instead of joining the gait; steps are not walked then; without a start it begins at
-    the gait's first node.
+    A standing start (`ocp.transition.standing_start`) begins with the scene's start
+    phases (gait.start: both feet flat, then the first heel off). stop: the transition
+    ends with the scene's stop phases (gait.stop), the last standing at rest, instead of
+    joining the gait; steps are not walked then; without a start it begins at the gait's
+    first node.
     `ocp.transition.StartError` if the start cannot be planned from; a failed plan (of the
     gait or the transition) has success False and says which in its message."""
     halves = (STOP_HALVES if stop else HALVES) if halves is None else halves
@@ -134,8 +179,9 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     start = start_of_plan(gait) if start is None else start
     walked = walk_on(gait, halves + max(steps, 1))  # the guess, the references, the answer
     tr_settings = transition_settings(settings, gait, walked, start, halves, stop)
-    tr_scene = transition_scene(scene, halves, stop)
-    offset = stance_offset(scene, start.q, gait)
+    tr_scene = transition_scene(scene, halves, start.standing, stop)
+    offset = stance_offset(scene, start.q, gait) - (
+        FIRST_STEP * gait.step_length if start.standing and halves > 1 else 0.0)
     planner.stage("building the transition")
     try:
         tr = planner.build(tr_scene, tr_settings, VARIANTS, refinement=True)
@@ -146,9 +192,7 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     kept = planner.stored_plans(tr_scene, tr_settings) if from_last else []
     begin = last_transition(tr, kept[-1], start, offset, gait, halves) if kept else first
     clock = Clock.begin(settings.solve.max_solve_time)
-    # A stop's guess is not near its optimum (it stands where the gait walks on): the cold
-    # attempts, relaxed first; a transition: FIRST_ATTEMPT, then those.
-    attempts = (() if stop and not kept else FIRST_ATTEMPT) + COLD_ATTEMPTS
+    attempts = FIRST_ATTEMPT + COLD_ATTEMPTS
     reached = planner.attempt(tr_scene, tr_settings, attempts[0], begin, clock)
     origin = begin.origin
     for attempt in attempts[1:] if not reached.success else ():
@@ -165,10 +209,12 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
         joined = dataclasses.replace(result, scene=scene, settings={
             **result.settings, "transition_half_cycles": str(halves), "transition_stop": "true"})
     else:
-        joined = join(result, walked, offset, halves)
+        lead = sum(tr_settings.intervals[: len(scene.gait.start)]) if start.standing else 0
+        joined = join(result, walked, offset, halves, lead)
     joined, cert = certified(mirrored_result(joined) if mirrored else joined)
+    standing = {"transition_standing": "true"} if start.standing else {}
     return dataclasses.replace(joined, settings={
-        **joined.settings, **certificate_metadata(cert),
+        **joined.settings, **certificate_metadata(cert), **standing,
         "gait_cost_value": repr(gait.cost_value), "gait_duration": repr(gait.duration)})
 
 

@@ -116,14 +116,15 @@ def _add_plan(commands: argparse._SubParsersAction) -> None:
                         "plan is kept there for later ones)")
     parser.add_argument("--urdf", metavar="ROBOT.urdf", help=URDF_HELP + "; the drafted "
                         "scene is written beside --out as NAME.yaml and planned")
-    parser.add_argument("--from", dest="start", metavar="RUN.mcap[:TIME]",
-                        help="begin at the state of a recording of this robot (at TIME s from "
-                        "its start; default its first node): the answer is the transition "
-                        "from it onto the gait, then --steps of the gait's half cycles")
+    parser.add_argument("--from", dest="start", metavar="standing|RUN.mcap[:TIME]",
+                        help="begin standing still (the scene's pose and start phases) or at "
+                        "the state of a recording of this robot (at TIME s from its start; "
+                        "default its first node): the answer is the transition from it onto "
+                        "the gait, then --steps of the gait's half cycles")
     parser.add_argument("--to", dest="stop", choices=("standing",),
-                        help="end standing at rest, both feet flat, after "
-                        "--transition-half-cycles (from --from's state or the gait's first "
-                        "node) instead of walking on")
+                        help="end standing at rest, both feet flat (the scene's stop phases), "
+                        "after --transition-half-cycles (from --from's state or the gait's "
+                        "first node) instead of walking on")
     parser.add_argument("--transition-half-cycles", dest="halves", type=int, default=None,
                         metavar="K", help="half cycles of the transition --from a state "
                         "(1 to 4; default 2: one cannot mend every start; with --to "
@@ -190,10 +191,14 @@ def _plan_and_print(args: argparse.Namespace, out: str) -> dict:
 
 
 def _start_of(text: str | None, scene):
-    """The start state of --from RUN.mcap[:TIME] (None without it)."""
+    """The start state of --from standing|RUN.mcap[:TIME] (None without it)."""
     if not text:
         return None
+    from gait_planner.ocp.transition import standing_start
     from gait_planner.transitions import start_of_recording
+
+    if text == "standing":
+        return standing_start(scene)
 
     path, _, time = text.rpartition(":") if ":" in text else (text, "", "")
     try:

@@ -462,11 +462,9 @@ def _setting(result: PlanResult, key: str) -> float:
 
 # ---------------------------------------------------------------------------- a request's start
 
-# PlanGait's `start`: "" the periodic gait, "state" the request's state, "robot" the node's
-# latest /joint_states and /tf
-START_KINDS = ("", "state", "robot")
-NOT_YET = {"standing": "a plan from standing still (and `stop`) is not implemented yet "
-                       "(issue #62); give start \"state\" or \"robot\" with the robot's state"}
+# PlanGait's `start`: "" the periodic gait, "standing" the scene's standing pose at rest,
+# "state" the request's state, "robot" the node's latest /joint_states and /tf
+START_KINDS = ("", "standing", "state", "robot")
 
 
 def time_ns(stamp: Any) -> int:
@@ -481,26 +479,27 @@ def _xyz(v: Any) -> list[float]:
 def requested_start(scene, request: Any, joint_state: Any = None,
                     transforms: Mapping[str, Any] | None = None):
     """(StartState or None, stamp ns or None) of a PlanGait request's or goal's start fields
-    (srv/PlanGait.srv): start "" is the periodic gait (None, None); "state" the request's
+    (srv/PlanGait.srv): start "" is the periodic gait (None, None); "standing" the scene's
+    standing pose at rest (`ocp.transition.standing_start`, stamp None); "state" the request's
     `state` (sensor_msgs/JointState), `root_pose` and `root_twist`; "robot" the node's latest
     /joint_states `joint_state` and, from `transforms` (child frame -> the latest
     geometry_msgs/TransformStamped from ``world``; None: the node has no /tf subscription),
     the root frame the node's recordings publish (`frame_tree`), with `root_twist`. The stamp is the JointState's (0: none).
-    RequestError for another start (a clear refusal for "standing": `NOT_YET`);
+    RequestError for another start;
     `ocp.transition.StartError` for a state that cannot be used or a robot state not yet
     received, naming what (`ocp.joint_state.start_of_joint_state`)."""
     from gait_planner.ocp.joint_state import start_of_joint_state
-    from gait_planner.ocp.transition import StartError
+    from gait_planner.ocp.transition import StartError, standing_start
     from gait_planner.request import RequestError
 
     kind = str(getattr(request, "start", "") or "")
-    if kind in NOT_YET:
-        raise RequestError(f"start {kind!r}: {NOT_YET[kind]}")
     if kind not in START_KINDS:
-        raise RequestError(f"start must be \"\" (the periodic gait), \"state\" or \"robot\", "
-                           f"got {kind!r}")
+        raise RequestError(f"start must be \"\" (the periodic gait), \"standing\", \"state\" "
+                           f"or \"robot\", got {kind!r}")
     if not kind:
         return None, None
+    if kind == "standing":
+        return standing_start(scene), None
     twist = request.root_twist
     if kind == "state":
         state, pose = request.state, request.root_pose

@@ -255,7 +255,7 @@ def check_gait(c: Checker, value: Any, bodies: tuple[Body, ...], contacts) -> Ga
         key,
         required=("step_length", "base_time_step", "scaling_bounds", "friction_coefficient",
                   "phases"),
-        optional=("cost", "mirror", "options"),
+        optional=("cost", "mirror", "options", "start", "stop"),
     )
     bkey = join(key, "scaling_bounds")
     lower, upper = c.vector(g["scaling_bounds"], bkey, 2)
@@ -269,6 +269,10 @@ def check_gait(c: Checker, value: Any, bodies: tuple[Body, ...], contacts) -> Ga
                            join(key, "options"))
     phases, mirror = _phases(c, g["phases"], contacts), _mirror(c, g.get("mirror", {}), bodies)
     _check_periodic_phases(c, phases, mirror, contacts)
+    start = _end_phases(c, g.get("start", []), "start", contacts, 0)
+    stop = _end_phases(c, g.get("stop", []), "stop", contacts, len(start))
+    c.unique([p.name for p in phases + start + stop], lambda n: join(key, "start/stop"),
+             "phase")
     return Gait(
         phases=phases,
         step_length=c.number(g["step_length"], join(key, "step_length"), positive=True),
@@ -280,7 +284,32 @@ def check_gait(c: Checker, value: Any, bodies: tuple[Body, ...], contacts) -> Ga
         ),
         cost=cost,
         options=options,
+        start=start,
+        stop=stop,
     )
+
+
+def _end_phases(c: Checker, value: Any, key: str, contacts, first: int) -> tuple[Phase, ...]:
+    """The `gait.start` or `gait.stop` phases ({name, contacts, intervals} each; a scaling
+    of its own, numbered from `first`): contacts known, the start's first phase and the
+    stop's last holding at least one contact (they stand)."""
+    key = join("gait", key)
+    known = [contact.name for contact in contacts]
+    phases = []
+    for i, item in enumerate(c.named_list(value, key, "phase")):
+        pkey = join(key, i)
+        p = c.mapping(item, pkey, required=("name", "contacts", "intervals"))
+        ckey = join(pkey, "contacts")
+        held = [c.known(c.name(v, join(ckey, n)), join(ckey, n), known, "contact")
+                for n, v in enumerate(c.sequence(p["contacts"], ckey))]
+        c.unique(held, lambda n: join(ckey, n), "contact")
+        phases.append(Phase(name=p["name"], contacts=tuple(held), scaling=first + i,
+                            intervals=c.integer(p["intervals"], join(pkey, "intervals"),
+                                                minimum=1)))
+    standing = (phases[0] if key.endswith("start") else phases[-1]) if phases else None
+    if standing is not None and not standing.contacts:
+        c.fail(key, f"phase {standing.name!r} stands: it must hold contacts")
+    return tuple(phases)
 
 
 def _phases(c: Checker, value: Any, contacts) -> tuple[Phase, ...]:

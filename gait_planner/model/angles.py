@@ -134,6 +134,33 @@ def configuration(scene: Scene, pose: InitialPose | None = None) -> np.ndarray:
     return q
 
 
+def pose_of(scene: Scene, q: np.ndarray) -> InitialPose:
+    """The pose of director coordinates q (k,): the root body's centre of mass and Cardan
+    angles (`root_angles`) and every joint's angles; `configuration` of it is q again, to
+    round-off, where q meets the joint constraints."""
+    i = [b.name for b in scene.bodies].index(scene.root.body)
+    phi, D = q[12 * i : 12 * i + 3], q[12 * i + 3 : 12 * i + 12].reshape(3, 3).T
+    values, angles, at = joint_angles(scene, np.asarray(q)[None, :])[0], {}, 0
+    for joint in scene.joints:
+        angles[joint.name] = tuple(float(v) for v in values[at : at + joint.dof])
+        at += joint.dof
+    return InitialPose(tuple(float(v) for v in phi), root_angles(D), angles)
+
+
+def blended(scene: Scene, qa: np.ndarray, qb: np.ndarray, s: float) -> np.ndarray:
+    """(k,): the configuration a fraction s in [0, 1] of the way from qa (k,) to qb (k,)
+    in pose coordinates (`pose_of`: root position, root angles and joint angles, each
+    linearly), so that it meets the joint constraints as `configuration` makes it."""
+    a, b = pose_of(scene, qa), pose_of(scene, qb)
+
+    def mix(u, v):
+        return tuple((1 - s) * x + s * y for x, y in zip(u, v))
+
+    return configuration(scene, InitialPose(
+        mix(a.root_position, b.root_position), mix(a.root_angles, b.root_angles),
+        {name: mix(a.joint_angles[name], b.joint_angles[name]) for name in a.joint_angles}))
+
+
 def conjugate_torques(scene: Scene, angles: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """Torques conjugate to the joint angles (N m): tau_angle . angle_rate = power.
 

@@ -49,6 +49,10 @@ YAML layout (exactly these keys; unknown keys are errors)::
       mirror: {thigh_r: thigh_l}      # optional; one way suffices, unnamed bodies -> selves
       phases:
         - {name: right_full, contacts: [foot_r_heel], scaling: 0, intervals: 8}
+      start:                          # optional: a start from standing, before the first
+        - {name: stand, contacts: [...], intervals: 8}   # half cycle (ocp.transition)
+      stop:                           # optional: a stop after a half cycle, ending at rest
+        - {name: stand, contacts: [...], intervals: 8}
       options: {}                     # optional; passed through to the optimiser, but its
                                       # posture entries (joint_limits, torso_lean_max, in
                                       # degrees) are checked here (gait_planner.model.posture)
@@ -92,7 +96,7 @@ SCENE_NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")
 DEFAULT_GAIT = "walk"  # the name of a scene's `gait:` block (`with_gait`)
 # what a gait of `gaits:` may change of the `gait:` block (the mirror pairs stay)
 _GAIT_CHANGES = ("phases", "step_length", "base_time_step", "scaling_bounds",
-                 "friction_coefficient", "cost", "options")
+                 "friction_coefficient", "cost", "options", "start", "stop")
 SCENE_SUFFIXES = (".yaml", ".yml")  # a --scene ending so is a path, anything else a name
 _warned: set[str] = set()  # the scene warnings logged so far (each once per process)
 

@@ -187,6 +187,12 @@ class Gait:
             regularisation weights ...), validated by the optimal-control code; its posture
             entries (joint_limits, torso_lean_max) already when the scene loads
             (`gait_planner.model.posture`).
+        start: the phases of a start from standing, before the first half cycle (its
+            first holds both feet flat; `gait_planner.ocp.transition`), each with a
+            scaling of its own (numbered from 0 among start and stop phases); () if the
+            scene declares none.
+        stop: the phases of a stop after a half cycle of `phases` (the last ends standing
+            at rest), numbered after the start's; () if none.
     """
 
     phases: tuple[Phase, ...]
@@ -197,6 +203,8 @@ class Gait:
     friction_coefficient: float
     cost: str = "kinetic_energy"
     options: Mapping[str, object] = field(default_factory=lambda: MappingProxyType({}))
+    start: tuple[Phase, ...] = ()
+    stop: tuple[Phase, ...] = ()
 
     @property
     def n_scalings(self) -> int:

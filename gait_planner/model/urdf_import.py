@@ -54,7 +54,8 @@ approximation of it:
   within 10 deg of upright, hip yaw within +-15 deg, the stance knee within +-45 deg in
   single support.
 * **Gait.** walker3d's five phases for feet with heel and forefoot, the compass's two for
-  point feet; walker3d's swing clearance and strike speed, the step length and the time
+  point feet, and walker3d's start from standing and stop (`_ends`; none for point feet),
+  from the draft's standing pose; walker3d's swing clearance and strike speed, the step length and the time
   step scaled from walker3d by the leg length L
   (hip to sole): step = 0.7066 L (walker3d: 0.6338 m at L = 0.897 m), base time step
   0.01 s sqrt(L / 0.897 m) (equal Froude number, so sigma's bounds keep their meaning);
@@ -372,7 +373,7 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
             "step_length": step, "base_time_step": time_step,
             "scaling_bounds": [0.5, pace.upper], "friction_coefficient": 0.8,
             "cost": "kinetic_energy", "mirror": mirror,
-            "phases": phases,
+            "phases": phases, **_ends(contact_names, point_feet),
             "options": {**_swing_options(leg, half_widths), **envelope,
                         **({"leg_clearance": float(leg_clearance)} if spheres else {}),
                         "joint_limits": limits, "effort_limits": efforts,
@@ -474,6 +475,21 @@ def _phases(names: dict[tuple[str, str], str], point_feet: bool) -> list[dict]:
             {"name": "double_heel", "contacts": [rf, lh], "scaling": 2, "intervals": 8},
             {"name": "double_full", "contacts": [rf, lh, lf], "scaling": 3, "intervals": 8},
             {"name": "left_full", "contacts": [lh, lf], "scaling": 0, "intervals": 8}]
+
+
+def _ends(names: dict[tuple[str, str], str], point_feet: bool) -> dict:
+    """The draft's gait.start and gait.stop: walker3d's (config/scenes/walker3d.yaml: both
+    feet flat, the left heel off; the right foot's swing on, both feet flat at rest); none
+    for point feet."""
+    if point_feet:
+        return {}
+    rh, rf = names[("r", "heel")], names[("r", "forefoot")]
+    lh, lf = names[("l", "heel")], names[("l", "forefoot")]
+    both = [rh, rf, lh, lf]
+    return {"start": [{"name": "stand", "contacts": both, "intervals": 24},
+                      {"name": "left_heel_off", "contacts": [rh, rf, lf], "intervals": 12}],
+            "stop": [{"name": "right_swing", "contacts": [lh, lf], "intervals": 12},
+                     {"name": "at_rest", "contacts": both, "intervals": 24}]}
 
 
 def _round(v, digits: int = 12) -> list[float]:

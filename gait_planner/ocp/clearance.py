@@ -130,15 +130,19 @@ def required_clearances(scene: Scene, held: Sequence[frozenset[str] | set[str]],
     return out
 
 
-def strike_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]]
-                    ) -> dict[int, tuple[str, ...]]:
-    """{interval n: contact points that strike at its end}: held in interval n + 1 (interval
-    P the mirror image of interval 0, `required_clearances`), not in interval n; held
-    (P,) as there. Only intervals with a strike are listed, points in the scene's order."""
+def strike_schedule(scene: Scene, held: Sequence[frozenset[str] | set[str]],
+                    last: set[str] | None = None) -> dict[int, tuple[str, ...]]:
+    """{interval n: contact points that strike at its end}: held in interval n + 1, not in
+    interval n; held (P,) as in `required_clearances`; `last`: the points held in interval
+    P (a transition's last interval: its own phase's, the gait's joined or standing
+    still; None: the mirror image of interval 0's, as a periodic half cycle's, or its own
+    after a transition of an even number of half cycles, `next_half_mirrored`). Only
+    intervals with a strike are listed, points in the scene's order."""
     period = len(held)
     partner = contact_partners(scene)
-    after = list(held[1:]) + [{partner[p] for p in held[0]} if next_half_mirrored(scene)
-                              else set(held[0])]
+    if last is None:
+        last = {partner[p] for p in held[0]} if next_half_mirrored(scene) else set(held[0])
+    after = list(held[1:]) + [last]
     out = {}
     for n in range(period):
         points = tuple(c.name for c in scene.contacts

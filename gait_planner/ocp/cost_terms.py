@@ -18,9 +18,11 @@ import casadi as ca
 from gait_planner.ocp.posture import twist_squares
 
 # Weight (cost per (N m)^2) of a transition's torques' distance from the gait's at its
-# join (`CostTerms._join_torques`); 1e-4 as walker2d's torque_smoothness option, which
-# kept its efforts smooth at +1.4 % J (benchmarks/HISTORY.md).
-JOIN_WEIGHT = 1e-4
+# join (`CostTerms._join_torques`). 1e-4 (walker2d's torque_smoothness) kept transitions
+# from states near the gait smooth, but walker2d's start from standing zigzagged at the
+# join (knee_r 4-6 N m from node to node, the verifier's check); 1e-3 made it smooth at
+# +1.7 % J (benchmarks/HISTORY.md, 2026-12-07).
+JOIN_WEIGHT = 1e-3
 
 
 class CostTerms:

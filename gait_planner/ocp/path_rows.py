@@ -48,7 +48,9 @@ class PathRows:
             self._clearance_elements(schedule, first_row)
             self._ineq.append(("ground_clearance", ca.vertcat(*ground)))
             self._without_elements["ground_clearance"] = ca.MX(-ca.DM(self.clearances))
-        strikes = strike_schedule(mb.scene, held) if s.strike_speed_max > 0 else {}
+        last = {p for bc in self.contacts[self.phase_of_interval[N - 1]] for p in bc.points} \
+            if self.transition else None  # the joined gait's, or standing still
+        strikes = strike_schedule(mb.scene, held, last) if s.strike_speed_max > 0 else {}
         if strikes:
             c = np.array([s.base_time_step, s.strike_speed_max])
             rows = self._interval_groups(

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
-from gait_planner.model.angles import angle_names, joint_angles
+from gait_planner.model.angles import angle_names, configuration, joint_angles
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Phase, Scene
 from gait_planner.ocp.mirror import (configuration_mirror, contact_partners, mirror_parts,
@@ -37,7 +37,6 @@ from gait_planner.ocp.settings import GaitSettings, ground_of
 from gait_planner.ocp.solution import end_rates
 from gait_planner.result import PlanResult
 
-STAND = "stand"  # the phase a stop ends in: both feet flat (`transition_scene`)
 # How far (m) a contact point of the first phase may be from the ground, and how far any
 # point may be below it, for a start to be planned.
 CONTACT_TOLERANCE = 0.005
@@ -55,12 +54,26 @@ class StartError(ValueError):
 @dataclass(frozen=True)
 class StartState:
     """Where a transition begins: q (k,) director coordinates (m, -) satisfying the joint
-    constraints, momentum (k,) N s its discrete momentum p-_0 (director coordinates), and
-    where it came from, in words."""
+    constraints, momentum (k,) N s its discrete momentum p-_0 (director coordinates),
+    where it came from, in words, and whether it stands (`standing_start`: the scene's
+    start phases come first)."""
 
     q: np.ndarray
     momentum: np.ndarray
     origin: str
+    standing: bool = False
+
+
+def standing_start(scene: Scene) -> StartState:
+    """The scene's standing pose (its `initial_pose`: for the shipped walkers every joint
+    at zero, both feet flat on z = 0; for a drafted robot the draft's) at rest, a start of
+    the scene's start phases (gait.start: both feet flat first). StartError if the scene
+    declares none."""
+    if scene.gait is None or not scene.gait.start:
+        raise StartError(f"scene {scene.name!r} declares no start from standing (gait.start "
+                         f"phases, docs/user-guide.md)")
+    q = configuration(scene)
+    return StartState(q, np.zeros_like(q), "standing", standing=True)
 
 
 def start_of_plan(plan: PlanResult) -> StartState:
@@ -107,7 +120,8 @@ def turned_start(scene: Scene, start: StartState, lateral: float, rate: float) -
 
 
 def check_start(scene: Scene, settings: GaitSettings, start: StartState) -> None:
-    """StartError unless the first phase's contacts can hold `start`: its configuration
+    """StartError unless the first phase's contacts (a standing start's: the scene's first
+    start phase) can hold `start`: its configuration
     meets the joint constraints, every contact point held in the first phase is within
     CONTACT_TOLERANCE of the ground and none is below it by more, and every joint
     angle lies within its range (ANGLE_TOLERANCE); numbers finite."""
@@ -128,7 +142,8 @@ def check_start(scene: Scene, settings: GaitSettings, start: StartState) -> None
         if value < lo - ANGLE_TOLERANCE or value > hi + ANGLE_TOLERANCE:
             raise StartError(f"joint {name} is at {np.degrees(value):.1f} deg, outside its "
                              f"range [{np.degrees(lo):.1f}, {np.degrees(hi):.1f}] deg")
-    held = set(scene.gait.phases[0].contacts)
+    first = scene.gait.start[0] if start.standing else scene.gait.phases[0]
+    held = set(first.contacts)
     ground = ground_of(scene, settings)
     for contact in scene.contacts:
         point = mb.point_matrix(contact.body, contact.point) @ q  # world (3,)
@@ -137,7 +152,7 @@ def check_start(scene: Scene, settings: GaitSettings, start: StartState) -> None
             where = "above" if z > 0 else "below"
             raise StartError(
                 f"contact {contact.name} is {abs(z) * 1e3:.1f} mm {where} the ground, where "
-                f"the first phase ({scene.gait.phases[0].name}) holds it (at most "
+                f"the first phase ({first.name}) holds it (at most "
                 f"{CONTACT_TOLERANCE * 1e3:g} mm)")
         if z < -CONTACT_TOLERANCE:
             raise StartError(f"contact {contact.name} is {-z * 1e3:.1f} mm below the ground "
@@ -149,7 +164,8 @@ def mirrored_start(scene: Scene, start: StartState) -> StartState:
     no step): q' = A q, p' = A p (a signed permutation; partner bodies have equal masses
     and inertias, so M A = A M): a start on the other foot as one on the first phase's."""
     A = configuration_mirror(Multibody(scene))[0]
-    return StartState(A @ start.q, A @ start.momentum, f"{start.origin}, mirrored")
+    return dataclasses.replace(start, q=A @ start.q, momentum=A @ start.momentum,
+                               origin=f"{start.origin}, mirrored")
 
 
 def mirrored_result(result: PlanResult) -> PlanResult:
@@ -190,46 +206,64 @@ def join_targets(gait: PlanResult, offset: float, halves: int = 1) -> np.ndarray
     return q + offset * mirror_parts(mb)[1]
 
 
-def transition_scene(scene: Scene, halves: int, stop: bool = False) -> Scene:
+def transition_scene(scene: Scene, halves: int, standing: bool = False, stop: bool = False
+                     ) -> Scene:
     """`scene` with a gait of `halves` half cycles of its own: copy j (j = 0 ..
     halves-1) of its phases holds the contacts mirrored j times (the partner points for
     odd j), is named "<phase>~<j+1>" from the second copy on and scales with its own
-    sigmas (the scene's indices + j n_sigma). With `stop` the last copy's last phase is
-    STAND instead: both feet flat (the first phase's contacts and their partners), the
-    phase a stop ends at rest in."""
-    if halves == 1 and not stop:
+    sigmas (the scene's indices + j n_sigma). `standing`: the scene's start phases
+    (gait.start: both feet flat, ...) come first; `stop`: its stop phases (gait.stop,
+    declared after an unmirrored half cycle, so mirrored when the last copy is) come last,
+    the last of them at rest. Start and stop phases keep their names and have a sigma
+    each, after the copies'. StartError if the scene declares no such phases."""
+    gait = scene.gait
+    for wanted, phases, key, what in ((standing, gait.start, "start", "start from standing"),
+                                      (stop, gait.stop, "stop", "stop")):
+        if wanted and not phases:
+            raise StartError(f"scene {scene.name!r} declares no {what} (gait.{key} phases, "
+                             f"docs/user-guide.md)")
+    if halves == 1 and not (standing or stop):
         return scene
-    partner, n = contact_partners(scene), scene.gait.n_scalings
-    phases = [
-        Phase(p.name if j == 0 else f"{p.name}~{j + 1}",
-              tuple(partner[c] for c in p.contacts) if j % 2 else p.contacts,
-              p.scaling + j * n, p.intervals)
-        for j in range(halves) for p in scene.gait.phases]
-    if stop:
-        first = scene.gait.phases[0].contacts
-        both = tuple(c.name for c in scene.contacts if c.name in first
-                     or partner[c.name] in first)
-        phases[-1] = Phase(STAND, both, halves * n, phases[-1].intervals)
-    return dataclasses.replace(scene, gait=dataclasses.replace(scene.gait, phases=tuple(phases)))
+    partner, n = contact_partners(scene), gait.n_scalings
+
+    def mirrored(contacts, flip):
+        return tuple(partner[c] for c in contacts) if flip else contacts
+
+    copies = [Phase(p.name if j == 0 else f"{p.name}~{j + 1}", mirrored(p.contacts, j % 2),
+                    p.scaling + j * n, p.intervals)
+              for j in range(halves) for p in gait.phases]
+    ends = list(gait.start if standing else ()) + list(gait.stop if stop else ())
+    own = {p.name: halves * n + i for i, p in enumerate(ends)}
+    first = [dataclasses.replace(p, scaling=own[p.name]) for p in gait.start] if standing else []
+    last = [Phase(p.name, mirrored(p.contacts, halves % 2 == 0), own[p.name], p.intervals)
+            for p in gait.stop] if stop else []
+    return dataclasses.replace(scene, gait=dataclasses.replace(
+        gait, phases=tuple(first + copies + last)))
 
 
 def transition_settings(gait_settings: GaitSettings, gait: PlanResult, walked: PlanResult,
                         start: StartState, halves: int = 1, stop: bool = False
                         ) -> GaitSettings:
-    """The settings of the transition of `halves` half cycles (`transition_scene`) from
-    `start` onto `gait` (planned with `gait_settings`): the gait's grid (its intervals,
-    refined or not) repeated, each copy but the last one interval short in its last phase
-    (that interval is the next copy's first), the phases' joint ranges mirrored with their
-    copies (`ocp.mirror.torque_mirror`: a roll or yaw range changes sign), no refinement,
-    no speed row, the start's momentum, the gait's first interval's scaling and its
-    torques walked as far, nodes 0..N (`walked`: the gait joined to at least halves + 1
-    half cycles by `walk_on`; node N's is the transition's). A stop
-    (`transition_scene`'s STAND) ends at rest, its reference torques held from where it
-    stands."""
+    """The settings of the transition of `halves` half cycles (`transition_scene`, with
+    the scene's start phases first for a standing start, its stop phases last for a stop)
+    from `start` onto `gait` (planned with `gait_settings`): the start phases' intervals,
+    then the gait's grid (its intervals, refined or not) repeated, each copy but the last
+    one interval short in its last phase (that interval is the next copy's first; a stop
+    follows the last copy there), then the stop phases'; the phases' joint ranges mirrored
+    with their copies (`ocp.mirror.torque_mirror`: a roll or yaw range changes sign), no
+    refinement, no speed row, the start's momentum, the gait's first interval's scaling
+    and its torques walked as far (`walked`: the gait joined to at least halves + 1 half
+    cycles by `walk_on`), from the first node of the gait's copies on (held before it, at
+    the gait's node 0, and in a stop from where the stop phases begin). A stop ends at
+    rest."""
+    scene = gait.scene.gait
     one = [int(i) for i in gait.settings["intervals_per_phase"].split(",")]
-    intervals = []
+    begin = [p.intervals for p in scene.start] if start.standing else []
+    intervals = list(begin)
     for j in range(halves):
-        intervals += one[:-1] + [one[-1] - (j < halves - 1)]
+        intervals += one[:-1] + [one[-1] - (j < halves - 1 or stop)]
+    end = [p.intervals for p in scene.stop] if stop else []
+    intervals += end
     limits = tuple(gait_settings.phase_joint_limits)
     if halves > 1:
         B = torque_mirror(Multibody(gait.scene))
@@ -243,10 +277,10 @@ def transition_settings(gait_settings: GaitSettings, gait: PlanResult, walked: P
 
         limits += tuple((f"{phase}~{j + 1}", mirrored(ranges) if j % 2 else ranges)
                         for j in range(1, halves) for phase, ranges in limits)
-    N = sum(intervals)
-    reference = walked.tau[: N + 1].copy()
+    N, S, P = sum(intervals), sum(begin), sum(end)
+    reference = np.vstack([np.repeat(walked.tau[:1], S, axis=0), walked.tau[: N + 1 - S]])
     if stop:
-        reference[N - intervals[-1] :] = reference[N - intervals[-1]]
+        reference[N - P :] = reference[N - P]
     first = float(np.diff(gait.times)[0] / gait_settings.base_time_step)
     return dataclasses.replace(gait_settings, intervals=tuple(intervals), refinements=0,
                                speed=0.0, step_length=gait.step_length,
@@ -256,23 +290,25 @@ def transition_settings(gait_settings: GaitSettings, gait: PlanResult, walked: P
                                end_torque=tuple(float(v) for v in reference.ravel()))
 
 
-def join(transition: PlanResult, walked: PlanResult, offset: float, halves: int = 1
-         ) -> PlanResult:
-    """The transition (nodes 0..N, `halves` half cycles) followed by `walked`, the gait
-    joined to halves + K half cycles (`ocp.walk_on`), from its node N on, moved `offset` m
-    along x: one motion whose node N-1 is the transition's (its forces span both
-    neighbouring intervals) and whose later nodes are the gait's K half cycles, of the
-    gait's scene; the transition's phases keep their copies' names ("<phase>~<j>",
-    `transition_scene`), the gait's are `walk_on`'s. J and the duration are the transition's;
-    settings["transition_nodes"] says where the gait begins."""
+def join(transition: PlanResult, walked: PlanResult, offset: float, halves: int = 1,
+         lead: int = 0) -> PlanResult:
+    """The transition (nodes 0..N: `lead` intervals of start phases, then `halves` half
+    cycles) followed by `walked`, the gait joined to halves + K half cycles
+    (`ocp.walk_on`), from its node N - lead on, moved `offset` m along x: one motion whose
+    node N-1 is the transition's (its forces span both neighbouring intervals) and whose
+    later nodes are the gait's K half cycles, of the gait's scene; the transition's phases
+    keep their names ("<phase>~<j>" for the copies, `transition_scene`), the gait's are
+    `walk_on`'s. J and the duration are the transition's; settings["transition_nodes"]
+    says where the gait begins."""
     N = transition.n_nodes - 1
+    M = N - lead  # the gait's node joined at the transition's node N
     along = mirror_parts(Multibody(transition.scene))[1]
-    t0 = transition.times[N - 1] - walked.times[N - 1]
-    q = np.vstack([transition.q[:N], walked.q[N:] + offset * along])
-    times = np.concatenate([transition.times[:N], walked.times[N:] + t0])
+    t0 = transition.times[N - 1] - walked.times[M - 1]
+    q = np.vstack([transition.q[:N], walked.q[M:] + offset * along])
+    times = np.concatenate([transition.times[:N], walked.times[M:] + t0])
 
     def stack(a, b):
-        return np.concatenate([a[:N], b[N:]])
+        return np.concatenate([a[:N], b[M:]])
 
     forces = {c: stack(f, walked.contact_forces[c]) for c, f in transition.contact_forces.items()}
     rolls = {b: stack(r, walked.roll_moments[b]) for b, r in transition.roll_moments.items()}
@@ -282,13 +318,12 @@ def join(transition: PlanResult, walked: PlanResult, offset: float, halves: int 
         joint_angles=joint_angles(transition.scene, q), joint_velocities=velocities,
         joint_accelerations=accelerations,
         scene=walked.scene,
-        phases=transition.phases[:N] + walked.phases[N:],
-        active_contacts=transition.active_contacts[:N] + walked.active_contacts[N:],
+        phases=transition.phases[:N] + walked.phases[M:],
+        active_contacts=transition.active_contacts[:N] + walked.active_contacts[M:],
         contact_forces=forces, roll_moments=rolls,
         generalized_force=stack(transition.generalized_force, walked.generalized_force),
         kinetic_energy=stack(transition.kinetic_energy, walked.kinetic_energy),
-        potential_energy=np.concatenate([transition.potential_energy[:N],
-                                         walked.potential_energy[N:]]),
+        potential_energy=stack(transition.potential_energy, walked.potential_energy),
         settings=dict(transition.settings, transition_nodes=str(N),
                       transition_half_cycles=str(halves),
                       steps=str(int(walked.settings.get("steps", "1")) - halves),

@@ -66,7 +66,7 @@ from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
 from gait_planner.ros.robot_description import RobotScenes
 from gait_planner.ros.worker import Closed, Lapsed, PlanWorker, Stopped
-from gait_planner.transitions import HALVES, MAX_HALVES
+from gait_planner.transitions import HALVES, MAX_HALVES, STOP_HALVES
 from gait_planner.walk.walk_plan import walk
 from gait_planner.walk.summary import format_summary, half_cycles_done
 from gait_planner_msgs.msg import ContactForces, MultibodyState
@@ -258,16 +258,17 @@ class GaitPlannerNode(Node):
                 request, default_scene=self._param("default_scene"),
                 default_max_solve_time=self._param("max_solve_time"),
                 compiled=self._param("compile_derivatives")), self._scenes)
-            halves = _half_cycles(request.transition_half_cycles)
+            stop = bool(request.stop)
+            halves = _half_cycles(request.transition_half_cycles, stop)
             start, start_ns = messages.requested_start(problem.scene, request,
                                                        self._joint_state, self._transforms)
             library = self._param("gait_library")
             seed, note = (None, "") if (not library or not problem.warm_start
-                                        or start is not None) else library_start(
+                                        or start is not None or stop) else library_start(
                 self._planner, Path(library).expanduser(), problem, self._scenes)
             outcome = plan_and_record(self._planner, problem, self._param("output_dir"),
                                       rrd=False, stage=self._worker.enter, seed=seed,
-                                      start=start, halves=halves)
+                                      start=start, halves=halves, stop=stop)
         except Stopped:
             answer.success, answer.message = False, self._stopped_message()
             self.get_logger().info(f"{answer.message}: nothing recorded")
@@ -348,10 +349,11 @@ class GaitPlannerNode(Node):
             self._pub_forces.publish(messages.fill_message(ContactForces(), forces))
 
 
-def _half_cycles(value: int) -> int:
-    """PlanGait's transition_half_cycles: 0 is `HALVES`; RequestError outside 1..MAX_HALVES."""
+def _half_cycles(value: int, stop: bool = False) -> int:
+    """PlanGait's transition_half_cycles: 0 is `HALVES` (a stop's `STOP_HALVES`);
+    RequestError outside 1..MAX_HALVES."""
     if value == 0:
-        return HALVES
+        return STOP_HALVES if stop else HALVES
     if not 1 <= value <= MAX_HALVES:
         raise RequestError(f"transition_half_cycles must be 1 to {MAX_HALVES}, or 0 for "
                            f"{HALVES}, got {value}")

@@ -405,8 +405,9 @@ def _interval_error(scene: SceneData, rec: RecordedPlan, meta: dict, h: np.ndarr
     transition_scene`) are "<phase>~<j>" from its second half cycle on: copy j's sigma is
     the scene's index + (j-1) n_sigma, its contacts mirrored for even j (all flipped once
     more in a motion mirrored, ``transition_mirrored``), and its last interval has a sigma
-    of its own, the last; a stop's (``transition_stop``) last phase "stand" holds both
-    feet flat, with the sigma after the copies'."""
+    of its own, the last; a standing start's phases (``transition_standing``, the scene's
+    gait.start) come first and a stop's (``transition_stop``, gait.stop, mirrored after an
+    even number of half cycles) last, each with a sigma of its own after the copies'."""
     try:
         sigma = [float(s) for s in meta["phase_scaling"].split(",") if s.strip()]
     except (KeyError, ValueError):
@@ -431,22 +432,26 @@ def _interval_error(scene: SceneData, rec: RecordedPlan, meta: dict, h: np.ndarr
     n_sigma = 1 + max((i for i, _ in scene.phases.values()), default=0)
     flipped = meta.get("transition_mirrored") == "true"
     partner = scene.contact_partners
-    phases = dict(scene.phases)
-    if transition and meta.get("transition_stop") == "true":  # a stop ends in "stand"
-        first = next(iter(scene.phases.values()))[1]
-        phases["stand"] = (int(meta["transition_half_cycles"]) * n_sigma,
-                           tuple(c for c in scene.contacts if c in first or partner[c] in first))
+    phases = {name: (index, contacts, False) for name, (index, contacts) in scene.phases.items()}
+    if transition:
+        halves = int(meta["transition_half_cycles"])
+        ends = [(p, False) for p in scene.start_phases
+                if meta.get("transition_standing") == "true"]
+        ends += [(p, halves % 2 == 0) for p in scene.stop_phases
+                 if meta.get("transition_stop") == "true"]
+        phases.update({name: (halves * n_sigma + i, contacts, flip)
+                       for i, ((name, contacts), flip) in enumerate(ends)})
     for n, hn in enumerate(h):
         phase, _, copy = rec.phases[n].partition("~")
         if phase not in phases or (copy and not (transition and copy.isdigit())):
             fail(f"node {n} is in phase {rec.phases[n]!r}, which the scene does not declare")
             return math.nan
-        index, contacts = phases[phase]
+        index, contacts, flip = phases[phase]
         j = int(copy) if copy else 1
         index += (j - 1) * n_sigma
         if transition and n == len(h) - 1:  # the transition's last interval: its own sigma
             index = len(sigma) - 1
-        if transition and (j - 1 + flipped) % 2:
+        if transition and (j - 1 + flipped + flip) % 2:
             contacts = tuple(partner[c] for c in contacts)
         if index >= len(sigma):
             fail(f"phase {phase!r} uses sigma_{index + 1}, the metadata gives {len(sigma)}")

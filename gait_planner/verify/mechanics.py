@@ -54,6 +54,9 @@ class SceneData:
     scaling_bounds: tuple[float, float] | None
     base_time_step: float | None
     options: dict[str, Any]
+    # the start from standing and the stop phases (gait.start, gait.stop): (name, contacts)
+    start_phases: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    stop_phases: tuple[tuple[str, tuple[str, ...]], ...] = ()
     # the URDF it was drafted from (`robot:`): root link pose (position, rotation) in the
     # root body's frame and the locked joints (name -> rad); None for hand-written scenes
     robot_root: tuple[np.ndarray, np.ndarray] | None = None
@@ -114,6 +117,11 @@ def parse_scene(text: str) -> SceneData:
     phases = {str(p["name"]): (int(p["scaling"]), tuple(str(c) for c in p["contacts"]))
               for p in gait.get("phases") or ()}
     bounds = gait.get("scaling_bounds")
+
+    def ends(key):
+        return tuple((str(p["name"]), tuple(str(c) for c in p["contacts"]))
+                     for p in gait.get(key) or ())
+
     return SceneData(
         name=str(data["name"]), gravity=float(data.get("gravity", 9.81)), bodies=bodies,
         joints=tuple(ordered), root=root, planar=data["root"]["type"] == "planar",
@@ -121,7 +129,8 @@ def parse_scene(text: str) -> SceneData:
         mirror=mirror, phases=phases,
         scaling_bounds=tuple(float(b) for b in bounds) if bounds else None,
         base_time_step=float(gait["base_time_step"]) if "base_time_step" in gait else None,
-        options=dict(gait.get("options") or {}), **_robot(data.get("robot"), root))
+        options=dict(gait.get("options") or {}), start_phases=ends("start"),
+        stop_phases=ends("stop"), **_robot(data.get("robot"), root))
 
 
 def _robot(robot: Any, root: str) -> dict[str, Any]:

@@ -280,7 +280,8 @@ def test_a_requests_start_fields_become_a_start_state():
     """`requested_start` reads PlanGait's start fields (attributes, as rclpy messages have
     them): "" is the periodic gait, "state" the request's state with its stamp, "robot"
     the node's latest joint state and world -> root transform, refused naming the frame
-    while that has not arrived; "standing" and other starts are refused."""
+    while that has not arrived, "standing" the scene's standing pose at rest (refused for a
+    scene that declares no start phases); other starts are refused."""
     from types import SimpleNamespace as Msg
 
     from gait_planner.io.messages import WORLD_FRAME, frame_tree, quaternion_msg, requested_start
@@ -315,7 +316,10 @@ def test_a_requests_start_fields_become_a_start_state():
                                                rotation=rotation))}
     start, stamp = requested_start(scene, robot, state, held)
     assert np.abs(start.q - q).max() < 1e-12 and stamp == 7_000_000_005
-    with pytest.raises(RequestError, match="'standing': .* not implemented yet"):
-        requested_start(scene, Msg(start="standing"))
+    standing, stamp = requested_start(scene, Msg(start="standing"))
+    assert standing.standing and stamp is None and not standing.momentum.any()
+    assert np.abs(standing.q - q).max() < 1e-12  # the scene's standing pose
+    with pytest.raises(StartError, match="'compass' declares no start from standing"):
+        requested_start(load_scene("compass"), Msg(start="standing"))
     with pytest.raises(RequestError, match="start must be"):
         requested_start(scene, Msg(start="walking"))

@@ -62,3 +62,22 @@ def test_the_last_phase_must_mirror_the_first():
                    "      - {name: land, contacts: [foot_l_forefoot], scaling: 1, intervals: 2}\n")
     with pytest.raises(SceneError, match="must share the first phase's scaling 0"):
         scene_from_text(_with_gaits(other_scale), "w.yaml")
+
+
+def test_start_and_stop_phases_are_declared_with_a_time_scale_each():
+    """gait.start and gait.stop (`model.scene.Gait`): their own phases, numbered after
+    each other (start first), inherited by the scene's other gaits unless they change
+    them; a phase name used twice and a standing phase that holds nothing are refused."""
+    gait = WALKER2D.gait
+    assert [(p.name, p.scaling) for p in gait.start] == [("stand", 0), ("left_heel_off", 1)]
+    assert [(p.name, p.scaling) for p in gait.stop] == [("right_swing", 2), ("at_rest", 3)]
+    assert set(gait.start[0].contacts) == set(gait.stop[-1].contacts) == {
+        c.name for c in WALKER2D.contacts}
+    assert with_gait(WALKER2D, "run").gait.start == gait.start
+    text = WALKER2D.source.split("\ngaits:")[0]
+    with pytest.raises(SceneError, match="duplicate phase name 'right_full'"):
+        scene_from_text(text.replace("- {name: at_rest,", "- {name: right_full,"), "w.yaml")
+    with pytest.raises(SceneError, match="phase 'stand' stands: it must hold contacts"):
+        scene_from_text(text.replace(
+            "- {name: stand, contacts: [foot_r_heel, foot_r_forefoot, foot_l_heel, "
+            "foot_l_forefoot]", "- {name: stand, contacts: []"), "w.yaml")

@@ -14,8 +14,9 @@ from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
-from gait_planner.ocp.transition import (STAND, StartError, StartState, check_start, start_of_plan,
-                                         transition_scene, transition_settings, turned_start)
+from gait_planner.ocp.transition import (StartError, StartState, check_start, standing_start,
+                                         start_of_plan, transition_scene, transition_settings,
+                                         turned_start)
 from gait_planner.ocp.transcription import Transcription
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.ocp.walk_on import walk_on
@@ -156,18 +157,22 @@ def test_starts_the_first_phase_cannot_hold_are_refused():
         check_start(scene, settings, StartState(bent, np.zeros(mb.k), "test"))
 
 
-def test_a_stop_ends_at_rest_in_the_stand_phase(gait):
-    """The stop's problem (`transition_scene(..., stop=True)`, settings.end_at_rest): its
-    last phase "stand" holds both feet, its nodes N-1 and N are node N-2 for any unknowns
-    (at rest: node N-1's equation a static equilibrium), only node 0 is fixed. (Its solve
-    is not robust yet: walker2d converged in 2070 iterations from one gait and not in
-    3400 from the same gait re-planned warm; benchmarks/HISTORY.md.)"""
+def test_a_stop_ends_at_rest_in_the_scenes_stop_phases(gait):
+    """The stop's problem (`transition_scene(..., stop=True)`, settings.end_at_rest): the
+    half cycle one interval short, then the scene's stop phases (the swing on, then both
+    feet flat), each with a sigma of its own; its nodes N-1 and N are node N-2 for any
+    unknowns (at rest: node N-1's equation a static equilibrium), only node 0 is fixed."""
     scene, settings, planner, plan = gait
     tr_settings = transition_settings(settings, plan, walk_on(plan, 2), start_of_plan(plan), 1,
                                       stop=True)
     tr_scene = transition_scene(scene, 1, stop=True)
-    assert tr_scene.gait.phases[-1].name == STAND
+    stop = scene.gait.stop
+    assert tr_scene.gait.phases[-len(stop):] == tuple(
+        dataclasses.replace(p, scaling=scene.gait.n_scalings + i) for i, p in enumerate(stop))
     assert set(tr_scene.gait.phases[-1].contacts) == {c.name for c in scene.contacts}
+    one = [int(i) for i in plan.settings["intervals_per_phase"].split(",")]
+    assert tr_settings.intervals == tuple(one[:-1]) + (one[-1] - 1,) + tuple(
+        p.intervals for p in stop)
     tr = Transcription(DiscreteMechanics(Multibody(tr_scene)), tr_settings)
     N, nd = tr.N, tr.mb.ndof
     rng = np.random.default_rng(1)
@@ -178,3 +183,24 @@ def test_a_stop_ends_at_rest_in_the_stand_phase(gait):
     lbx, ubx, _, _ = tr.bounds()
     fixed = np.flatnonzero(lbx == ubx)
     assert set(fixed) == set(range(nd))  # u_0 only
+
+
+def test_a_standing_start_begins_with_the_scenes_start_phases(gait):
+    """`standing_start`: the scene's pose at rest, held by its first start phase (both feet
+    flat); `transition_scene(..., standing=True)`: the start phases first, a sigma each
+    after the K copies'; the settings' grid begins with their intervals. A scene that
+    declares no start phases is refused."""
+    scene, settings, planner, plan = gait
+    start = standing_start(scene)
+    assert start.standing and not start.momentum.any()
+    check_start(scene, settings, start)  # all four points on the ground
+    tr_scene = transition_scene(scene, 2, standing=True)
+    n, begin = scene.gait.n_scalings, scene.gait.start
+    assert tr_scene.gait.phases[: len(begin)] == begin and [
+        p.scaling for p in tr_scene.gait.phases[: len(begin)]] == [2 * n, 2 * n + 1]
+    assert tr_scene.gait.phases[len(begin)] == scene.gait.phases[0]
+    tr_settings = transition_settings(settings, plan, walk_on(plan, 3), start, 2)
+    assert tr_settings.intervals[: len(begin)] == tuple(p.intervals for p in begin)
+    assert not any(tr_settings.start_momentum)
+    with pytest.raises(StartError, match="'compass' declares no start from standing"):
+        standing_start(load_scene("compass"))

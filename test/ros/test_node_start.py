@@ -98,7 +98,6 @@ def test_a_service_request_from_a_given_state_starts_there(planner_node, make_no
         "elbow_l": dict(start="state", state=JointState(
             name=state.name[:-1] + ["elbow_l"], position=state.position)),
         "no /joint_states received yet": dict(start="robot"),
-        "not implemented yet": dict(start="standing"),
         "transition_half_cycles must be 1 to 4": dict(start="state", state=state,
                                                       transition_half_cycles=5),
     }
