@@ -5,7 +5,7 @@ Usage: .venv/bin/python benchmarks/start_stop.py [--scene walker3d] [--halves 1 
        [--json NAME]
 
 One process, one Planner (derivatives compiled, no warm-start store): the scene's default
-gait is planned cold and certified, then for each K a start from the scene's standing pose
+gait is planned cold and certified (`transitions.planned_gait`), then for each K a start from the scene's standing pose
 (`standing_start`: its start phases, then K half cycles onto the gait, then one of the
 gait's) and a stop from the gait's first node (K half cycles, then the scene's stop phases,
 at rest), each from its guess (`transitions.transition_start`; nothing re-planned).
@@ -18,17 +18,11 @@ are printed.
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import time
 
-from gait_planner.model.loader import load_scene
-from gait_planner.ocp.settings import settings_for
-from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.transition import StartError, standing_start
-from gait_planner.strategies import plan_certified
 from gait_planner.transitions import plan_transition
-from gait_planner.verify import verify_result
+from transitions import planned_gait, verdict
 
 
 def main() -> None:
@@ -38,13 +32,7 @@ def main() -> None:
     parser.add_argument("--json", metavar="NAME",
                         help="also write the rows to benchmarks/results/NAME.json")
     args = parser.parse_args()
-    print(f"# {platform.node()} {platform.processor() or platform.machine()} "
-          f"{time.strftime('%Y-%m-%d %H:%M')}, load {os.getloadavg()[0]:.2f}, {args.scene}, "
-          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
-    scene = load_scene(args.scene)
-    settings = settings_for(scene, compiled=True)
-    planner = Planner()
-    gait, _ = plan_certified(planner, scene, settings, warm_start=False)
+    scene, settings, planner, gait = planned_gait(args.scene)
     print(f"gait: {gait.stats.iterations} iterations, J {gait.cost_value:.5f}, "
           f"half cycle {gait.duration:.3f} s")
     rows = []
@@ -63,12 +51,10 @@ def main() -> None:
                 print(f"| {motion} | {halves} | refused: {err} |")
                 continue
             answer = time.perf_counter() - began
-            report = verify_result(r) if r.success else None
             row = {"motion": motion, "halves": halves, "success": r.success,
                    "iterations": r.stats.iterations, "solve_s": r.stats.solve_time,
                    "answer_s": answer, "cost": r.cost_value, "duration_s": r.duration,
-                   "checks": "passed" if report is not None and report.ok else
-                   ("; ".join(report.failures)[:120] if report else r.message[:120])}
+                   "checks": verdict(r)}
             rows.append(row)
             print(f"| {motion} | {halves} | {r.success} | {r.stats.iterations} | "
                   f"{r.stats.solve_time:.2f} | {answer:.1f} | {r.cost_value:.4f} | "

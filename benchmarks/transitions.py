@@ -37,6 +37,29 @@ from gait_planner.transitions import plan_transition
 from gait_planner.verify import verify_result
 
 
+def planned_gait(name: str):
+    """(scene, settings, planner, gait): the scene's default gait planned cold and
+    certified in a new Planner (derivatives compiled, no warm-start store), after a line
+    with the machine, the date, the load and the threads."""
+    print(f"# {platform.node()} {platform.processor() or platform.machine()} "
+          f"{time.strftime('%Y-%m-%d %H:%M')}, load {os.getloadavg()[0]:.2f}, {name}, "
+          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
+    scene = load_scene(name)
+    settings = settings_for(scene, compiled=True)
+    planner = Planner()
+    gait, _ = plan_certified(planner, scene, settings, warm_start=False)
+    return scene, settings, planner, gait
+
+
+def verdict(result) -> str:
+    """"passed", or the verifier's failures (a plan that converged) or the solver's
+    message, cut to 120 characters."""
+    if not result.success:
+        return result.message[:120]
+    report = verify_result(result)
+    return "passed" if report.ok else "; ".join(report.failures)[:120]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scene", default="walker3d")
@@ -46,13 +69,7 @@ def main() -> None:
     parser.add_argument("--json", metavar="NAME",
                         help="also write the rows to benchmarks/results/NAME.json")
     args = parser.parse_args()
-    print(f"# {platform.node()} {platform.processor() or platform.machine()} "
-          f"{time.strftime('%Y-%m-%d %H:%M')}, load {os.getloadavg()[0]:.2f}, {args.scene}, "
-          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
-    scene = load_scene(args.scene)
-    settings = settings_for(scene, compiled=True)
-    planner = Planner()
-    gait, _ = plan_certified(planner, scene, settings, warm_start=False)
+    scene, settings, planner, gait = planned_gait(args.scene)
     print(f"gait: {gait.stats.iterations} iterations, J {gait.cost_value:.5f}")
     rng = np.random.default_rng(args.seed)
     starts = [start_of_plan(gait)] + [
@@ -73,13 +90,11 @@ def main() -> None:
                 r = plan_transition(planner, scene, settings, start, steps=2, halves=halves,
                                     from_last=origin == "last")
                 answer = time.perf_counter() - began
-                report = verify_result(r) if r.success else None
                 row = {"halves": halves, "start": start.origin, "from": origin,
                        "success": r.success, "iterations": r.stats.iterations,
                        "solve_s": r.stats.solve_time, "answer_s": answer,
                        "cost_ratio": r.cost_value / (halves * gait.cost_value),
-                       "checks": "passed" if report is not None and report.ok else
-                       ("; ".join(report.failures)[:120] if report else r.message[:120])}
+                       "checks": verdict(r)}
                 rows.append(row)
                 print(f"| {halves} | {start.origin} | {origin} | {r.success} | "
                       f"{r.stats.iterations} | {r.stats.solve_time:.3f} | {answer:.2f} | "

@@ -74,7 +74,8 @@ class Transcription(PathRows, HeldRows, CostTerms):
     not periodic, but with given ends. Every node 0..N has unknowns of its own (u_0,
     u_{N-1} and u_N are fixed at zero by their bounds, so q_0 = qref_0 is the start and
     q_{N-1}, q_N = qref_{N-1}, qref_N join the gait; with settings.end_at_rest, a stop,
-    they are node N-2's configuration: at rest); node 0 has a dynamics row of its own,
+    they are node N-2's configuration: at rest, node N holding node N-1's torques); node 0
+    has a dynamics row of its own,
     `_start_row`, and contact multipliers; the last interval has a sigma of its own, held
     at the gait's by the row end_scaling, and node N's torques are the gait's (parameters,
     with the gait's at the nodes before for the cost's `CostTerms._join_torques`); no pin_x and
@@ -132,9 +133,9 @@ class Transcription(PathRows, HeldRows, CostTerms):
 
         q_free = mb.reparametrise.map(free)(self.U, self.Qref)
         tau = TORQUE_SCALE * self.T
-        if rest:
+        if rest:  # at rest from node N-2 on, node N-1's torques held at node N
             self.Q = ca.horzcat(q_free, q_free[:, N - 2], q_free[:, N - 2])  # (k, N+1)
-            self.TAU = ca.horzcat(tau, self.end_torque[N * mb.nt :])  # (nt, N+1)
+            self.TAU = ca.horzcat(tau, tau[:, N - 1])  # (nt, N+1)
         elif self.transition:
             self.Q = q_free  # (k, N+1)
             self.TAU = ca.horzcat(tau, self.end_torque[N * mb.nt :])  # (nt, N+1)

@@ -254,8 +254,8 @@ def transition_settings(gait_settings: GaitSettings, gait: PlanResult, walked: P
     refinement, no speed row, the start's momentum, the gait's first interval's scaling
     and its torques walked as far (`walked`: the gait joined to at least halves + 1 half
     cycles by `walk_on`), from the first node of the gait's copies on (held before it, at
-    the gait's node 0, and in a stop from where the stop phases begin). A stop ends at
-    rest."""
+    the gait's node 0; in a stop held through its stop phases from where they begin), the
+    reference of `CostTerms._join_torques`. A stop ends at rest."""
     scene = gait.scene.gait
     one = [int(i) for i in gait.settings["intervals_per_phase"].split(",")]
     begin = [p.intervals for p in scene.start] if start.standing else []

@@ -196,11 +196,46 @@ def test_a_standing_start_begins_with_the_scenes_start_phases(gait):
     check_start(scene, settings, start)  # all four points on the ground
     tr_scene = transition_scene(scene, 2, standing=True)
     n, begin = scene.gait.n_scalings, scene.gait.start
-    assert tr_scene.gait.phases[: len(begin)] == begin and [
-        p.scaling for p in tr_scene.gait.phases[: len(begin)]] == [2 * n, 2 * n + 1]
+    assert tr_scene.gait.phases[: len(begin)] == tuple(
+        dataclasses.replace(p, scaling=2 * n + i) for i, p in enumerate(begin))
     assert tr_scene.gait.phases[len(begin)] == scene.gait.phases[0]
     tr_settings = transition_settings(settings, plan, walk_on(plan, 3), start, 2)
     assert tr_settings.intervals[: len(begin)] == tuple(p.intervals for p in begin)
     assert not any(tr_settings.start_momentum)
     with pytest.raises(StartError, match="'compass' declares no start from standing"):
         standing_start(load_scene("compass"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("gait", ["walker2d", "walker3d"], indirect=True)
+def test_from_standing_the_walker_sets_off_onto_the_gait(gait):
+    """From the scene's standing pose at rest (two half cycles, the first step half the
+    gait's): node 0 is that pose, all four contact points loaded there, the motion joins
+    the gait and passes every check of the verifier, the certificate included."""
+    scene, settings, planner, plan = gait
+    start = standing_start(scene)
+    result = plan_transition(planner, scene, settings, start, steps=1, from_last=False)
+    assert result.success, result.message
+    assert np.abs(result.q[0] - start.q).max() < 1e-12
+    assert result.settings["transition_standing"] == "true"
+    assert set(result.active_contacts[0]) == {c.name for c in scene.contacts}
+    assert all(f[0, 2] > 0 for f in result.contact_forces.values())
+    report = verify_result(result)
+    assert report.ok, report.summary()
+
+
+@pytest.mark.parametrize("gait", ["walker2d", pytest.param("walker3d", marks=pytest.mark.slow)],
+                         indirect=True)
+def test_a_stop_ends_standing_at_rest(gait):
+    """From the gait's first node, one half cycle and the scene's stop phases: the last
+    three nodes are one configuration (at rest), both feet flat and loaded there, every
+    check of the verifier passed."""
+    scene, settings, planner, plan = gait
+    result = plan_transition(planner, scene, settings, None, stop=True, from_last=False)
+    assert result.success, result.message
+    assert np.array_equal(result.q[-1], result.q[-3]) and np.array_equal(result.q[-2],
+                                                                         result.q[-3])
+    assert set(result.active_contacts[-2]) == {c.name for c in scene.contacts}
+    assert all(f[-2, 2] > 0 for f in result.contact_forces.values())
+    report = verify_result(result)
+    assert report.ok, report.summary()
