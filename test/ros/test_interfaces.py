@@ -46,6 +46,7 @@ EXPECTED_FIELDS = {
         "root_pose": "geometry_msgs/Pose",
         "root_twist": "geometry_msgs/Twist",
         "transition_half_cycles": "int32",
+        "stop": "boolean",  # end standing at rest
     },
     PlanGait.Response: {
         "success": "boolean",
@@ -197,7 +198,7 @@ def test_a_request_with_a_start_state_roundtrips():
     pose.position.z, pose.orientation.y, pose.orientation.w = 1.02, 0.1, 0.995
     twist.linear.x, twist.angular.y = 1.2, -0.4
     request = PlanGait.Request(scene="walker2d", start="state", state=state, root_pose=pose,
-                               root_twist=twist, transition_half_cycles=3)
+                               root_twist=twist, transition_half_cycles=3, stop=True)
     back = roundtrip(request)
     assert back == request and list(back.state.name) == ["hip_r", "knee_r"]
     assert back.state.header.stamp == state.header.stamp and back.root_twist.linear.x == 1.2
