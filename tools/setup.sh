@@ -10,9 +10,11 @@
 #    numpy's include dir (the wheels name their builder's /opt/python/cp311-cp311/... paths);
 # 5. configures, builds and installs msg_defs/ (gait_planner_msgs) into the venv prefix, and
 #    tools/tf2_msgs (tf2_msgs/TFMessage) when no tf2_msgs is installed (no PyPI wheel);
-# 6. installs gait_planner itself editable (pip install -e . --no-deps).
+# 6. installs gait_planner itself editable (pip install -e . --no-deps);
+# 7. compiles walker3d's default problem and plans it (what `make run` needs; the other
+#    scenes, ground forms, gaits and anchors are `make prepare`).
 #
-# Steps 3, 5 and 6 are skipped when the stamp files under VENV_DIR/.gait_planner_setup/ show that
+# Steps 3, 5, 6 and 7 are skipped when the stamp files under VENV_DIR/.gait_planner_setup/ show that
 # their inputs have not changed, so a second run changes nothing and takes a few seconds.
 set -euo pipefail
 
@@ -162,23 +164,23 @@ if ! is_current gait_planner "$pkg_hash" || [[ ! -x "$venv/bin/gait-planner" ]];
   mark gait_planner "$pkg_hash"
 fi
 
-# --- 7. compiled derivatives and default plans of the shipped scenes -----------------------
+# --- 7. what the first plan needs: walker3d's default problem, compiled, and its plan --------
 # The planner compiles each scene's per-node derivative elements to C the first time they
-# are needed and caches them by source hash; doing it here, for every ground form a request
-# may take (level or ramp, a speed, stairs up, stairs down; each gait a scene declares:
-# 308 s for the three scenes' walks on the idle 2-core VM, 2026-11-28), keeps it off every
-# request (`gait-planner prepare`), which also plans each scene's default request into the
-# warm-start store (gait_planner/ocp/warm_starts.py) that the node re-plans from. A
+# are needed and caches them by source hash. Set-up compiles only what `make run` plans:
+# walker3d's default problem (47 libraries; 92 s with its plan on the 2-core VM, 2026-12-07)
+# and plans its default request into the warm-start store (gait_planner/ocp/warm_starts.py).
+# The rest (every ground form and gait of the shipped scenes, their warm-start anchors) is
+# `make prepare` (`make test` runs it first) or the node's background preparation. A
 # failure only costs speed later.
 prep_hash="$( { printf '%s\n' "$venv" "${GAIT_PLANNER_CACHE:-$HOME/.cache/gait_planner}";
   cat gait_planner/model/*.py gait_planner/dynamics/*.py gait_planner/ocp/*.py \
-      gait_planner/cli/prepare.py config/scenes/*.yaml; } | sha256sum | cut -d' ' -f1)"
-if ! is_current prepare "$prep_hash"; then
-  say "compiling the scenes' derivatives and planning their defaults (10-15 minutes the first time on 2 cores; cached)"
-  if "$venv/bin/gait-planner" prepare walker3d walker2d compass; then
-    mark prepare "$prep_hash"
+      gait_planner/cli/prepare.py config/scenes/walker3d.yaml; } | sha256sum | cut -d' ' -f1)"
+if ! is_current prepare-default "$prep_hash"; then
+  say "compiling walker3d's default problem and planning it (about 1.5 minutes the first time on 2 cores; cached)"
+  if "$venv/bin/gait-planner" prepare --default-only walker3d; then
+    mark prepare-default "$prep_hash"
   else
-    say "warning: compiling failed; plans will compile (or fall back to CasADi) when asked"
+    say "warning: compiling failed; the plan will compile (or fall back to CasADi) when asked"
   fi
 fi
 
