@@ -192,6 +192,7 @@ if [[ -n "$prep_pid" ]]; then
   if wait "$prep_pid"; then
     mark prepare-default "$prep_hash"
     say "$(tail -n 1 "$prep_log")"
+    say "the other ground forms, gaits and scenes: \`make prepare\` (minutes; the node does it in the background)"
   else
     tail -n 20 "$prep_log" >&2
     say "warning: compiling failed (log $prep_log); the plan will compile (or fall back to CasADi) when asked"
