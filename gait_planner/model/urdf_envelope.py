@@ -16,7 +16,8 @@ robot's own geometry at the URDF's zero pose (base level, legs straight):
   URDF's range), whatever the URDF's sign.
 
 `leg_roles` names the joints by their world axes, not their names, so any axis convention
-and naming works; a leg without such a joint gets no row for it.
+and naming works; a leg without such a joint gets no row for it. It also names the hip and
+ankle pitch joints, whose speed limits set the draft's pace (`gait_planner.model.urdf_pace`).
 """
 
 from __future__ import annotations
@@ -36,19 +37,22 @@ _MID_LEG = 0.25  # a knee is at least this share of the hip's height above the l
 
 def leg_roles(model, data, chain: Sequence[int], axes: dict[str, np.ndarray],
               frame) -> dict:
-    """{"hip_yaw": joint, "knee": joint} of one leg: `chain` its joint ids from the base
-    (Pinocchio model, forward kinematics in `data` at the draft pose), `axes` the joints'
-    unit axes in their own frames (`urdf_read.revolute_axis`), `frame` the walker's world
-    in the URDF's (`gait_planner.model.urdf_frame.WalkFrame`: forward, left, up)."""
+    """{"hip_yaw": joint, "knee": joint, "sweep": [joints]} of one leg: `chain` its joint
+    ids from the base (Pinocchio model, forward kinematics in `data` at the draft pose),
+    `axes` the joints' unit axes in their own frames (`urdf_read.revolute_axis`), `frame`
+    the walker's world in the URDF's (`gait_planner.model.urdf_frame.WalkFrame`: forward,
+    left, up). "sweep": the leg's pitch joints but the knee (hip and ankle pitch: those
+    that turn through the stride angle, `gait_planner.model.urdf_pace`)."""
     world = {j: frame.W.T @ data.oMi[j].rotation @ axes[model.names[j]] for j in chain}
     height = {j: float(frame.W[:, 2] @ (data.oMi[j].translation
                                          - data.oMi[chain[-1]].translation)) for j in chain}
     pitch = [j for j in chain if abs(world[j][1]) > _ALONG]
     if len(pitch) < 2 or height[pitch[1]] < _MID_LEG * height[chain[0]]:
-        return {}  # no second pitch joint, or it is an ankle
+        return {"sweep": [model.names[j] for j in pitch]}  # no knee: pitch[1] is an ankle
     knee = pitch[1]
     yaw = [j for j in chain[:chain.index(knee)] if abs(world[j][2]) > _ALONG]
-    return {"knee": model.names[knee], **({"hip_yaw": model.names[yaw[0]]} if yaw else {})}
+    return {"knee": model.names[knee], **({"hip_yaw": model.names[yaw[0]]} if yaw else {}),
+            "sweep": [model.names[j] for j in pitch if j != knee]}
 
 
 def walking_envelope(roles: dict[str, dict[str, str]], limits: dict[str, list[float]],

@@ -57,7 +57,9 @@ approximation of it:
   point feet; walker3d's swing clearance and strike speed, the step length and the time
   step scaled from walker3d by the leg length L
   (hip to sole): step = 0.7066 L (walker3d: 0.6338 m at L = 0.897 m), base time step
-  0.01 s sqrt(L / 0.897 m) (equal Froude number, so sigma's bounds keep their meaning).
+  0.01 s sqrt(L / 0.897 m) (equal Froude number, so sigma's bounds keep their meaning);
+  sigma's upper bound walker3d's 1.5, or longer where the slowest hip or ankle pitch joint
+  cannot sweep the step that fast (`gait_planner.model.urdf_pace`: Romeo's 3.0).
 
 Refused before anything is built, with the joint or link named (`UrdfError`): an
 unreadable or closed-chain description, a leg joint that is not revolute (prismatic,
@@ -90,6 +92,7 @@ from gait_planner.model.urdf_fuse import ball_points, find_balls
 from gait_planner.model.urdf_holds import locked_holds
 from gait_planner.model.urdf_mirror import (MIRROR_TOLERANCE, S, mirror_geometry,
                                             mirror_pairs, mirrored_inertias)
+from gait_planner.model.urdf_pace import scaling_upper
 from gait_planner.model.urdf_read import (find_feet, leg_path, read_urdf, revolute_axis,
                                           visual_geometry)
 
@@ -339,6 +342,10 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
         if len(held) == 1:
             stance.setdefault(held.pop(), []).append(phase["name"])
     envelope = walking_envelope(roles, limits, stance)
+    time_step = round(0.01 * math.sqrt(leg / WALKER3D_LEG), 5)
+    pace = scaling_upper(step, leg, time_step, phases, sides,
+                         {j: speeds[j] for role in roles.values() for j in role["sweep"]
+                          if j in speeds})
     fused = f" ({3 * len(balls)} as {len(balls)} spherical)" if balls else ""
     scene = {
         "name": name,
@@ -362,8 +369,8 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
         "initial_pose": {"root_position": _round(com_world),
                          "root_angles": _round(matrix_rpy(frame.rotation(root.R))[::-1])},
         "gait": {
-            "step_length": step, "base_time_step": round(0.01 * math.sqrt(leg / WALKER3D_LEG), 5),
-            "scaling_bounds": [0.5, 1.5], "friction_coefficient": 0.8,
+            "step_length": step, "base_time_step": time_step,
+            "scaling_bounds": [0.5, pace.upper], "friction_coefficient": 0.8,
             "cost": "kinetic_energy", "mirror": mirror,
             "phases": phases,
             "options": {**_swing_options(leg, half_widths), **envelope,
@@ -386,7 +393,7 @@ def _write(model, data, full, bodies, ids, axes, balls, foot_ids, contacts, half
               f"{WALK_JOINT_SPEED:g} deg/s).\n# Walking envelope (gait_planner.model.urdf_envelope): the base "
               f"link within {UPRIGHT_DEG:g} deg of upright,\n# hip yaw within "
               f"+-{HIP_YAW_DEG:g} deg, the stance knee within +-{STANCE_KNEE_DEG:g} deg in "
-              f"single support.\n")
+              f"single support.\n") + pace.comment()
     if np.any(frame.W != np.eye(3)) or np.any(frame.origin != 0):
         header += (f"# Walking direction (the scene's x): the URDF's "
                    f"{_round(frame.W[:, 0], 6)}, told by {frame.cue}; left: "

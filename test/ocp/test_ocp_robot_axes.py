@@ -25,9 +25,10 @@ first run of this test).
 
 Romeo (`romeo_small.urdf`): its joints' own URDF velocity limits (hip yaw 18.3 deg/s, hip
 and ankle 120, knee 344; `joint_speed_limits`), not its slowest for every joint; its draft
-with sigma's upper bound raised from 1.5 to 3 (a half cycle of up to 1.02 s; at 1.5 no plan
-converged in 600 s, the joint speed rows most violated) plans cold and passes every check,
-its ankles and hip yaws at their own limits, no joint above its own.
+as drafted, whose sigma bound its slow hip and ankle pitch joints raise from 1.5 to 3.0
+(`gait_planner.model.urdf_pace`: a half cycle of up to 1.04 s; at 1.5 no plan converged in
+600 s, the joint speed rows most violated), plans cold and passes every check, its ankles
+and hip yaws at their own limits, no joint above its own.
 
 Slow: without compiling, iCub's problem builds and solves in about 2 min (6 GB of memory:
 run it alone), Alexander's in about 1 min, Romeo's in about 2 min (5.2 GB).
@@ -120,11 +121,9 @@ def test_romeo_plans_within_each_joints_own_speed_limit(example_robots, tmp_path
     assert "joint_speed_max" not in options
     assert limits["LHipYaw"] == pytest.approx(np.degrees(0.32), abs=1e-5)
     assert limits["RKneePitch"] == pytest.approx(np.degrees(6.0), abs=1e-5)
-    drafted = "  scaling_bounds: [0.5, 1.5]\n"
-    assert drafted in draft.yaml
-    scene_file = tmp_path / "romeo.yaml"
-    scene_file.write_text(draft.yaml.replace(drafted, "  scaling_bounds: [0.5, 3.0]\n"))
-    outcome, _ = _planned_and_checked(scene_file, "romeo", tmp_path)
+    assert yaml.safe_load(draft.yaml)["gait"]["scaling_bounds"] == [0.5, 3.0]  # its pace
+    outcome, _ = _planned_and_checked(write_draft(draft, tmp_path / "romeo.yaml"), "romeo",
+                                      tmp_path)
     rec = read_plan_mcap(outcome.mcap_path)
     speed = np.degrees(np.abs(np.asarray(rec.velocities))).max(axis=0)
     shares = {name: speed[rec.joint_names.index(name)] / limit
