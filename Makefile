@@ -3,27 +3,35 @@
 # ones (long solves, refinements, the web viewer's screenshot); `make test-all` runs both.
 # `make fuzz` sends FUZZ_EXAMPLES (1000) hypothesis-drawn requests to a live node
 # (test/ros/test_fuzz.py; `make test` runs a seeded 40 of them).
-# All set up .venv/ first (tools/setup.sh; quick when nothing changed).
+# All set up .venv/ first (tools/setup.sh; quick when nothing changed), which compiles only
+# what `make run` plans (walker3d's default problem). `make prepare` builds the rest: every
+# ground form and gait of the shipped scenes and their warm-start anchors (about 6 min on 2
+# idle cores from an empty compile cache, 14 min under load 3-5; a second once the cache
+# marks them prepared); the test targets run it first.
 
 VENV ?= .venv
 PYTHON := $(VENV)/bin/python
 PYTEST_ARGS ?=
 FUZZ_EXAMPLES ?= 1000
+PREPARE_SCENES ?= walker3d walker2d compass
 
-.PHONY: setup test test-slow test-all fuzz run docs bench bench-quick bench-peers chromium clean distclean
+.PHONY: setup prepare test test-slow test-all fuzz run docs bench bench-quick bench-peers chromium clean distclean
 
 setup:
 	@tools/setup.sh $(VENV)
 
-test: setup
+prepare: setup
+	$(VENV)/bin/gait-planner prepare $(PREPARE_SCENES)
+
+test: prepare
 	$(PYTHON) -m pytest test -m "not slow" $(PYTEST_ARGS)
 
-test-slow: setup
+test-slow: prepare
 	$(PYTHON) -m pytest test -m slow $(PYTEST_ARGS)
 
 test-all: test test-slow
 
-fuzz: setup
+fuzz: prepare
 	GAIT_PLANNER_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PYTHON) -m pytest test/ros/test_fuzz.py -m fuzz -s --hypothesis-show-statistics $(PYTEST_ARGS)
 
 run: setup
@@ -33,7 +41,7 @@ run: setup
 # chromium (`SCREENSHOT=` keeps the old one) and rewrites every generated number in README.md
 # and docs/ from benchmarks/results/*.json (tools/docs.py; 1 to 3 min on 2 cores).
 SCREENSHOT ?= --screenshot
-docs: setup chromium
+docs: prepare chromium
 	$(PYTHON) tools/docs.py --plan $(SCREENSHOT)
 
 # Benchmarks (benchmarks/README.md): `bench` rewrites benchmarks/REPORT.md and
@@ -42,10 +50,10 @@ docs: setup chromium
 # benchmarks/walk.py; robots drafted from their URDF, Bolt and G1, an estimated 15-25 min:
 # benchmarks/robots.py); `bench-quick` is a smoke run (~5 min)
 # writing to build/bench-quick/ instead.
-bench: setup chromium
+bench: prepare chromium
 	$(PYTHON) benchmarks/bench.py
 
-bench-quick: setup
+bench-quick: prepare
 	$(PYTHON) benchmarks/bench.py --quick
 
 # `bench-peers` (issues #27, #38): DMOCC against Crocoddyl, Drake and OpenSim Moco, each peer
@@ -59,7 +67,7 @@ bench-quick: setup
 PEERS ?= crocoddyl drake opensim
 PEERS_THREADS ?= single
 PEERS_ARGS ?=
-bench-peers: setup
+bench-peers: prepare
 	@for peer in $(PEERS); do benchmarks/peers/setup_env.sh $$peer || true; done
 	$(PYTHON) -m benchmarks.peers.run --peers $(PEERS) --threads $(PEERS_THREADS) $(PEERS_ARGS)
 

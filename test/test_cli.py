@@ -58,9 +58,27 @@ def test_user_errors_are_one_line(tmp_path, capsys):
     assert "gait-planner: error:" in capsys.readouterr().err
 
 
-def test_prepare_compiles_and_refuses_unknown_scenes(capsys):
+def test_prepare_compiles_marks_skips_and_refuses_unknown_scenes(capsys, tmp_path,
+                                                                 monkeypatch):
+    """In an empty cache: --default-only builds the default problem and plans it without
+    marking the scene; a full prepare reports each problem built and marks it; the next
+    skips it, --again does not."""
+    from gait_planner.model.loader import load_scene
+    from gait_planner.ocp.prepared import is_prepared
+
+    monkeypatch.setenv("GAIT_PLANNER_CACHE", str(tmp_path / "cache"))
+    assert main(["prepare", "--default-only", "compass"]) == 0
+    out = capsys.readouterr().out
+    assert "compass: per-node elements compiled to C; its default plan kept" in out
+    assert "problem 1 of" not in out and not is_prepared(load_scene("compass"))
     assert main(["prepare", "compass"]) == 0
-    assert "compass: per-node elements compiled to C" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "compass: problem 5 of 5 built (ground forms and gaits)" in out
+    assert is_prepared(load_scene("compass"))
+    assert main(["prepare", "compass"]) == 0
+    assert capsys.readouterr().out == "compass: prepared already (--again prepares it anew)\n"
+    assert main(["prepare", "--again", "compass"]) == 0
+    assert "compass: problem 5 of 5 built" in capsys.readouterr().out
     assert main(["prepare", "no_such_scene"]) == 2
     assert "gait-planner: error:" in capsys.readouterr().err
 

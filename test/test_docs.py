@@ -53,12 +53,29 @@ def test_a_changed_number_makes_its_region_stale(docs, monkeypatch):
 def test_an_unmeasured_time_renders_as_a_todo(docs, monkeypatch):
     original = docs.load
     measured = json.loads((ROOT / "docs" / "measured.json").read_text())
+    rows = measured["rows"]
+
+    def with_test(time):
+        return {**measured, "rows": {**rows, "make_test": {**rows["make_test"], "time": time}}}
     monkeypatch.setattr(docs, "load", lambda name: (
-        {**measured, "make_test": None} if name == "measured" else original(name)))
-    assert "not measured yet (`time make test` once set-up is done)" in docs.render_measured()
+        with_test(None) if name == "measured" else original(name)))
+    assert "not measured yet (`time make test` once prepared)" in docs.render_measured()
     monkeypatch.setattr(docs, "load", lambda name: (
-        {**measured, "make_test": "5 min"} if name == "measured" else original(name)))
-    assert "`make test` (every test not marked slow): 5 min;" in docs.render_measured()
+        with_test("5 min") if name == "measured" else original(name)))
+    assert "| `make test` (every test not marked slow) | 5 min |" in docs.render_measured()
+
+
+def test_the_readme_table_holds_docs_measured_json():
+    """Each row of docs/measured.json is a row of the README's table, its time as stored;
+    its date stands in the line under the table."""
+    measured = json.loads((ROOT / "docs" / "measured.json").read_text())
+    block = (ROOT / "README.md").read_text().split("<!-- docs:measured -->")[1].split(
+        "<!-- /docs:measured -->")[0]
+    table_rows = [line for line in block.splitlines() if line.startswith("| ")]
+    assert len(table_rows) == 1 + len(measured["rows"])  # the head and one row each
+    for row in measured["rows"].values():
+        assert f"| {row['command']} | {row['time']} |" in table_rows, row["command"]
+        assert row["date"] in block.splitlines()[-1], row["date"]
 
 
 def test_readme_is_short():

@@ -15,7 +15,8 @@ A page holds generated regions::
 
 Each JSON file has the command that writes it in `COMMANDS`; a table names it under itself.
 docs/measured.json holds what a person times by hand on a fresh clone (`time make run`,
-`time make test`); a missing one renders as "not measured yet" with the command to run.
+`time make prepare`, `time make test`, ...; `HOW_TO_MEASURE`); a missing time renders as
+"not measured yet" with the command to run.
 """
 
 from __future__ import annotations
@@ -83,19 +84,28 @@ def sigma(values: list[float]) -> str:
 # --- regions: render_NAME() -> the text between the markers ----------------------------
 
 
-HOW_TO_MEASURE = {"first_run": "`time make run` on a fresh clone with an empty cache",
-                  "make_test": "`time make test` once set-up is done",
-                  "make_test_slow": "`time make test-slow`"}
+HOW_TO_MEASURE = {  # docs/measured.json's rows: how to measure each again
+    "first_run": "`time make run` on a fresh clone, an empty compile cache",
+    "prepare": "`time make prepare` after it",
+    "make_test": "`time make test` once prepared",
+    "make_test_slow": "`time make test-slow` once prepared",
+    "default_solve": "the solve time `make run` prints"}
 
 
 def render_measured() -> str:
+    """The README's table of what a person times by hand (docs/measured.json: each row's
+    command, time, date and conditions), and one line under it: the machine, and the dates
+    with their conditions."""
     m = load("measured")
-
-    def said(key: str) -> str:
-        return m[key] if m.get(key) else f"not measured yet ({HOW_TO_MEASURE[key]})"
-    return (f"* the first `make run` on a fresh clone: {said('first_run')};\n"
-            f"* `make test` (every test not marked slow): {said('make_test')};\n"
-            f"* `make test-slow` (the slow end-to-end tests): {said('make_test_slow')}.\n")
+    rows, when = [], {}
+    for key, how in HOW_TO_MEASURE.items():
+        row = m["rows"][key]
+        rows.append([row["command"], row.get("time") or f"not measured yet ({how})"])
+        if row.get("time"):
+            when.setdefault(f"{row['date']} ({row['conditions']})", []).append(row["short"])
+    dates = "; ".join(f"{', '.join(names)} {date}" for date, names in when.items())
+    return (table(["command", "time"], rows) + f"\n*{m['machine']}: {dates}; the dated "
+            "detail in [benchmarks/HISTORY.md](benchmarks/HISTORY.md).*\n")
 
 
 def render_plan_line() -> str:

@@ -8,11 +8,14 @@
 # 3. pip-installs requirements.txt (pinned ROS 2 wheels from PyPI, numerics, tests);
 # 4. points the ROS message wheels' exported CMake files at this interpreter's include dir and
 #    numpy's include dir (the wheels name their builder's /opt/python/cp311-cp311/... paths);
-# 5. configures, builds and installs msg_defs/ (gait_planner_msgs) into the venv prefix, and
+# 5. installs gait_planner itself editable (pip install -e . --no-deps);
+# 6. compiles walker3d's default problem and plans it (what `make run` needs; the other
+#    scenes, ground forms, gaits and anchors are `make prepare`), in the background while
+# 7. configures, builds and installs msg_defs/ (gait_planner_msgs) into the venv prefix, and
 #    tools/tf2_msgs (tf2_msgs/TFMessage) when no tf2_msgs is installed (no PyPI wheel);
-# 6. installs gait_planner itself editable (pip install -e . --no-deps).
+#    then it waits for step 6.
 #
-# Steps 3, 5 and 6 are skipped when the stamp files under VENV_DIR/.gait_planner_setup/ show that
+# Steps 3, 5, 6 and 7 are skipped when the stamp files under VENV_DIR/.gait_planner_setup/ show that
 # their inputs have not changed, so a second run changes nothing and takes a few seconds.
 set -euo pipefail
 
@@ -88,7 +91,42 @@ if ((${#stale[@]})); then
          -e "s|$wheel_python/include/python3.11|$py_include|g" "${stale[@]}"
 fi
 
-# --- 5. the interface package msg_defs/ (gait_planner_msgs) ----------------------------------
+# --- 5. gait_planner, editable ---------------------------------------------------------------
+pkg_hash="$( { printf '%s\n' "$venv"; cat setup.py setup.cfg package.xml; } | sha256sum | cut -d' ' -f1)"
+if ! is_current gait_planner "$pkg_hash" || [[ ! -x "$venv/bin/gait-planner" ]]; then
+  say "installing gait_planner editable into $venv"
+  # PEP 660 editable install (pip puts the console script into $venv/bin); an older pip would
+  # otherwise run `setup.py develop`, which follows setup.cfg's ROS script_dir.
+  pep517=()
+  [[ "$("$py" -m pip install --help 2>/dev/null)" == *--use-pep517* ]] && pep517=(--use-pep517)
+  # (PYTHONWARNINGS: setuptools' note on flat layouts is information, not a problem.)
+  PYTHONWARNINGS=ignore pip_install --no-deps --no-build-isolation "${pep517[@]}" -e .
+  mark gait_planner "$pkg_hash"
+fi
+
+# --- 6. what the first plan needs: walker3d's default problem, compiled, and its plan --------
+# The planner compiles each scene's per-node derivative elements to C the first time they
+# are needed and caches them by source hash. Set-up compiles only what `make run` plans:
+# walker3d's default problem (47 libraries; 92 s with its plan on the 2-core VM, 2026-12-07)
+# and plans its default request into the warm-start store (gait_planner/ocp/warm_starts.py).
+# It needs no ROS message, so it runs in the background while step 7 builds the messages
+# (their generators and CMake leave a core idle much of the time), and set-up waits for it
+# at the end. The rest (every ground form and gait of the shipped scenes, their warm-start
+# anchors) is `make prepare` (`make test` runs it first) or the node's background
+# preparation. A failure only costs speed later.
+prep_hash="$( { printf '%s\n' "$venv" "${GAIT_PLANNER_CACHE:-$HOME/.cache/gait_planner}";
+  cat gait_planner/model/*.py gait_planner/dynamics/*.py gait_planner/ocp/*.py \
+      gait_planner/cli/prepare.py config/scenes/walker3d.yaml; } | sha256sum | cut -d' ' -f1)"
+prep_pid=""
+prep_log="$stamps/prepare-default.log"
+if ! is_current prepare-default "$prep_hash"; then
+  say "compiling walker3d's default problem and planning it, beside the next steps (about 1.5 minutes the first time on 2 cores; cached; log $prep_log)"
+  "$venv/bin/gait-planner" prepare --default-only walker3d >"$prep_log" 2>&1 &
+  prep_pid=$!
+  trap 'kill "$prep_pid" 2>/dev/null || true' EXIT  # a failing step 7 does not leave it running
+fi
+
+# --- 7. the interface package msg_defs/ (gait_planner_msgs) ----------------------------------
 mapfile -t msg_sources < <(find msg_defs -type f ! -name '*~' | LC_ALL=C sort)
 msg_hash="$( { printf '%s\n' "$req_hash" "$venv" "${msg_sources[@]}"; cat "${msg_sources[@]}" "$self"; } \
   | sha256sum | cut -d' ' -f1)"
@@ -127,7 +165,7 @@ if ! is_current msg_defs "$msg_hash" || [[ ! -f "$venv/share/gait_planner_msgs/p
   mark msg_defs "$msg_hash"
 fi
 
-# --- 5b. tf2_msgs/TFMessage, where no tf2_msgs is installed ----------------------------------
+# --- 7b. tf2_msgs/TFMessage, where no tf2_msgs is installed ----------------------------------
 # PyPI has no tf2_msgs wheel; the node subscribes to /tf (PlanGait's start "robot") and its
 # tests publish it, so tools/tf2_msgs (TFMessage alone, ROS 2's definition) is built into
 # the venv when `import tf2_msgs` fails. A full ROS 2 install has the real package.
@@ -149,36 +187,15 @@ if ! "$py" -c 'import tf2_msgs.msg' >/dev/null 2>&1; then
   fi
 fi
 
-# --- 6. gait_planner, editable ---------------------------------------------------------------
-pkg_hash="$( { printf '%s\n' "$venv"; cat setup.py setup.cfg package.xml; } | sha256sum | cut -d' ' -f1)"
-if ! is_current gait_planner "$pkg_hash" || [[ ! -x "$venv/bin/gait-planner" ]]; then
-  say "installing gait_planner editable into $venv"
-  # PEP 660 editable install (pip puts the console script into $venv/bin); an older pip would
-  # otherwise run `setup.py develop`, which follows setup.cfg's ROS script_dir.
-  pep517=()
-  [[ "$("$py" -m pip install --help 2>/dev/null)" == *--use-pep517* ]] && pep517=(--use-pep517)
-  # (PYTHONWARNINGS: setuptools' note on flat layouts is information, not a problem.)
-  PYTHONWARNINGS=ignore pip_install --no-deps --no-build-isolation "${pep517[@]}" -e .
-  mark gait_planner "$pkg_hash"
-fi
-
-# --- 7. compiled derivatives and default plans of the shipped scenes -----------------------
-# The planner compiles each scene's per-node derivative elements to C the first time they
-# are needed and caches them by source hash; doing it here, for every ground form a request
-# may take (level or ramp, a speed, stairs up, stairs down; each gait a scene declares:
-# 308 s for the three scenes' walks on the idle 2-core VM, 2026-11-28), keeps it off every
-# request (`gait-planner prepare`), which also plans each scene's default request into the
-# warm-start store (gait_planner/ocp/warm_starts.py) that the node re-plans from. A
-# failure only costs speed later.
-prep_hash="$( { printf '%s\n' "$venv" "${GAIT_PLANNER_CACHE:-$HOME/.cache/gait_planner}";
-  cat gait_planner/model/*.py gait_planner/dynamics/*.py gait_planner/ocp/*.py \
-      gait_planner/cli/prepare.py config/scenes/*.yaml; } | sha256sum | cut -d' ' -f1)"
-if ! is_current prepare "$prep_hash"; then
-  say "compiling the scenes' derivatives and planning their defaults (10-15 minutes the first time on 2 cores; cached)"
-  if "$venv/bin/gait-planner" prepare walker3d walker2d compass; then
-    mark prepare "$prep_hash"
+# --- 6, continued: wait for walker3d's default problem ----------------------------------------
+if [[ -n "$prep_pid" ]]; then
+  if wait "$prep_pid"; then
+    mark prepare-default "$prep_hash"
+    say "$(tail -n 1 "$prep_log")"
+    say "the other ground forms, gaits and scenes: \`make prepare\` (minutes; the node does it in the background)"
   else
-    say "warning: compiling failed; plans will compile (or fall back to CasADi) when asked"
+    tail -n 20 "$prep_log" >&2
+    say "warning: compiling failed (log $prep_log); the plan will compile (or fall back to CasADi) when asked"
   fi
 fi
 

@@ -1,5 +1,7 @@
 """``gait-planner prepare SCENE...``: compile the scenes' derivatives and plan their
-defaults and warm-start anchors into the warm-start store (`make setup` runs it)."""
+defaults and warm-start anchors into the warm-start store (`make prepare`; `make setup`
+runs ``prepare --default-only walker3d``, what `make run`'s plan needs; the node prepares
+its `prepare_scenes` in the background by running this command)."""
 
 from __future__ import annotations
 
@@ -13,17 +15,24 @@ from gait_planner.cli.terminal import print_stage
 def add_prepare_parser(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "prepare", help="compile the scenes' derivatives and plan their defaults now "
-        "(make setup runs it)",
+        "(make prepare; make setup runs it --default-only for walker3d)",
         description="Build each SCENE's problems with compiled derivatives (one per shape: "
         "level or ramp, a requested speed, stairs up, stairs down; for each of its gaits), so "
         "that the C libraries are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) "
         "and no request within the scene's ranges compiles, and plan its default request and "
         "its warm-start anchors into the warm-start store (gait_planner/ocp/warm_starts.py), "
-        "from which the node's first request re-plans warm. The first time it compiles for "
-        "minutes (walker3d's walk and anchors 6.3 min on 2 cores, its other gaits up to 4 "
-        "more); cached, planning the anchors takes most of its 1-4 minutes.")
+        "from which the node's first request re-plans warm. A scene prepared in full is marked "
+        "in the cache (gait_planner/ocp/prepared.py) and skipped the next time unless its file "
+        "or the code changed. The first time it compiles for minutes (walker3d in full about "
+        "4.5 min on 2 cores, walker2d 1.3, the compass seconds); --default-only builds only "
+        "the default problem and plans the default (walker3d: about 1 min).")
     parser.add_argument("scenes", nargs="+", metavar="NAME|FILE.yaml",
                         help="scenes: names or paths to scene files (see plan --help)")
+    parser.add_argument("--default-only", action="store_true",
+                        help="only each scene's default problem and its default plan (what "
+                        "`make run` needs; make setup runs it for walker3d)")
+    parser.add_argument("--again", action="store_true",
+                        help="prepare a scene even if the cache marks it prepared")
     parser.set_defaults(handler=_prepare)
 
 
@@ -35,49 +44,72 @@ def _compile_note(stage: str) -> None:
 
 def _plan_anchors(planner, scene) -> list[bool]:
     """Plan the scene's warm-start anchors (`ocp.prepare_requests.anchor_requests`), each from the
-    nearest plan kept, into the planner's warm-start store; whether each converged."""
+    nearest plan kept, into the planner's warm-start store, each reported as it ends; whether
+    each converged."""
     from gait_planner.ocp.prepare_requests import anchor_requests
     from gait_planner.ocp.settings import settings_for
     from gait_planner.strategies import plan_once
 
-    out = []
-    for anchor in anchor_requests(scene):
+    anchors, out = anchor_requests(scene), []
+    for k, anchor in enumerate(anchors, 1):
         result = plan_once(planner, scene, settings_for(scene, compiled=True, **anchor))
         out.append(result.success)
-        if not result.success:
-            print(f"{scene.name}: the warm-start anchor {anchor} failed: {result.message}",
-                  flush=True)
+        print(f"{scene.name}: warm-start anchor {k} of {len(anchors)} "
+              + ("planned" if result.success else f"{anchor} failed: {result.message}"),
+              flush=True)
     return out
 
 
-def _prepare(args: argparse.Namespace) -> int:
-    from gait_planner.model.loader import SceneError, find_scene, with_gait
-    from gait_planner.ocp.warm_starts import WarmStartStore
+def _build_forms(planner, scene) -> None:
+    """Build every problem shape of the scene's walk and of its other gaits (not planned),
+    each reported as it is built."""
+    from gait_planner.model.loader import with_gait
     from gait_planner.ocp.prepare_requests import form_requests
+    from gait_planner.ocp.settings import settings_for
+
+    forms = [(gait, shape) for gait in (scene, *(with_gait(scene, g) for g in scene.gaits))
+             for shape in form_requests(gait, settings_for(gait, compiled=True))]
+    for k, (gait, shape) in enumerate(forms, 1):
+        planner.prepare(gait, shape)
+        print(f"{scene.name}: problem {k} of {len(forms)} built (ground forms and gaits)",
+              flush=True)
+
+
+def _prepare(args: argparse.Namespace) -> int:
+    from gait_planner.model.loader import SceneError, find_scene
+    from gait_planner.ocp.prepared import is_prepared, mark_prepared
     from gait_planner.ocp.settings import SettingsError, settings_for
     from gait_planner.ocp.solve import Planner
+    from gait_planner.ocp.warm_starts import WarmStartStore
     from gait_planner.strategies import plan_once
 
     for name in args.scenes:
         start = time.perf_counter()
         try:
             scene = find_scene(name)
+            if not (args.default_only or args.again) and is_prepared(scene):
+                print(f"{name}: prepared already (--again prepares it anew)", flush=True)
+                continue
             settings = settings_for(scene, compiled=True)
             planner = Planner(library=WarmStartStore(), stage=_compile_note, pin=True)
             used = planner.prepare(scene, settings)
             result = plan_once(planner, scene, settings, warm_start=False)
-            # every shape of the walk (the default's already built) and of its other gaits
-            # (built, not planned)
-            for gait in (scene, *(with_gait(scene, g) for g in scene.gaits)):
-                for shape in form_requests(gait, settings_for(gait, compiled=True)):
-                    planner.prepare(gait, shape)
-            anchors = _plan_anchors(planner, scene) if result.success else []
+            print(f"{name}: default problem built and planned "
+                  f"({time.perf_counter() - start:.1f} s)", flush=True)
+            anchors = []
+            if not args.default_only:
+                _build_forms(planner, scene)
+                anchors = _plan_anchors(planner, scene) if result.success else []
         except (SceneError, SettingsError) as error:
             raise CliError(str(error)) from None
         kept = ("its default plan" + (f" and {sum(anchors)} of {len(anchors)} warm-start "
                                       "anchors" if anchors else "")
                 + " kept in the warm-start store" if result.success
                 else f"its default plan failed: {result.message}")
-        gaits = f"; its gaits {', '.join(scene.gaits)} built" if scene.gaits else ""
-        print(f"{name}: {used}; {kept}{gaits} ({time.perf_counter() - start:.1f} s)", flush=True)
+        gaits = (f"; its gaits {', '.join(scene.gaits)} built"
+                 if scene.gaits and not args.default_only else "")
+        seconds = time.perf_counter() - start
+        if result.success and not args.default_only:
+            mark_prepared(scene, seconds)
+        print(f"{name}: {used}; {kept}{gaits} ({seconds:.1f} s)", flush=True)
     return 0

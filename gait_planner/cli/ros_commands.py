@@ -142,6 +142,9 @@ def add_call_parser(commands: argparse._SubParsersAction) -> None:
                         help="use the action: print feedback, Ctrl-C cancels")
     parser.add_argument("--timeout", type=float, default=900.0, metavar="S",
                         help="s to wait for the answer (default 900)")
+    parser.add_argument("--preparation", action="store_true",
+                        help="ask what the node has prepared instead (/gait_planner/"
+                        "preparation): exit status 0 once every scene is ready")
     parser.add_argument("--json", action="store_true", help="print the answer as JSON")
     parser.set_defaults(handler=_call)
 
@@ -151,10 +154,18 @@ def _call(args: argparse.Namespace) -> int:
     import math
 
     from gait_planner.request import FIELDS, RequestError
-    from gait_planner.ros.client import CallError, call_plan_gait, call_plan_gait_action
+    from gait_planner.ros.client import (CallError, ask_preparation, call_plan_gait,
+                                         call_plan_gait_action)
 
     if not (math.isfinite(args.timeout) and args.timeout > 0):
         raise CliError(f"--timeout must be > 0 s, got {args.timeout}")
+    if args.preparation:
+        try:
+            status = ask_preparation(timeout=args.timeout)
+        except CallError as err:
+            raise CliError(str(err)) from None
+        print(json.dumps(status, indent=2) if args.json else status["message"])
+        return 0 if status["done"] else 1
     fields = {name: getattr(args, name) for name in FIELDS}
     try:
         answer = (call_plan_gait_action if args.action else call_plan_gait)(

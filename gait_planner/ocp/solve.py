@@ -330,8 +330,15 @@ class Planner:
 
     def keep(self, scene: Scene, settings: GaitSettings, plan: StoredPlan) -> None:
         """Keep an optimum of (scene, settings) for warm starts, in the library too if the
-        planner has one."""
+        planner has one; the pinned plans another process added to the library's file
+        since this one read it (a node's background preparation) are taken in first, so
+        that saving does not drop them."""
         built = self._build(scene, settings)
+        if self.library is not None and built.library_key is not None:
+            known = {p.request for p in built.stored}
+            built.stored[:0] = [p for p in self.library.load(
+                built.library_key, int(built.tr.x.shape[0]), int(built.tr.g.shape[0]))
+                if p.pinned and p.request not in known]
         built.stored.append(dataclasses.replace(plan, pinned=True) if self.pin else plan)
         if self.library is not None and built.library_key is not None:
             self.library.save(built.library_key, built.stored)

@@ -75,7 +75,9 @@ class StoredPlan:
 
 
 @functools.cache
-def _code_digest() -> str:
+def code_digest() -> str:
+    """SHA-256 of the source of the model, dynamics and transcription code (what the stored
+    vectors, and the preparation of a scene, depend on)."""
     root = Path(__file__).resolve().parent.parent
     digest = hashlib.sha256()
     for package in _CODE:
@@ -94,7 +96,7 @@ class WarmStartStore:
     def key(scene_source: str, fixed_settings: object, nx: int, ng: int) -> str:
         """The problem's key: SHA-256 of the scene text, repr of the settings that fix the
         problem, the NLP's size and the code that defines its vectors."""
-        text = "\n".join([scene_source, repr(fixed_settings), f"{nx} {ng}", _code_digest()])
+        text = "\n".join([scene_source, repr(fixed_settings), f"{nx} {ng}", code_digest()])
         return hashlib.sha256(text.encode()).hexdigest()
 
     def path(self, key: str) -> Path:

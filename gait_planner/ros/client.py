@@ -1,11 +1,12 @@
-"""A minimal client of the node (ros2cli is not on PyPI): ``gait-planner call [--action]``
-and its Python API.
+"""A minimal client of the node (ros2cli is not on PyPI): ``gait-planner call [--action |
+--preparation]`` and its Python API.
 
 `call_plan_gait` (the service) and `call_plan_gait_action` (the action: feedback, Ctrl-C
 cancels) take the request's fields (`gait_planner.request.FIELDS`; missing, 0 or empty: the
 node's or the scene's default), check them as the node will (`plan_request`: RequestError
 before anything is sent) and return the answer as a dict with its "status" (succeeded,
-failed, refused, rejected, aborted, canceled). They raise `CallError` when no answer can
+failed, refused, rejected, aborted, canceled); `ask_preparation` returns what the node has
+prepared (the service /gait_planner/preparation). They raise `CallError` when no answer can
 come: no node serves the name within `DISCOVERY_WAIT` s, none answers within the timeout, or
 the node left the ROS graph (`NodeGone`: it stopped or died) after it was seen, and stayed
 away for `GONE_GRACE` s. A node that stops (SIGTERM, SIGINT) leaves the graph at once; one
@@ -32,9 +33,9 @@ from unique_identifier_msgs.msg import UUID
 
 from gait_planner.request import FIELDS, plan_request
 from gait_planner.ros.action_server import ACTION
-from gait_planner.ros.node import BUSY, SERVICE
+from gait_planner.ros.node import BUSY, PREPARATION_SERVICE, SERVICE
 from gait_planner_msgs.action import PlanGait as PlanGaitAction
-from gait_planner_msgs.srv import PlanGait
+from gait_planner_msgs.srv import PlanGait, Preparation
 
 CANCEL_WAIT = 10.0  # s to wait for the node to answer a cancel request
 DISCOVERY_WAIT = 10.0  # s to wait for the node's service or action to appear
@@ -119,28 +120,41 @@ def _spin_until(node: Node, done: Callable[[], bool], timeout: float, what: str,
         rclpy.spin_once(node, timeout_sec=SPIN)
 
 
+def _call_service(kind, name: str, request, timeout: float):
+    """Call the node's service `name` (of type `kind`) once with `request` and return its
+    response (CallError if no node serves it or none answers within `timeout` s)."""
+    rclpy.init()
+    node = rclpy.create_node("gait_planner_client")
+    try:
+        client = node.create_client(kind, name)
+        if not client.wait_for_service(timeout_sec=min(timeout, DISCOVERY_WAIT)):
+            raise CallError(f"no service {name}: is `gait-planner node` running "
+                            "(same ROS_DOMAIN_ID)?")
+        future = client.call_async(request)
+        _spin_until(node, future.done, timeout, "answer",
+                    Presence(client.service_is_ready, name))
+        return future.result()
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def ask_preparation(*, timeout: float) -> dict:
+    """What the node has prepared (`gait_planner_msgs/srv/Preparation`): done, ready,
+    pending and message."""
+    res = _call_service(Preparation, PREPARATION_SERVICE, Preparation.Request(), timeout)
+    return {"done": res.done, "ready": list(res.ready), "pending": list(res.pending),
+            "message": res.message}
+
+
 def call_plan_gait(fields: Mapping[str, Any], *, timeout: float) -> dict:
     """Call the service once with the request's `fields` and return the response's scalar
     fields and its "status": succeeded, failed (the solver ran: `message` says why) or
     refused (busy, or a request the node cannot plan)."""
-    request = request_msg(fields)
-    rclpy.init()
-    node = rclpy.create_node("gait_planner_client")
-    try:
-        client = node.create_client(PlanGait, SERVICE)
-        if not client.wait_for_service(timeout_sec=min(timeout, DISCOVERY_WAIT)):
-            raise CallError(f"no service {SERVICE}: is `gait-planner node` running "
-                            "(same ROS_DOMAIN_ID)?")
-        future = client.call_async(request)
-        _spin_until(node, future.done, timeout, "answer",
-                    Presence(client.service_is_ready, SERVICE))
-        answer = answer_dict(future.result())
-        status = ("succeeded" if answer["success"] else
-                  "failed" if answer["solver_status"] else "refused")
-        return {"status": status, **answer}
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    answer = answer_dict(_call_service(PlanGait, SERVICE, request_msg(fields), timeout))
+    status = ("succeeded" if answer["success"] else
+              "failed" if answer["solver_status"] else "refused")
+    return {"status": status, **answer}
 
 
 def feedback_line(feedback: PlanGaitAction.Feedback) -> str:

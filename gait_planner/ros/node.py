@@ -30,6 +30,13 @@ used, or a robot state not yet received, is refused naming why. SIGINT and SIGTE
 iteration and end the node (`main`); a killed node leaves the ROS graph within 3 s (its DDS
 lease: `DDS_PROFILE`), so its clients stop waiting for it. At start the node removes
 temporary recording files that killed processes left in its output folder.
+
+Preparation: with prepare_on_start the node builds the default request's problem before it
+offers its service, then prepares the scenes of prepare_scenes in the background
+(`gait_planner.ros.preparation`, progress in the log); the service
+``/gait_planner/preparation`` (`gait_planner_msgs/srv/Preparation`) answers what is ready and
+what is not yet. A request for a scene not yet prepared is planned all the same (its
+problem built, and compiled if need be, for it) and its answer's message says so.
 """
 
 from __future__ import annotations
@@ -64,13 +71,14 @@ from gait_planner.problem import resolve
 from gait_planner.request import PlanRequest, RequestError, plan_request
 from gait_planner.ros import parameters
 from gait_planner.ros.action_server import PlanGaitActionServer
+from gait_planner.ros.preparation import BackgroundPreparation
 from gait_planner.ros.robot_description import RobotScenes
 from gait_planner.ros.worker import Closed, Lapsed, PlanWorker, Stopped
 from gait_planner.transitions import HALVES, MAX_HALVES, STOP_HALVES
 from gait_planner.walk.walk_plan import walk
 from gait_planner.walk.summary import format_summary, half_cycles_done
 from gait_planner_msgs.msg import ContactForces, MultibodyState
-from gait_planner_msgs.srv import PlanGait
+from gait_planner_msgs.srv import PlanGait, Preparation
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
@@ -81,6 +89,7 @@ except ImportError:  # ROS 2 wheels from PyPI without `make setup`'s tools/tf2_m
 from trajectory_msgs.msg import JointTrajectory
 
 SERVICE = "/gait_planner/plan_gait"
+PREPARATION_SERVICE = "/gait_planner/preparation"
 TOPIC_TRAJECTORY = "/gait_planner/joint_trajectory"
 TOPIC_STATE = "/gait_planner/state"
 TOPIC_FORCES = "/gait_planner/contact_forces"
@@ -105,6 +114,7 @@ class GaitPlannerNode(Node):
     def __init__(self, *, planner: Planner | None = None, **kwargs):
         # (destroy_node may run before __init__ has ended)
         self._worker, self._action, self._recorder = PlanWorker(), None, None
+        self._preparation = BackgroundPreparation([], lambda line: None)  # none yet
         # the robot's latest /joint_states and world -> frame transforms (start "robot")
         self._joint_state, self._transforms = None, {}
         super().__init__("gait_planner", **kwargs)
@@ -132,12 +142,16 @@ class GaitPlannerNode(Node):
                                            stop=self._worker.stopped, library=library)
         if self._param("prepare_on_start"):
             self._prepare()
+            self._preparation = BackgroundPreparation(
+                self._scenes_to_prepare(folders), self.get_logger().info, folders)
         group = ReentrantCallbackGroup()
         qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         self._pub_trajectory = self.create_publisher(JointTrajectory, TOPIC_TRAJECTORY, 10)
         self._pub_state = self.create_publisher(MultibodyState, TOPIC_STATE, qos)
         self._pub_forces = self.create_publisher(ContactForces, TOPIC_FORCES, qos)
         self.create_service(PlanGait, SERVICE, self._on_plan, callback_group=group)
+        self.create_service(Preparation, PREPARATION_SERVICE, self._on_preparation,
+                            callback_group=group)
         self._describe(self._param("robot_description"), "the parameter robot_description")
         self.add_post_set_parameters_callback(self._on_parameters)
         latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -158,6 +172,7 @@ class GaitPlannerNode(Node):
                 QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT),
                 callback_group=group)
         self._action = PlanGaitActionServer(self, self._worker, self._plan_into, group)
+        self._preparation.start()
 
     def _on_joint_state(self, msg: JointState) -> None:
         self._joint_state = msg
@@ -202,8 +217,26 @@ class GaitPlannerNode(Node):
         self.get_logger().info(f"prepared {request.scene} in {time.perf_counter() - start:.1f} s"
                                f" ({how})")
 
+    def _scenes_to_prepare(self, folders: list[str]) -> list:
+        """The scenes of prepare_scenes (an unknown one logged and left out)."""
+        scenes = []
+        for name in dict.fromkeys(n for n in self._param("prepare_scenes") if n):
+            try:
+                scenes.append(load_scene(name, extra=folders))
+            except SceneError as err:
+                self.get_logger().warning(f"prepare_scenes: {err}")
+        return scenes
+
+    def _on_preparation(self, request: Preparation.Request, response: Preparation.Response):
+        status = self._preparation.status()
+        response.done, response.message = status.done, status.message
+        response.ready, response.pending = list(status.ready), list(status.pending)
+        return response
+
     def close(self) -> None:
-        """Stop a running plan and release the callbacks waiting for it (shutdown)."""
+        """Stop a running plan and the background preparation, and release the callbacks
+        waiting for the plan (shutdown)."""
+        self._preparation.close()
         self._worker.close()
 
     def wait_idle(self, timeout: float) -> bool:
@@ -266,6 +299,10 @@ class GaitPlannerNode(Node):
             seed, note = (None, "") if (not library or not problem.warm_start
                                         or start is not None or stop) else library_start(
                 self._planner, Path(library).expanduser(), problem, self._scenes)
+            if not self._preparation.ready(problem.scene.name):
+                note = "; ".join(filter(None, [note, (
+                    f"{problem.scene.name} is not prepared yet ({PREPARATION_SERVICE} says "
+                    "how far): this request built its own problem")]))
             outcome = plan_and_record(self._planner, problem, self._param("output_dir"),
                                       rrd=False, stage=self._worker.enter, seed=seed,
                                       start=start, halves=halves, stop=stop)

@@ -71,18 +71,27 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         floating_point_range=[FloatingPointRange(from_value=0.0, to_value=MAX_SOLVE_TIME)])),
     "compile_derivatives": (True, _descriptor(
         ParameterType.PARAMETER_BOOL,
-        "Evaluate derivatives with per-node elements compiled to C (cached; `make setup` "
-        "compiles the shipped scenes)")),
+        "Evaluate derivatives with per-node elements compiled to C (cached; `make prepare` "
+        "and prepare_scenes compile the shipped scenes; a problem not yet compiled is "
+        "compiled for the request that needs it)")),
     "prepare_on_start": (True, _descriptor(
         ParameterType.PARAMETER_BOOL,
         "Build the default scene's problem and load the modules that certify and record a "
         "plan at start, before the service and the action are offered, so that the first "
-        "request pays no build (walker3d: about 1 s from the compiled cache)",
+        "request pays no build (walker3d: about 1 s from the compiled cache), then prepare "
+        "prepare_scenes in the background",
         read_only=True)),
+    "prepare_scenes": (["walker3d", "walker2d", "compass"], _descriptor(
+        ParameterType.PARAMETER_STRING_ARRAY,
+        "Scenes prepared in full in the background when prepare_on_start is true (every "
+        "ground form and gait compiled, the default and the warm-start anchors planned: "
+        "`gait-planner prepare` in a child process, gait_planner/ros/preparation.py), each "
+        "that the cache does not mark prepared; the service /gait_planner/preparation "
+        "answers what is ready; empty entries are ignored; fixed at start", read_only=True)),
     "warm_start_store": (True, _descriptor(
         ParameterType.PARAMETER_BOOL,
         "Warm-start from the optima of earlier processes (the warm-start store in the cache "
-        "folder, gait_planner/ocp/warm_starts.py; `make setup` plans the shipped scenes' "
+        "folder, gait_planner/ocp/warm_starts.py; `make prepare` plans the shipped scenes' "
         "default requests and warm-start anchors into it; a request on another ground or at "
         "another pace is continued from the nearest along a path of parameters) and add this "
         "node's optima to it; a request with cold_start ignores it", read_only=True)),

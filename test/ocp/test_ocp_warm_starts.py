@@ -3,6 +3,8 @@ an earlier one kept on disk, to the same optimum; a damaged or foreign file is i
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from gait_planner.model.loader import load_scene
@@ -93,3 +95,20 @@ def test_pinned_plans_outlive_any_number_of_later_plans(tmp_path):
     assert len(loaded) == 3 + MAX_PLANS
     assert {p.step for p in loaded if p.pinned} == {10.0, 11.0, 12.0}
     assert [p.step for p in loaded if not p.pinned] == [p.step for p in later[-MAX_PLANS:]]
+
+
+def test_a_plan_kept_keeps_the_plans_another_process_pinned_meanwhile(tmp_path):
+    """A node reads a problem's file once, when it builds the problem; a background
+    `prepare` pins its plans into the file after that; the node's next plan is saved with
+    them, not over them."""
+    compass = load_scene("compass")
+    settings = settings_for(compass)
+    node = Planner(library=WarmStartStore(tmp_path))
+    node.build(compass, settings, ())  # the file does not exist yet
+    prepared = plan_once(Planner(library=WarmStartStore(tmp_path), pin=True), compass,
+                         settings, warm_start=False)
+    later = plan_once(node, compass, dataclasses.replace(settings, step_length=0.32),
+                      warm_start=False)
+    assert prepared.success and later.success, (prepared.message, later.message)
+    kept = Planner(library=WarmStartStore(tmp_path)).stored_plans(compass, settings)
+    assert sorted((p.step, p.pinned) for p in kept) == [(0.3, True), (0.32, False)]

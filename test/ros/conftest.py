@@ -140,8 +140,9 @@ def spin_until(executor: SingleThreadedExecutor) -> Callable[..., bool]:
 @pytest.fixture
 def planner_node(ros_context: Context, tmp_path: Path) -> Iterator[Callable[..., Node]]:
     """``planner_node(**parameters)``: a `GaitPlannerNode` writing to `tmp_path` (its only
-    allowed output folder; prepare_on_start and warm_start_store false unless given, so a test's
-    first plan is cold whatever earlier processes planned), served on a background thread by
+    allowed output folder; prepare_on_start and warm_start_store false and prepare_scenes none
+    unless given, so a test's first plan is cold whatever earlier processes planned and no
+    background preparation runs), served on a background thread by
     its own multi-threaded executor and `gait_planner.ros.node.serve`, as `gait-planner node`
     serves it, so a test's client spins apart from it. Closed, shut down and destroyed after
     the test."""
@@ -155,7 +156,8 @@ def planner_node(ros_context: Context, tmp_path: Path) -> Iterator[Callable[...,
 
     def start(**parameters) -> Node:
         values = {"output_dir": str(tmp_path), "allowed_output_dirs": [str(tmp_path)],
-                  "prepare_on_start": False, "warm_start_store": False, **parameters}
+                  "prepare_on_start": False, "warm_start_store": False,
+                  "prepare_scenes": [""], **parameters}
         node = GaitPlannerNode(context=ros_context, parameter_overrides=[
             Parameter(name, value=value) for name, value in values.items()])
         serving = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS, context=ros_context)

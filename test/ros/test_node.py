@@ -25,7 +25,8 @@ def setup(ros_context, make_node, executor, tmp_path):
     server = GaitPlannerNode(context=ros_context, parameter_overrides=[
         Parameter("output_dir", value=str(tmp_path)),
         Parameter("allowed_output_dirs", value=[str(tmp_path)]),
-        Parameter("default_scene", value="compass"), Parameter("warm_start_store", value=False)])
+        Parameter("default_scene", value="compass"), Parameter("warm_start_store", value=False),
+        Parameter("prepare_scenes", value=[""])])  # no background preparation
     client_node = make_node("plan_client")
     received = {"trajectory": [], "state": [], "forces": []}
     qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)

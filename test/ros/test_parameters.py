@@ -68,7 +68,7 @@ def test_parameters_are_declared_with_type_range_and_description(parameters):
     client, wait = parameters
     names = ["default_scene", "output_dir", "allowed_output_dirs", "max_solve_time",
              "compile_derivatives", "feedback_every", "prepare_on_start", "warm_start_store",
-             "scene_dirs", "gait_library"]
+             "scene_dirs", "gait_library", "prepare_scenes"]
     described = {d.name: d for d in wait(client.describe_parameters(names)).descriptors}
     assert all(described[name].description for name in names)
     assert described["max_solve_time"].type == ParameterType.PARAMETER_DOUBLE
@@ -79,6 +79,7 @@ def test_parameters_are_declared_with_type_range_and_description(parameters):
     assert described["prepare_on_start"].read_only
     assert described["warm_start_store"].read_only
     assert described["gait_library"].read_only
+    assert described["prepare_scenes"].read_only
     assert described["scene_dirs"].type == ParameterType.PARAMETER_STRING_ARRAY
     assert described["scene_dirs"].read_only
 
@@ -133,10 +134,11 @@ def test_the_shipped_params_file_is_read_and_overridden_by_ros_args(
     shipped = yaml.safe_load(SHIPPED.read_text())["gait_planner"]["ros__parameters"]
     process = node_process("--params-file", "config/gait_planner.yaml", "--ros-args",
                            "-p", f"output_dir:={tmp_path}",
-                           "-p", f"allowed_output_dirs:=['{tmp_path}']")
+                           "-p", f"allowed_output_dirs:=['{tmp_path}']",
+                           "-p", "prepare_scenes:=['']")  # no background preparation
     values = parameters_of_process(process, list(shipped))
     assert values == {**shipped, "output_dir": str(tmp_path),
-                      "allowed_output_dirs": [str(tmp_path)]}
+                      "allowed_output_dirs": [str(tmp_path)], "prepare_scenes": [""]}
 
 
 @pytest.mark.parametrize("content, words", [
