@@ -1,6 +1,5 @@
 """Robots planned from their URDF (issue #37, item 6): per robot of the example-robot-data
-wheel (`robot_plan.ROBOTS`: Bolt, Unitree G1, Talos, iCub, Alexander; Romeo only when named:
-its draft as written finds no plan in 600 s, benchmarks/HISTORY.md), the scene drafted
+wheel (`robot_plan.ROBOTS`: Bolt, Unitree G1, Talos, iCub, Alexander, Romeo), the scene drafted
 and planned as a user plans it, in fresh processes; G1's plan beside walker3d scaled to G1
 and walker3d itself.
 
@@ -154,8 +153,7 @@ def recordings(rows: list[dict]) -> dict[str, str]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--robots", nargs="+", default=[r for r in ROBOTS if r != "romeo"],
-                        choices=list(ROBOTS))  # Romeo's draft: no plan in 600 s (HISTORY)
+    parser.add_argument("--robots", nargs="+", default=list(ROBOTS), choices=list(ROBOTS))
     parser.add_argument("--modes", nargs="+", default=["compiled", "casadi"],
                         choices=["compiled", "casadi"])
     parser.add_argument("--counterpart", default="g1", help="robot set beside walker3d "
