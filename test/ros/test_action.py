@@ -22,6 +22,10 @@ from gait_planner_msgs.srv import PlanGait
 pytestmark = pytest.mark.timeout(180)
 
 FAST = 1.0  # s: a busy answer, a rejection, a cancel arrive within this
+# s: a cancel while the goal builds its problem (CasADi in the worker thread holds the GIL
+# in long stretches): 1 s was missed once in a full `make test` on a fresh clone
+# (2026-12-07), never alone
+CANCEL_WHILE_BUILDING = 3.0
 # Plans that run long enough to be interrupted: walker2d with CasADi's derivatives (no C
 # compilation, whose cache a changed source invalidates): building ~10 s, ~25 ms an iteration.
 
@@ -100,7 +104,7 @@ def test_a_long_build_repeats_its_phase_every_heartbeat(planner_node, client, sp
     gaps = [b.elapsed - a.elapsed for a, b in itertools.pairwise(building)]
     assert gaps and min(gaps) >= FEEDBACK_HEARTBEAT, gaps
     cancel = handle.cancel_goal_async()
-    assert spin_until(cancel.done, FAST) and cancel.result().goals_canceling
+    assert spin_until(cancel.done, CANCEL_WHILE_BUILDING) and cancel.result().goals_canceling
     assert _result(handle, spin_until).status == GoalStatus.STATUS_CANCELED
     print(f"building messages {len(building)}, gaps {min(gaps):.3f}-{max(gaps):.3f} s")
 
@@ -152,7 +156,7 @@ def test_a_second_request_is_answered_busy_at_once_while_a_goal_runs(
     assert not second.accepted and rejected_after < FAST
 
     cancel = first.cancel_goal_async()
-    assert spin_until(cancel.done, FAST) and cancel.result().goals_canceling
+    assert spin_until(cancel.done, CANCEL_WHILE_BUILDING) and cancel.result().goals_canceling
     assert _result(first, spin_until).status == GoalStatus.STATUS_CANCELED
     # free again: the next request is planned
     again = _send(action, spin_until, [], scene="compass", output_name="again")
