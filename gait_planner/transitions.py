@@ -28,8 +28,8 @@ from gait_planner.ocp.solution import failed_result
 from gait_planner.ocp.solve import Clock, Planner, Start
 from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.ocp.transcription import TORQUE_SCALE, Transcription
-from gait_planner.ocp.transition import (StartError, StartState, check_start, join,
-                                         join_targets, mirrored_result, mirrored_start,
+from gait_planner.ocp.transition import (StartError, StartState, check_start, end_intervals,
+                                         join, join_targets, mirrored_result, mirrored_start,
                                          stance_offset, start_of_plan, transition_scene,
                                          transition_settings)
 from gait_planner.ocp.walk_on import walk_on
@@ -80,7 +80,7 @@ def transition_start(tr: Transcription, gait: PlanResult, walked: PlanResult,
     multipliers of `ocp.guess.initial_multipliers`."""
     N, settings, scene = tr.N, tr.settings, tr.mb.scene
     along = mirror_parts(tr.mb)[1]
-    S = sum(settings.intervals[: len(scene.gait.start)]) if start.standing else 0
+    S, P = end_intervals(settings, scene, start.standing, tr.layout.rest)
     inner = walked.q[: N - 1 - S] + offset * along
     lead = [blended(scene, start.q, inner[0], _ease(n / S)) for n in range(S)]
     inner = np.vstack(lead + list(inner))[1 : N - 1]
@@ -89,8 +89,7 @@ def transition_start(tr: Transcription, gait: PlanResult, walked: PlanResult,
                             np.full(extra, settings.scaling_bounds[1])])
     if tr.layout.rest:
         rest = N - settings.intervals[-1]  # where the last stop phase (at rest) begins
-        stand = standing_guess_node(tr, inner[N - sum(settings.intervals[-len(
-            scene.gait.stop):]) - 1])
+        stand = standing_guess_node(tr, inner[N - P - 1])
         inner = np.array([blended(scene, q, stand, _ease((n + 1) / rest))
                           for n, q in enumerate(inner)])
         qref = np.vstack([start.q, inner])
@@ -209,8 +208,8 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
         joined = dataclasses.replace(result, scene=scene, settings={
             **result.settings, "transition_half_cycles": str(halves), "transition_stop": "true"})
     else:
-        lead = sum(tr_settings.intervals[: len(scene.gait.start)]) if start.standing else 0
-        joined = join(result, walked, offset, halves, lead)
+        joined = join(result, walked, offset, halves,
+                      end_intervals(tr_settings, scene, start.standing, stop)[0])
     joined, cert = certified(mirrored_result(joined) if mirrored else joined)
     standing = {"transition_standing": "true"} if start.standing else {}
     return dataclasses.replace(joined, settings={

@@ -241,6 +241,17 @@ def transition_scene(scene: Scene, halves: int, standing: bool = False, stop: bo
         gait, phases=tuple(first + copies + last)))
 
 
+def end_intervals(settings: GaitSettings, scene: Scene, standing: bool, stop: bool
+                  ) -> tuple[int, int]:
+    """(S, P): how many intervals of a transition's grid (`transition_settings`) its start
+    phases (0 unless `standing`) and its stop phases (0 unless `stop`) take; scene: the
+    gait's scene, which declares them."""
+    grid = settings.intervals
+    S = sum(grid[: len(scene.gait.start)]) if standing else 0
+    P = sum(grid[len(grid) - len(scene.gait.stop):]) if stop else 0
+    return S, P
+
+
 def transition_settings(gait_settings: GaitSettings, gait: PlanResult, walked: PlanResult,
                         start: StartState, halves: int = 1, stop: bool = False
                         ) -> GaitSettings:
