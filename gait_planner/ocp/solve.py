@@ -182,13 +182,18 @@ def _first_call(built: _Built, solver: ca.Function, s: GaitSettings) -> None:
     in-library answer of walker3d (5 iterations) took 206 ms as the instance's first call
     and 101-124 ms after, 106-109 ms as the first call after this one (which took 74 ms;
     2026-11-29). The instance keeps no state between calls: the plans after it are the
-    same, bit for bit."""
+    same, bit for bit. The callback's deadline, listener, stop and count are restored after
+    it: a variant first used within an attempt keeps the attempt's."""
     tr, (lbx, ubx, lbg, ubg) = built.tr, built.bounds
     qref = GUESSES["kinematic"](tr, s.step_length, ground_of(tr.mb.scene, s))[: tr.layout.free]
     cb = built.callback
+    kept = cb.deadline, cb.report, cb.stop, cb.iteration  # an attempt may be under way
     cb.deadline, cb.report, cb.stop = -np.inf, None, None
-    solver(x0=np.clip(guess_x(tr, s.scaling_bounds[1]), lbx, ubx),
-           p=tr.parameters(qref, s), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+    try:
+        solver(x0=np.clip(guess_x(tr, s.scaling_bounds[1]), lbx, ubx),
+               p=tr.parameters(qref, s), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+    finally:
+        cb.deadline, cb.report, cb.stop, cb.iteration = kept
 
 
 def _key(scene: Scene, s: GaitSettings):

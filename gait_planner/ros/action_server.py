@@ -73,7 +73,9 @@ class PlanGaitActionServer:
 
     def _on_cancel(self, goal_handle: ServerGoalHandle) -> CancelResponse:
         if self._worker.request_stop(self._tickets.get(id(goal_handle.request), -1)):
-            self._node.get_logger().info("plan goal canceled: stopping the solver")
+            self._node.get_logger().info(
+                f"plan goal canceled at iteration {self._worker.stopped_at} of "
+                f"{self._worker.phase or 'its start'}: stopping the solver")
             return CancelResponse.ACCEPT
         self._node.get_logger().info(
             "cancel refused: the plan is being recorded or walked, or is over")

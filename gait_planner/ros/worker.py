@@ -64,6 +64,7 @@ class PlanWorker:
         self._closed = threading.Event()
         self._listener: Listener | None = None
         self.phase, self.iterations = "", 0
+        self.stopped_at: int | None = None  # the solver's iteration count when a stop was granted
         self.ticket = 0  # numbers the reservations: a stop names the plan it is meant for
         self._claimed, self._reserved_at = True, 0.0  # the current reservation's
         # on_lapse(ticket, age): told when a lapsed reservation is taken over (the node logs it)
@@ -83,7 +84,7 @@ class PlanWorker:
                 if self.on_lapse is not None:  # the lock stays held: it is the new reservation's
                     self.on_lapse(self.ticket, age)
             self._stop.clear()
-            self.phase, self.iterations = "", 0
+            self.phase, self.iterations, self.stopped_at = "", 0, None
             self.ticket += 1
             self._claimed, self._reserved_at = False, time.monotonic()
             return self.ticket
@@ -100,6 +101,7 @@ class PlanWorker:
             if self.phase in UNSTOPPABLE or ticket not in (None, self.ticket):
                 return False
             self._stop.set()
+            self.stopped_at = self.iterations
             return True
 
     def enter(self, phase: str) -> None:

@@ -111,7 +111,7 @@ def test_a_long_build_repeats_its_phase_every_heartbeat(planner_node, client, sp
 
 def test_cancel_stops_the_solver_within_an_iteration_and_records_nothing(
         planner_node, client, spin_until, wait_for_feedback, tmp_path):
-    planner_node(default_scene="walker2d", compile_derivatives=False)
+    node = planner_node(default_scene="walker2d", compile_derivatives=False)
     action, _, trajectories = client
     feedback: list = []
     handle = _send(action, spin_until, feedback, cold_start=True, output_name="canceled")
@@ -124,14 +124,19 @@ def test_cancel_stops_the_solver_within_an_iteration_and_records_nothing(
     assert answer.status == GoalStatus.STATUS_CANCELED
     assert not answer.result.success and answer.result.message == "stopped on request"
     solver = [f.iteration for f in feedback if not math.isnan(f.cost)]
-    # the feedback in flight when the cancel was sent, and then at most one more iteration
-    assert max(solver) <= seen.iteration + 3, (seen.iteration, solver)
+    # once the node granted the stop, at most the iteration under way; how many iterations
+    # the cancel took to reach the node is transport and load (once 25 on a loaded machine),
+    # bounded by FAST above, not by the solver
+    granted = node._worker.stopped_at
+    assert granted is not None and granted >= seen.iteration
+    assert max(solver) <= granted + 1, (granted, solver)
     assert "recording" not in {f.phase for f in feedback}
     assert stopped_after < FAST
     spin_until(lambda: trajectories, 1.0)
     assert not trajectories, "a canceled plan was published"
     assert not list(tmp_path.iterdir()), "a canceled plan left files"
-    print(f"cancel to result: {stopped_after:.3f} s")
+    print(f"cancel to result: {stopped_after:.3f} s; sent at iteration {seen.iteration}, "
+          f"granted at {granted}")
 
 
 def test_a_second_request_is_answered_busy_at_once_while_a_goal_runs(
