@@ -25,9 +25,8 @@ import numpy as np
 import yaml
 
 from gait_planner.walk.clock import PlanClock
-from gait_planner.walk.controller import Gains, ReferenceController
-from gait_planner.walk.model_error import DelayedTorque, ModelError
-from gait_planner.walk.predictor import DelayPredictor
+from gait_planner.walk.controller import ReferenceController
+from gait_planner.walk.model_error import ModelError
 from gait_planner.walk.robot_urdf import RobotUrdf
 from gait_planner.walk.slides import Slides
 from gait_planner.walk.touches import Touches
@@ -129,8 +128,8 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     factors drawn)."""
     import mujoco
 
-    from gait_planner.walk.mujoco_model import plan_qpos, plan_root_qvel
     from gait_planner.walk.reference import Reference, planned_joints
+    from gait_planner.walk.simulation import Simulation
 
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
         raise ValueError(f"steps must be an integer >= 1, got {steps!r}")
@@ -138,98 +137,54 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     rec = planned_joints(_read(path))
     ref = Reference.from_recording(rec, steps)
     scene = ref.scene
-    if len(scene.contacts) < 2 or len({c.body for c in scene.contacts}) == len(scene.contacts):
-        raise ValueError(f"{rec.path}: scene {scene.name!r} has no foot with two contact "
-                         f"points (heel and forefoot); walk needs feet")
+    check_feet(scene, rec.path)
     if robot is None and scene.robot is not None:  # drafted: the recording's own URDF
         robot = recorded_robot(rec, scene)
-    wm = walk_model(rec, scene, cfg, robot)
-    factors = model_error.apply(wm.model) if model_error is not None else {}
-    model, data = wm.model, mujoco.MjData(wm.model)
-    delay_steps = (round(model_error.torque_delay / model.opt.timestep)
-                   if model_error is not None else 0)
-    delayed = DelayedTorque(delay_steps) if delay_steps else None
-    predictor = None
-    if delayed is not None and cfg["delay"]["predict"]:  # the nominal walker: no model error
-        predictor = DelayPredictor(walk_model(rec, scene, cfg, robot).model, delayed,
-                                   cfg["joints"]["kp"], wm.dof, wm.qpos)
+    sim = Simulation.build(rec, scene, cfg, robot, model_error)
+    model, data, wm, gains = sim.model, sim.data, sim.wm, sim.gains
     place = cfg["placement"]
-    torso = cfg["torso"]
-    gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], torso["kp"], torso["kd"],
-                  place["kp"], place["kd"], place["height_kp"], torso["position_kp"],
-                  torso["position_kd"], place["swing_margin"])
     pace = cfg["clock"]
     clock = PlanClock(pace["pace_gain"], pace["rate_min"], pace["rate_max"])
     control = ReferenceController(model, wm, ref, gains, place["max_shift"], scale, clock)
     root_site = wm.root_site
+    sim.place(ref)
 
-    i_root = scene.body_index(scene.root.body)
-    data.qpos[:] = plan_qpos(wm, i_root, ref.q[0], ref.angles[0])
-    root_qvel = plan_root_qvel(wm, ref.root_at(0.0)[1], *ref.root_rate0)
-    data.qvel[:len(root_qvel)] = root_qvel
-    data.qvel[wm.dof] = ref.rates[0]
-
-    stop = cfg["stop"]
     h = model.opt.timestep
-    weight = float(np.sum(model.body_mass)) * float(-model.opt.gravity[2])
     touches = Touches(ref.times, ref.active, [c.name for c in scene.contacts],
-                      TOUCH_SHARE * weight)
+                      TOUCH_SHARE * sim.weight())
     slides = Slides(touches.names, touches.threshold, ref.normal)
     t_end = steps * ref.period
     errs, ffs, fbs, plans = [], [], [], []
     trace: dict[str, list] = {k: [] for k in ("time", "plan_time", "position", "velocity",
                                               "torso", "torso_ref", "ground_force",
                                               "contact_position")}
+
+    def record(state, t: float) -> None:
+        trace["time"].append(state.time)
+        trace["plan_time"].append(t)
+        trace["position"].append(state.qpos[wm.qpos].copy())
+        trace["velocity"].append(state.qvel[wm.dof].copy())
+        trace["torso"].append(np.r_[state.site_xpos[root_site], state.site_xmat[root_site]])
+        trace["contact_position"].append(state.site_xpos[wm.contact_sites].copy())
+
     drift, placement, per_half, boundaries, start = [], [], [], 1, 0
     reason = "completed"
-    along = np.array([1.0, 0.0, 0.0]) - ref.normal[0] * ref.normal  # walking direction
-    along /= np.linalg.norm(along)  # on the ground (e_x, or up or down a ramp)
+    along = walking_direction(ref)
     speed = ref.step_length / ref.period
+    stop = cfg["stop"]
     while clock(data.time) < t_end - 0.5 * h:
-        # kinematics of the current state, the control on it, then the step (mj_step1/2):
-        # what is recorded at a step is all of one state
-        mujoco.mj_step1(model, data)
-        t_sim, t = data.time, clock(data.time)  # t: the plan's time (module docstring)
-        # under a delay with prediction: the command for the state it will meet
-        state = predictor(data) if predictor is not None else data
-        ff, fb, plan_effort, plan_angles = control(state)
-        if predictor is not None:  # tracking is judged against the plan now
-            plan_angles = ref.at(t)[0]
-        data.qfrc_applied[:] = 0.0
-        # -kd v is MuJoCo's (implicit) joint damping (walk.mujoco_model)
-        torque = ff + fb + gains.kd * state.qvel[wm.dof]
-        if delayed is not None:  # the command late, the joint's own kp q now
-            torque = delayed(torque + gains.kp * state.qpos[wm.qpos],
-                             gains.kp * data.qpos[wm.qpos])
-        data.qfrc_applied[wm.dof] = torque
-        errs.append(plan_angles - data.qpos[wm.qpos])
-        ffs.append(ff)
-        fbs.append(fb)
-        plans.append(plan_effort)
-        com = data.site_xpos[root_site].copy()
-        phi_ref, D_ref = ref.root_at(t)
-        tilt = math.degrees(math.acos(np.clip(
-            data.site_xmat[root_site].reshape(3, 3)[:, 2] @ D_ref[:, 2], -1, 1)))
+        step = sim.step(control, clock, ref, touches, slides, record if series else None)
+        errs.append(step.error)
+        ffs.append(step.ff)
+        fbs.append(step.fb)
+        plans.append(step.plan_effort)
         if series:
-            trace["time"].append(data.time)
-            trace["plan_time"].append(t)
-            trace["position"].append(data.qpos[wm.qpos].copy())
-            trace["velocity"].append(data.qvel[wm.dof].copy())
-            trace["torso"].append(np.r_[com, data.site_xmat[root_site]])
-            trace["torso_ref"].append(np.r_[phi_ref, D_ref.reshape(-1)])
-            trace["contact_position"].append(data.site_xpos[wm.contact_sites].copy())
-        mujoco.mj_step2(model, data)
-        forces = ground_forces(model, data, wm)  # of that state, solved in mj_step2
-        normal = forces @ ref.normal  # the normal force on each point
-        touches.update(t, normal)
-        slides.update(t_sim, forces, normal, data.site_xpos[wm.contact_sites])
-        control.loaded = {name for name, f in zip(touches.names, normal)
-                          if f > touches.threshold}
-        clock.pace(h, float(along @ (data.subtree_com[control.root] - ref.com_at(t))), speed)
-        if series:
-            trace["ground_force"].append(forces)
-        reason = stop_reason(stop, data, com[2], phi_ref[2], tilt, errs[-1], rec.joint_names,
-                             t_sim)
+            trace["torso_ref"].append(np.r_[step.phi_ref, step.D_ref.reshape(-1)])
+            trace["ground_force"].append(step.forces)
+        clock.pace(h, float(along @ (data.subtree_com[control.root] - ref.com_at(step.tau))),
+                   speed)
+        reason = stop_reason(stop, data, step.com[2], step.phi_ref[2], step.tilt, step.error,
+                             rec.joint_names, step.time)
         if reason != "completed":
             break
         tau = clock(data.time)  # of the state after the step
@@ -263,10 +218,25 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         "controller": {"joints": cfg["joints"], "torso": cfg["torso"], "placement": place,
                        "delay": cfg["delay"],
                        "simulation": cfg["simulation"], "foot_half_width": foot_half_width(rec)},
-        **({"model_error": {"differences": model_error.describe(), "mass_factors": factors}}
+        **({"model_error": {"differences": model_error.describe(),
+                            "mass_factors": sim.factors}}
            if model_error is not None else {}),
         **({"series": extra} if series else {}),
     }
+
+
+def check_feet(scene, path) -> None:
+    """ValueError naming the recording `path` unless its scene has feet with two contact
+    points each (heel and forefoot): the walk's controller places feet."""
+    if len(scene.contacts) < 2 or len({c.body for c in scene.contacts}) == len(scene.contacts):
+        raise ValueError(f"{path}: scene {scene.name!r} has no foot with two contact "
+                         f"points (heel and forefoot); walk needs feet")
+
+
+def walking_direction(ref) -> np.ndarray:
+    """(3,) the unit walking direction on the plan's ground: e_x, or up or down a ramp."""
+    along = np.array([1.0, 0.0, 0.0]) - ref.normal[0] * ref.normal
+    return along / np.linalg.norm(along)
 
 
 def foot_half_width(rec) -> float:
