@@ -241,7 +241,7 @@ def start_of_recording(scene: Scene, path: str, time: float | None = None) -> St
                          f"({times[0]:g} to {times[-1]:g} s)")
     n = min(int(np.searchsorted(times, t, side="right")) - 1, len(times) - 2)
     q, h = np.asarray(rec.q, float), np.diff(times)
-    mb = Multibody(scene)
+    mb = Multibody.of(scene)
     if n == 0:
         momentum = mb.mass_diagonal * (q[1] - q[0]) / h[0]
     else:

@@ -80,7 +80,7 @@ def start_of_plan(plan: PlanResult) -> StartState:
     """The first node of a periodic half cycle `plan` with its discrete momentum
     p-_0 = D2 L_d(q_{-1}, q_0, h_{-1}) + h_{-1}/2 B(q_0)^T tau_0, q_{-1} the mirror image of
     node N-2 a step back (paper eqs. 7-9; `ocp.solution.joint_rates`)."""
-    mb = Multibody(plan.scene)
+    mb = Multibody.of(plan.scene)
     A, shift, lift = configuration_mirror(mb, plan.ground)
     N = plan.n_nodes - 1
     h = np.diff(plan.times)
@@ -93,7 +93,7 @@ def start_of_velocity(scene: Scene, q: np.ndarray, q_dot: np.ndarray,
                       origin: str) -> StartState:
     """A measured state: configuration q (k,) and its velocity q_dot (k,) (m/s, 1/s), the
     momentum p = M q_dot (the director mass matrix is constant)."""
-    mb = Multibody(scene)
+    mb = Multibody.of(scene)
     return StartState(np.asarray(q, float).copy(), mb.mass_diagonal * np.asarray(q_dot, float),
                       origin)
 
@@ -102,7 +102,7 @@ def turned_start(scene: Scene, start: StartState, lateral: float, rate: float) -
     """`start` moved `lateral` m sideways (3D) and turning rigidly at `rate` rad/s about its
     first held contact point (roll in 3D, pitch in the plane) on top of its own motion: a
     start off the gait whose contacts stay on the ground (robustness tests, benchmarks)."""
-    mb = Multibody(scene)
+    mb = Multibody.of(scene)
     q = np.asarray(start.q, float).copy()
     contact = scene.contact(scene.gait.phases[0].contacts[0])
     centre = mb.point_matrix(contact.body, contact.point) @ q
@@ -125,7 +125,7 @@ def check_start(scene: Scene, settings: GaitSettings, start: StartState) -> None
     meets the joint constraints, every contact point held in the first phase is within
     CONTACT_TOLERANCE of the ground and none is below it by more, and every joint
     angle lies within its range (ANGLE_TOLERANCE); numbers finite."""
-    mb = Multibody(scene)
+    mb = Multibody.of(scene)
     q = np.asarray(start.q, float)
     if q.shape != (mb.k,) or np.asarray(start.momentum).shape != (mb.k,):
         raise StartError(f"a start of {scene.name} needs {mb.k} director coordinates and "
@@ -163,7 +163,7 @@ def mirrored_start(scene: Scene, start: StartState) -> StartState:
     """The mirror image of `start` about y = 0 (`ocp.mirror.configuration_mirror`'s A,
     no step): q' = A q, p' = A p (a signed permutation; partner bodies have equal masses
     and inertias, so M A = A M): a start on the other foot as one on the first phase's."""
-    A = configuration_mirror(Multibody(scene))[0]
+    A = configuration_mirror(Multibody.of(scene))[0]
     return dataclasses.replace(start, q=A @ start.q, momentum=A @ start.momentum,
                                origin=f"{start.origin}, mirrored")
 
@@ -175,7 +175,7 @@ def mirrored_result(result: PlanResult) -> PlanResult:
     `ocp.walk_on` keeps them."""
     scene = result.scene
     q, tau, gen, forces, rolls, active = mirror_nodes(
-        Multibody(scene), result.q, result.tau, result.generalized_force,
+        Multibody.of(scene), result.q, result.tau, result.generalized_force,
         result.contact_forces, result.roll_moments, result.active_contacts)
     velocities, accelerations = end_rates(scene, q, result.times)
     return dataclasses.replace(
@@ -188,7 +188,7 @@ def mirrored_result(result: PlanResult) -> PlanResult:
 def stance_offset(scene: Scene, q: np.ndarray, gait: PlanResult) -> float:
     """How far (m) along x the first held contact point of a start's configuration q (k,)
     is from the gait's at its node 0: the gait is joined that much further on."""
-    mb = Multibody(scene)
+    mb = Multibody.of(scene)
     first = scene.gait.phases[0].contacts[0]
     row = mb.contact_rows(first)[0]
     return float(row @ q - row @ gait.q[0])
@@ -198,7 +198,7 @@ def join_targets(gait: PlanResult, offset: float, halves: int = 1) -> np.ndarray
     """(2, k): the gait's nodes 0 and 1 `halves` half cycles on (mirrored that many
     times, a step further each, `ocp.mirror.configuration_mirror`), moved `offset` m along
     x: the transition's nodes N-1 and N."""
-    mb = Multibody(gait.scene)
+    mb = Multibody.of(gait.scene)
     A, shift, lift = configuration_mirror(mb, gait.ground)
     q = gait.q[0:2]
     for _ in range(halves):
@@ -277,7 +277,7 @@ def transition_settings(gait_settings: GaitSettings, gait: PlanResult, walked: P
     intervals += end
     limits = tuple(gait_settings.phase_joint_limits)
     if halves > 1:
-        B = torque_mirror(Multibody(gait.scene))
+        B = torque_mirror(Multibody.of(gait.scene))
         names = angle_names(gait.scene)
         partner = {names[i]: (names[int(np.argmax(np.abs(B[:, i])))],
                               float(B[np.argmax(np.abs(B[:, i])), i])) for i in range(len(names))}
@@ -313,7 +313,7 @@ def join(transition: PlanResult, walked: PlanResult, offset: float, halves: int 
     says where the gait begins."""
     N = transition.n_nodes - 1
     M = N - lead  # the gait's node joined at the transition's node N
-    along = mirror_parts(Multibody(transition.scene))[1]
+    along = mirror_parts(Multibody.of(transition.scene))[1]
     t0 = transition.times[N - 1] - walked.times[M - 1]
     q = np.vstack([transition.q[:N], walked.q[M:] + offset * along])
     times = np.concatenate([transition.times[:N], walked.times[M:] + t0])

@@ -51,7 +51,7 @@ def walk_on(result: PlanResult, steps: int) -> PlanResult:
         return result
     scene, N, s = result.scene, result.n_nodes - 1, result.step_length
     M = N - 1  # intervals per half cycle
-    mb = Multibody(scene)
+    mb = Multibody.of(scene)
     A, shift, lift = configuration_mirror(mb, result.ground)
     climb = sum(b.mass for b in scene.bodies) * scene.gravity * result.ground.rise(s)  # J
 

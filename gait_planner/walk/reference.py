@@ -118,7 +118,7 @@ class Reference:
         scene = scene_of(rec)
         N = rec.n_nodes - 1
         s = float(rec.metadata["step_length"])
-        A, shift, lift = configuration_mirror(Multibody(scene), ground)
+        A, shift, lift = configuration_mirror(Multibody.of(scene), ground)
         partner = contact_partners(scene)
         angles0 = joint_angles(scene, rec.q)
         if np.abs(angles0 - rec.positions).max() > 1e-6:
@@ -150,6 +150,25 @@ class Reference:
         return cls(scene, steps, np.concatenate(parts["t"]), q, joint_angles(scene, q),
                    np.vstack(parts["r"]), np.vstack(parts["e"]), tuple(parts["a"]), period, s,
                    (v * flip, -w * flip), ground.normal)
+
+    @classmethod
+    def from_result(cls, result) -> "Reference":
+        """A plan as it is (a transition, a stop: `gait_planner.transitions`), not joined:
+        its nodes, the planned joints' angles, rates and efforts (those its JointTrajectory
+        carries, `io.messages.node_efforts`), its active contacts; period: its duration;
+        the root's rates at node 0 its first difference."""
+        from gait_planner.io.messages import node_efforts
+
+        scene, q, times = result.scene, np.asarray(result.q, float), np.asarray(result.times)
+        i = scene.body_index(scene.root.body)
+        h = float(times[1] - times[0])
+        D, D1 = (q[n, 12 * i + 3:12 * i + 12].reshape(3, 3).T for n in (0, 1))
+        return cls(scene, 1, times - times[0], q, np.asarray(result.joint_angles, float),
+                   np.asarray(result.joint_velocities, float), node_efforts(result),
+                   tuple(result.active_contacts), float(times[-1] - times[0]),
+                   float(result.step_length),
+                   ((q[1, 12 * i:12 * i + 3] - q[0, 12 * i:12 * i + 3]) / h,
+                    _omega(D, (D1 - D) / h)), result.ground.normal)
 
     def _node_weight(self, t: float) -> tuple[int, float]:
         """(n, a): t lies a of the way from node n to node n + 1 (clipped to the ends)."""
