@@ -240,12 +240,21 @@ def start_of_recording(scene: Scene, path: str, time: float | None = None) -> St
         raise StartError(f"time {t:g} s is outside the recording {path} "
                          f"({times[0]:g} to {times[-1]:g} s)")
     n = min(int(np.searchsorted(times, t, side="right")) - 1, len(times) - 2)
-    q, h = np.asarray(rec.q, float), np.diff(times)
+    return start_of_node(scene, rec.q, times, rec.generalized_force, n,
+                         f"{path} at {times[n]:.4g} s (node {n})")
+
+
+def start_of_node(scene: Scene, q: np.ndarray, times: np.ndarray, generalized_force,
+                  n: int, origin: str) -> StartState:
+    """The state of node n (0 <= n < N) of a plan or recording of `scene` (q (N+1, k),
+    times (N+1,) s, its published discrete forces (N+1, k) N s) with the discrete momentum
+    its own equations give it (`start_of_recording`)."""
+    q, h = np.asarray(q, float), np.diff(np.asarray(times, float))
     mb = Multibody.of(scene)
     if n == 0:
         momentum = mb.mass_diagonal * (q[1] - q[0]) / h[0]
     else:
         share = h[n - 1] / (h[n - 1] + h[n])
         momentum = (np.array(DiscreteMechanics(mb).discrete_lagrangian_d2(
-            q[n - 1], q[n], h[n - 1])).ravel() + share * np.asarray(rec.generalized_force[n]))
-    return StartState(q[n].copy(), momentum, f"{path} at {times[n]:.4g} s (node {n})")
+            q[n - 1], q[n], h[n - 1])).ravel() + share * np.asarray(generalized_force[n]))
+    return StartState(q[n].copy(), momentum, origin)

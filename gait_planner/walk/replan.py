@@ -17,11 +17,14 @@ again from the walker's measured state.
    for no plan**: the walker goes on with the plan it has for as long as the solve took on
    this machine (wall time), then switches to the new plan at that plan's time (the new
    plan begins at the measured state, so it starts late by the solve). A strike passed
-   while a plan is being solved is not re-planned; a re-plan that fails or is refused is
-   recorded and the walker keeps its plan.
-4. After `half_cycles` strikes the next re-plan is the stop (`plan_transition(stop=True)`,
-   `STOP_HALVES`): to standing at rest; when it ends the walker holds its last node for
-   `stand` s.
+   while a plan is being solved is not re-planned; a re-plan's solver stops after `DEADLINE`
+   of the gait's half cycle; one that fails, stops or is refused is recorded and the walker
+   keeps its plan.
+4. At strike `half_cycles` - 1 the stop is planned (`plan_transition(stop=True)`,
+   `STOP_HALVES`: to standing at rest) from the plan's own state at its next strike, where
+   it takes over (or when its solve ends, if later): planned from the measured state it took
+   165-208 iterations (walker2d, 2.5-3.4 s, 2026-12-07) and the walker was far past it when
+   it arrived. When the stop ends the walker holds its last node for `stand` s.
 
 replan=False is the same walk with one plan: the start plan carries `half_cycles` of the
 gait and only the stop is planned from the measured state (a walker cannot stop
@@ -51,7 +54,7 @@ from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.transition import StartError, StartState, standing_start, start_of_plan
 from gait_planner.result import PlanResult
 from gait_planner.strategies import plan_certified
-from gait_planner.transitions import plan_transition
+from gait_planner.transitions import plan_transition, start_of_node
 from gait_planner.walk.clock import PlanClock
 from gait_planner.walk.controller import ReferenceController
 from gait_planner.walk.reference import Reference
@@ -67,6 +70,11 @@ HALVES = 2  # half cycles of a re-plan onto the gait (`transitions.HALVES`)
 STOP_HALVES = 1  # of the stop (`transitions.STOP_HALVES`)
 AHEAD = 4  # the gait's half cycles a plan carries after its transition: what the walker
 #            follows while the next plan is solved
+# A re-plan's solver stops after this share of the gait's half cycle (its time limit): a
+# plan that would take over later than that, at a state the walker has long left, is
+# dropped and the walker keeps the plan it has (walker2d: a re-plan of 303 iterations took
+# 4.6 s and the walker then ran out of plan, 2026-12-07).
+DEADLINE = 0.75
 TOUCH_SHARE = 0.1  # of the weight: a point carrying more is touching (`walk_plan`)
 
 
@@ -138,10 +146,12 @@ def walk_replanned(planner: Planner, scene: Scene, settings: GaitSettings,
     cfg = config or load_config()
     plans: list[dict[str, Any]] = []
 
-    def timed(kind: str, start: StartState | None, at: float, **kw) -> PlanResult | None:
+    def timed(kind: str, start: StartState | None, at: float, limit: float | None = None,
+              **kw) -> PlanResult | None:
         began = wall()
         try:
-            r = plan(planner, scene, settings, start, **kw)
+            r = plan(planner, scene, settings if limit is None else
+                     settings.with_solve(max_solve_time=limit), start, **kw)
         except StartError as err:
             r, message = None, f"refused: {err}"
         else:
@@ -175,7 +185,8 @@ def walk_replanned(planner: Planner, scene: Scene, settings: GaitSettings,
     threshold = TOUCH_SHARE * sim.weight()
     slides = Slides(names, threshold, np.asarray(first.ground.normal, float))
     pace, place, stop = cfg["clock"], cfg["placement"], cfg["stop"]
-    gait_speed = first.step_length / float(first.settings["gait_duration"])
+    period = float(first.settings["gait_duration"])  # s, the gait's half cycle
+    gait_speed = first.step_length / period
 
     def segment(result: PlanResult, begin: float, kind: str) -> _Segment:
         ref = Reference.from_result(result)
@@ -209,7 +220,8 @@ def walk_replanned(planner: Planner, scene: Scene, settings: GaitSettings,
         if pending is not None and t >= pending[0]:
             touches += [dict(x, plan=len(touches)) for x in seg.touches.summary()]
             seg = segment(pending[2], pending[1], pending[3])
-            pending, next_strike = None, 0
+            # the strikes the new plan had before it took over are the old plan's
+            pending, next_strike = None, int(np.sum(seg.strikes <= seg.clock(t) + 0.5 * h))
             plans[-1]["took_over_s"] = round(t, 4)
             continue
         if seg.kind == "stop" and tau >= seg.ref.times[-1]:
@@ -224,15 +236,25 @@ def walk_replanned(planner: Planner, scene: Scene, settings: GaitSettings,
             next_strike += 1
             walked += 1
             say(f"strike {walked} at t = {t:.3f} s")
-            if pending is not None or (not replan and walked <= half_cycles):
-                continue  # a plan is being solved / one plan, no re-planning
-            final = walked > half_cycles
+            if pending is not None or seg.kind == "stop":
+                continue  # a plan is being solved, or the walker stops
+            if walked >= half_cycles - 1 and next_strike < len(seg.strikes):
+                # the stop, from the plan's state at its next strike, taking over there
+                n = int(np.searchsorted(seg.ref.times, seg.strikes[next_strike] - 0.5 * h))
+                at = t + float(seg.ref.times[n]) - tau
+                start = start_of_node(scene, seg.result.q, seg.result.times,
+                                      seg.result.generalized_force, n,
+                                      f"the plan at its strike at t = {at:.3f} s")
+                r = timed("stop", start, at, stop=True, halves=STOP_HALVES, steps=1)
+                if r is not None:
+                    pending = (max(at, t + plans[-1]["wall_s"]), at, r, "stop")
+                continue
+            if not replan or (seg.kind == "start" and next_strike == 1):
+                continue  # one plan / the end of the start phases
             start = measured_start(sim, scene, f"the walker at t = {t:.3f} s")
-            kind = "stop" if final else "re-plan"
-            r = timed(kind, start, t, **({"stop": True, "halves": STOP_HALVES, "steps": 1}
-                                        if final else {"steps": AHEAD, "halves": HALVES}))
+            r = timed("re-plan", start, t, DEADLINE * period, steps=AHEAD, halves=HALVES)
             if r is not None:
-                pending = (t + plans[-1]["wall_s"], t, r, "stop" if final else "walk")
+                pending = (t + plans[-1]["wall_s"], t, r, "walk")
     touches += [dict(x, plan=len(touches)) for x in seg.touches.summary()]
     import mujoco
 
@@ -243,7 +265,7 @@ def walk_replanned(planner: Planner, scene: Scene, settings: GaitSettings,
     replans = [p for p in walk_plans if p["kind"] == "re-plan"]
     return {
         "scene": scene.name, "replan": replan, "half_cycles": half_cycles,
-        "half_cycles_walked": min(walked, half_cycles), "stopped": reason,
+        "half_cycles_walked": walked, "stopped": reason,
         "stood": standing_since is not None and reason == "completed",
         "final_com_speed_m_s": round(speed, 4), "time_walked_s": round(float(data.time), 4),
         "feedback_share": rms(fbs) / max(rms(efforts), 1e-12),
