@@ -37,7 +37,7 @@ from gait_planner.transitions import start_of_recording
 
 __all__ = ["PlanRequest", "PlanResult", "Planner", "RequestError", "StartError", "StartState",
            "check", "plan", "record", "standing_start", "start_of_joint_state", "start_of_plan",
-           "start_of_recording", "start_of_velocity", "summary"]
+           "start_of_recording", "start_of_velocity", "summary", "walk_replanned"]
 
 _planner: Planner | None = None
 
@@ -66,6 +66,25 @@ def plan(request: PlanRequest | str, planner: Planner | None = None,
         request = PlanRequest(request, compiled=True)
     return plan_problem(planner, resolve(request, scenes), start=start, halves=halves,
                         stop=stop)
+
+
+def walk_replanned(request: PlanRequest | str, half_cycles: int = 10, replan: bool = True,
+                   planner: Planner | None = None, scenes: SceneLookup = load_scene,
+                   progress=None) -> dict:
+    """Walk `request` in MuJoCo from standing, `half_cycles` half cycles re-planned at
+    every strike from the walker's measured state (replan False: one plan), then stop and
+    stand 2 s (`gait_planner.walk.replan`); the walk's summary. planner, scenes: as `plan`;
+    progress(line) hears each plan and strike."""
+    from gait_planner.walk.replan import walk_replanned as walk
+
+    global _planner
+    if planner is None:
+        _planner = planner = _planner or Planner(library=WarmStartStore())
+    if isinstance(request, str):
+        request = PlanRequest(request, compiled=True)
+    problem = resolve(request, scenes)
+    return walk(planner, problem.scene, problem.settings, half_cycles, replan=replan,
+                progress=progress)
 
 
 def check(result: PlanResult):

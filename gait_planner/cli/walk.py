@@ -1,11 +1,14 @@
 """``gait-planner walk RUN.mcap [--steps K] [--self-test] [--json] [--out WALK.mcap]
-[--rrd WALK.rrd]``: walk a recorded plan in MuJoCo with the reference controller
+[--rrd WALK.rrd]``, ``gait-planner walk --replan SCENE [--steps K] [--json]``: walk a
+recorded plan in MuJoCo with the reference controller
 (`gait_planner.walk.walk_plan`): a line on stderr at each half cycle's end, the summary
 (`gait_planner.walk.summary`) on stdout; --out records the walk
 (`gait_planner.walk.recording`), --rrd draws it over the plan in rerun
 (`gait_planner.viz.rerun_walk`). --self-test walks it again with the plan's torques scaled
 by config/walk.yaml's self_test_scales (0 and 0.5) and says whether each did measurably worse
-(fewer half cycles or a larger feedback share).
+(fewer half cycles or a larger feedback share). --replan walks the scene from standing,
+re-planned at every strike (`gait_planner.walk.replan`); exit status 1 if it did not
+complete and stand.
 """
 
 from __future__ import annotations
@@ -55,7 +58,13 @@ def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.Argument
         "feet with the plan's contact points), start from node 0 and walk K half cycles "
         "joined by the mirror with the plan's torques, joint PD and torso feedback "
         "(config/walk.yaml).")
-    parser.add_argument("recording", metavar="RUN.mcap", help="a plan's MCAP recording")
+    parser.add_argument("recording", metavar="RUN.mcap", nargs="?",
+                        help="a plan's MCAP recording (not with --replan)")
+    parser.add_argument("--replan", metavar="SCENE", default=None,
+                        help="walk the scene's default request from standing instead, "
+                        "re-planned at every strike from the walker's measured state (each "
+                        "solve's wall time charged to the simulation), then stop and stand "
+                        "2 s (gait_planner.walk.replan)")
     parser.add_argument("--steps", type=_steps, default=10, metavar="K",
                         help="half cycles to walk (default 10)")
     parser.add_argument("--self-test", action="store_true",
@@ -93,9 +102,39 @@ def _write(key: str, path: str, result: dict[str, Any]) -> None:
         raise CliError(f"cannot write {path}: {error}") from error
 
 
+def _replan_command(args: argparse.Namespace) -> int:
+    from gait_planner.api import walk_replanned
+
+    if args.recording or args.self_test or args.out or args.rrd or args.config:
+        raise CliError("--replan walks a scene from standing: no RUN.mcap, --self-test, "
+                       "--out, --rrd or --config with it")
+    try:
+        result = walk_replanned(args.replan, args.steps,
+                                progress=lambda line: print(f"-- {line}", file=sys.stderr,
+                                                            flush=True))
+    except ValueError as error:  # RequestError, StartError: an unknown scene, no start
+        raise CliError(str(error)) from error
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print(f"{result['scene']}: {result['half_cycles_walked']} of {args.steps} half "
+              f"cycles re-planned, {result['stopped']}; stood still at the end: "
+              f"{result.get('stood', False)}; re-plans converged "
+              f"{result.get('replans_converged', 0)} of {result.get('replans', 0)} (median "
+              f"{result.get('replan_iterations_median')} iterations, "
+              f"{result.get('replan_wall_median_s')} s); feedback share "
+              f"{result.get('feedback_share', float('nan')):.2f}")
+    return 0 if result["stopped"] == "completed" else 1
+
+
 def _walk_command(args: argparse.Namespace) -> int:
     from gait_planner.walk.recording import output_path
     from gait_planner.walk.walk_plan import CONFIG, load_config, walk
+
+    if args.replan is not None:
+        return _replan_command(args)
+    if args.recording is None:
+        raise CliError("walk needs a recording RUN.mcap (or --replan SCENE)")
 
     outputs = {k: v for k, v in (("out", args.out), ("rrd", args.rrd)) if v is not None}
     try:

@@ -20,9 +20,9 @@ again from the walker's measured state.
    while a plan is being solved is not re-planned; a re-plan's solver stops after `DEADLINE`
    of the gait's half cycle; one that fails, stops or is refused is recorded and the walker
    keeps its plan.
-4. At strike `half_cycles` - 1 the stop is planned (`plan_transition(stop=True)`,
-   `STOP_HALVES`: to standing at rest) from the plan's own state at its next strike, where
-   it takes over (or when its solve ends, if later): planned from the measured state it took
+4. At strike `half_cycles` - `STOP_LEAD` the stop is planned (`plan_transition(stop=True)`,
+   `STOP_HALVES`: to standing at rest) from the plan's own state at strike `half_cycles`,
+   where it takes over (or when its solve ends, if later): planned from the measured state it took
    165-208 iterations (walker2d, 2.5-3.4 s, 2026-12-07) and the walker was far past it when
    it arrived. When the stop ends the walker holds its last node for `stand` s.
 
@@ -75,6 +75,10 @@ AHEAD = 4  # the gait's half cycles a plan carries after its transition: what th
 # dropped and the walker keeps the plan it has (walker2d: a re-plan of 303 iterations took
 # 4.6 s and the walker then ran out of plan, 2026-12-07).
 DEADLINE = 0.75
+# The stop is planned this many strikes before it takes over: from the plan's state at the
+# strike that ends the walk's last half cycle (one strike ahead, walker2d's stop of 72
+# iterations took 1.2 s and the walker was past that strike when it arrived, 2026-12-07).
+STOP_LEAD = 2
 TOUCH_SHARE = 0.1  # of the weight: a point carrying more is touching (`walk_plan`)
 
 
@@ -202,7 +206,7 @@ def walk_replanned(planner: Planner, scene: Scene, settings: GaitSettings,
     sim.place(seg.ref)
     along = walking_direction(seg.ref)
     touches: list[dict[str, Any]] = []
-    fbs, efforts = [], []
+    fbs, efforts, parts = [], [], []
     pending: tuple[float, float, PlanResult, str] | None = None  # (switch at, begin, plan)
     walked, next_strike, standing_since = 0, 0, None
     reason = "completed"
@@ -210,6 +214,7 @@ def walk_replanned(planner: Planner, scene: Scene, settings: GaitSettings,
         step = sim.step(seg.control, seg.clock, seg.ref, seg.touches, slides)
         fbs.append(step.fb)
         efforts.append(step.plan_effort)
+        parts.append("standing" if standing_since is not None else seg.kind)
         seg.clock.pace(h, float(along @ (data.subtree_com[seg.control.root]
                                          - seg.ref.com_at(step.tau))), gait_speed)
         reason = stop_reason(stop, data, step.com[2], step.phi_ref[2], step.tilt, step.error,
@@ -238,9 +243,11 @@ def walk_replanned(planner: Planner, scene: Scene, settings: GaitSettings,
             say(f"strike {walked} at t = {t:.3f} s")
             if pending is not None or seg.kind == "stop":
                 continue  # a plan is being solved, or the walker stops
-            if walked >= half_cycles - 1 and next_strike < len(seg.strikes):
-                # the stop, from the plan's state at its next strike, taking over there
-                n = int(np.searchsorted(seg.ref.times, seg.strikes[next_strike] - 0.5 * h))
+            ahead = min(STOP_LEAD, len(seg.strikes) - next_strike) - 1
+            if walked >= half_cycles - STOP_LEAD and ahead >= 0:
+                # the stop, from the plan's state at a strike ahead, taking over there
+                n = int(np.searchsorted(seg.ref.times,
+                                        seg.strikes[next_strike + ahead] - 0.5 * h))
                 at = t + float(seg.ref.times[n]) - tau
                 start = start_of_node(scene, seg.result.q, seg.result.times,
                                       seg.result.generalized_force, n,
@@ -269,6 +276,10 @@ def walk_replanned(planner: Planner, scene: Scene, settings: GaitSettings,
         "stood": standing_since is not None and reason == "completed",
         "final_com_speed_m_s": round(speed, 4), "time_walked_s": round(float(data.time), 4),
         "feedback_share": rms(fbs) / max(rms(efforts), 1e-12),
+        "feedback_share_by_part": {  # start, walk (the re-plans), stop, standing after it
+            part: rms([f for f, p in zip(fbs, parts) if p == part])
+            / max(rms([e for e, p in zip(efforts, parts) if p == part]), 1e-12)
+            for part in dict.fromkeys(parts)},
         "replans": len(replans), "replans_converged": sum(p["success"] for p in replans),
         "replan_wall_median_s": (float(np.median([p["wall_s"] for p in replans]))
                                  if replans else None),

@@ -2,7 +2,7 @@
 (`walk.walk_plan.walk`) and the walk that re-plans (`walk.replan`).
 
 `Simulation.build(rec, scene, cfg, robot, model_error)` makes the MuJoCo walker of a
-recording (`walk_plan.walk_model`) with the controller's gains, the model error applied and
+recording (`walk_model`) with the controller's gains, the model error applied and
 its torque delay (with config delay.predict, the prediction through the nominal walker,
 `walk.predictor`). `step(control, clock, ref, touches, slides)` advances it by one time step
 under `control` (`walk.controller.ReferenceController`) at the plan's time `clock(t)`: the
@@ -25,7 +25,44 @@ from gait_planner.walk.model_error import DelayedTorque, ModelError
 from gait_planner.walk.predictor import DelayPredictor
 from gait_planner.walk.robot_urdf import RobotUrdf
 
-__all__ = ["Simulation", "Step"]
+__all__ = ["Simulation", "Step", "foot_half_width", "ground_forces", "walk_model"]
+
+
+def foot_half_width(rec) -> float:
+    """m: the half width of the feet the recording's plan assumes (its metadata; the
+    planner's default for a recording without it)."""
+    return float(rec.metadata.get("foot_half_width", 0.04575))
+
+
+def walk_model(rec, scene, cfg: dict[str, Any], robot: RobotUrdf | None = None):
+    """The MuJoCo walker (`walk.mujoco_model.WalkModel`) of the recording `rec` of `scene`
+    with the simulation and joint damping of the controller's parameters `cfg`
+    (`load_config`), on the robot's own URDF if given."""
+    from gait_planner.walk.mujoco_model import build_model
+
+    sim = cfg["simulation"]
+    return build_model(rec, scene, foot_half_width(rec), sim["foot_sphere_radius"],
+                       sim["time_step"], sim["contact_time_constant"], cfg["joints"]["kd"],
+                       robot, int(sim["noslip_iterations"]))
+
+
+def ground_forces(model, data, wm) -> np.ndarray:
+    """(n_contacts, 3) N, world: the ground's force on each planned contact point's foot
+    geometry (`WalkModel.geom_contact`), summed, from the contacts MuJoCo solved in the last
+    step."""
+    import mujoco
+
+    force = np.zeros(6)
+    per_point = np.zeros((len(wm.contact_sites), 3))
+    for c in range(data.ncon):
+        geoms = (data.contact[c].geom1, data.contact[c].geom2)
+        ground_first = wm.geom_contact[geoms[0]] < 0  # geom1: the plane or a tread
+        foot = geoms[1] if ground_first else geoms[0]
+        mujoco.mj_contactForce(model, data, c, force)
+        # the contact frame's rows are its axes, the first the normal, from geom1 to geom2
+        f = data.contact[c].frame.reshape(3, 3).T @ force[:3]
+        per_point[wm.geom_contact[foot]] += f if ground_first else -f
+    return per_point
 
 
 @dataclass(frozen=True)
@@ -70,8 +107,6 @@ class Simulation:
               model_error: ModelError | None = None) -> "Simulation":
         import mujoco
 
-        from gait_planner.walk.walk_plan import walk_model
-
         wm = walk_model(rec, scene, cfg, robot)
         factors = model_error.apply(wm.model) if model_error is not None else {}
         delay_steps = (round(model_error.torque_delay / wm.model.opt.timestep)
@@ -109,8 +144,6 @@ class Simulation:
         """One time step (module docstring); before(data, tau) is called with the state the
         step starts from, its kinematics computed, before it is advanced."""
         import mujoco
-
-        from gait_planner.walk.walk_plan import ground_forces
 
         model, data, wm, gains = self.model, self.data, self.wm, self.gains
         mujoco.mj_step1(model, data)

@@ -28,6 +28,8 @@ from gait_planner.walk.clock import PlanClock
 from gait_planner.walk.controller import ReferenceController
 from gait_planner.walk.model_error import ModelError
 from gait_planner.walk.robot_urdf import RobotUrdf
+from gait_planner.walk.simulation import (Simulation, foot_half_width, ground_forces,
+                                          walk_model)
 from gait_planner.walk.slides import Slides
 from gait_planner.walk.touches import Touches
 
@@ -129,7 +131,6 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
     import mujoco
 
     from gait_planner.walk.reference import Reference, planned_joints
-    from gait_planner.walk.simulation import Simulation
 
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
         raise ValueError(f"steps must be an integer >= 1, got {steps!r}")
@@ -239,24 +240,6 @@ def walking_direction(ref) -> np.ndarray:
     return along / np.linalg.norm(along)
 
 
-def foot_half_width(rec) -> float:
-    """m: the half width of the feet the recording's plan assumes (its metadata; the
-    planner's default for a recording without it)."""
-    return float(rec.metadata.get("foot_half_width", 0.04575))
-
-
-def walk_model(rec, scene, cfg: dict[str, Any], robot: RobotUrdf | None = None):
-    """The MuJoCo walker (`walk.mujoco_model.WalkModel`) of the recording `rec` of `scene`
-    with the simulation and joint damping of the controller's parameters `cfg`
-    (`load_config`), on the robot's own URDF if given."""
-    from gait_planner.walk.mujoco_model import build_model
-
-    sim = cfg["simulation"]
-    return build_model(rec, scene, foot_half_width(rec), sim["foot_sphere_radius"],
-                       sim["time_step"], sim["contact_time_constant"], cfg["joints"]["kd"],
-                       robot, int(sim["noslip_iterations"]))
-
-
 def stop_reason(stop: dict[str, float], data, height: float, planned_height: float,
                 tilt: float, error: np.ndarray, joint_names, t: float) -> str:
     """Why a walk stops at simulated time t (s), or "completed" while it goes on, by the
@@ -275,25 +258,6 @@ def stop_reason(stop: dict[str, float], data, height: float, planned_height: flo
         return (f"lost tracking: {joint_names[worst]} {math.degrees(error[worst]):+.1f} deg "
                 f"from the plan at t = {t:.3f} s")
     return "completed"
-
-
-def ground_forces(model, data, wm) -> np.ndarray:
-    """(n_contacts, 3) N, world: the ground's force on each planned contact point's foot
-    geometry (`WalkModel.geom_contact`), summed, from the contacts MuJoCo solved in the last
-    step."""
-    import mujoco
-
-    force = np.zeros(6)
-    per_point = np.zeros((len(wm.contact_sites), 3))
-    for c in range(data.ncon):
-        geoms = (data.contact[c].geom1, data.contact[c].geom2)
-        ground_first = wm.geom_contact[geoms[0]] < 0  # geom1: the plane or a tread
-        foot = geoms[1] if ground_first else geoms[0]
-        mujoco.mj_contactForce(model, data, c, force)
-        # the contact frame's rows are its axes, the first the normal, from geom1 to geom2
-        f = data.contact[c].frame.reshape(3, 3).T @ force[:3]
-        per_point[wm.geom_contact[foot]] += f if ground_first else -f
-    return per_point
 
 
 def _placement_error(ref, data, control, tau: float) -> float:

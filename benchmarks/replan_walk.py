@@ -1,0 +1,88 @@
+"""Walks by re-planning against walks of one plan (issue #63): from standing, N half cycles,
+stop, stand 2 s, in MuJoCo (`gait_planner.walk.replan.walk_replanned`).
+
+Usage: .venv/bin/python benchmarks/replan_walk.py [--scenes walker2d walker3d]
+       [--half-cycles 10] [--json NAME]
+
+For each scene two rows, each in a fresh Planner with the warm-start store (derivatives
+compiled; the gait from the store, as `gait-planner walk --replan` and the API meet it:
+walker3d's start from standing converges from the store's gait, not from one planned
+cold, benchmarks/HISTORY.md 2026-12-07): "re-planned" (a transition from the walker's
+measured state at every strike, its wall time on this machine charged to the simulated
+clock) and "one plan" (the start plan carries every half cycle; only the stop is planned
+during the walk). Each row: half cycles walked, why it ended, whether it stood still at the
+end, the re-plans (converged of asked, median iterations and wall time), the feedback share,
+unplanned touches, the largest slide. Wall times depend on the machine and its load (the
+load is printed): they decide when a plan takes over, so two runs differ. Threads: one
+(OPENBLAS_NUM_THREADS=1, the package's default).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+
+from gait_planner.model.loader import load_scene
+from gait_planner.ocp.settings import settings_for
+from gait_planner.ocp.solve import Planner
+from gait_planner.ocp.warm_starts import WarmStartStore
+from gait_planner.walk.replan import walk_replanned
+
+
+def row(name: str, replan: bool, half_cycles: int) -> dict:
+    scene = load_scene(name)
+    began = time.perf_counter()
+    r = walk_replanned(Planner(library=WarmStartStore()), scene, settings_for(scene, compiled=True), half_cycles,
+                       replan=replan)
+    slides = r.get("foot_slide") or {}
+    return {"scene": name, "mode": "re-planned" if replan else "one plan",
+            "half_cycles_walked": r["half_cycles_walked"], "stopped": r["stopped"],
+            "stood": r.get("stood", False), "replans": r.get("replans", 0),
+            "replans_converged": r.get("replans_converged", 0),
+            "replan_iterations_median": r.get("replan_iterations_median"),
+            "replan_wall_median_s": r.get("replan_wall_median_s"),
+            "feedback_share": r.get("feedback_share"),
+            "feedback_share_by_part": r.get("feedback_share_by_part"),
+            "touches": len(r.get("unplanned_touches", [])),
+            "largest_slide_mm": slides.get("slide_mm") if isinstance(slides, dict) else None,
+            "plans": r["plans"], "run_s": round(time.perf_counter() - began, 1)}
+
+
+def _number(x) -> str:
+    return "-" if x is None else f"{x:.2f}"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenes", nargs="+", default=["walker2d", "walker3d"])
+    parser.add_argument("--half-cycles", type=int, default=10)
+    parser.add_argument("--json", metavar="NAME",
+                        help="also write the rows to benchmarks/results/NAME.json")
+    args = parser.parse_args()
+    print(f"# {platform.node()} {platform.processor() or platform.machine()} "
+          f"{time.strftime('%Y-%m-%d %H:%M')}, load {os.getloadavg()[0]:.2f}, "
+          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
+    print("| scene | mode | half cycles | ended | stood | re-plans converged | median it "
+          "| median wall s | feedback | touches |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    rows = []
+    for name in args.scenes:
+        for replan in (True, False):
+            x = row(name, replan, args.half_cycles)
+            rows.append(x)
+            print(f"| {name} | {x['mode']} | {x['half_cycles_walked']} | {x['stopped'][:60]} "
+                  f"| {x['stood']} | {x['replans_converged']}/{x['replans']} | "
+                  f"{x['replan_iterations_median']} | {x['replan_wall_median_s']} | "
+                  f"{_number(x['feedback_share'])} | {x['touches']} |", flush=True)
+            if not x["plans"][0]["success"]:
+                print(f"  the start: {x['plans'][0]['message']}")
+    if args.json:
+        from results_io import write_results
+
+        print(write_results(args.json, rows, {"half_cycles": args.half_cycles}))
+
+
+if __name__ == "__main__":
+    main()
