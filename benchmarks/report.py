@@ -871,6 +871,38 @@ def any_request(doc, cold_doc=None, library_doc=None) -> list[str]:
     return out + [""] + any_request_library(library_doc)
 
 
+def replan_walk(docs: list[dict]) -> list[str]:
+    out = ["## 13. Walking by re-planning", ""]
+    if not docs:
+        return out + ["Not measured.", ""]
+    out += ["`replan_walk.py` (issue #63, `gait_planner.walk.replan`): each scene walked in "
+            "MuJoCo with the reference controller (config/walk.yaml), from standing (or moving, "
+            "at the gait's first node, where marked), a number of half cycles, then a stop and "
+            "2 s standing; *re-planned*: a transition from the walker's measured state at "
+            "every strike (two half cycles onto the gait; its solver stopped at 0.75 of the "
+            "gait's half cycle), each solve's wall time on this machine charged to the "
+            "simulated clock (the walker keeps its plan until the new one arrives); *one "
+            "plan*: the start plan carries every half cycle, only the stop is planned during "
+            "the walk. The stop is planned two strikes ahead from the plan's own state there. "
+            "Wall times (and so when plans take over) depend on the machine's load: two runs "
+            "differ. Feedback share: RMS feedback / RMS planned effort over the whole walk "
+            "(start, walk, stop, standing).", ""]
+    for doc in docs:
+        rows = [dict(r, walked=f"{r['half_cycles_walked']} of {doc['header']['half_cycles']}",
+                     replans=(f"{r['replans_converged']} of {r['replans']}"
+                              if r["replans"] else "–"))
+                for r in doc["rows"]]
+        out += [provenance(doc), ""] + table(rows, [
+            ("scene", "scene", ""), ("start", "start", ""), ("mode", "mode", ""),
+            ("half cycles walked", "walked", ""), ("stood at the end", "stood", ""),
+            ("re-plans converged", "replans", ""),
+            ("median iterations", "replan_iterations_median", ".0f"),
+            ("median wall s", "replan_wall_median_s", ".2f"),
+            ("feedback share", "feedback_share", ".0%"), ("unplanned touches", "touches", ""),
+            ("why it ended", "stopped", "")]) + [""]
+    return out
+
+
 def main() -> None:
     docs = {name: load_results(name) for name in ("work_precision", "integrators", "model_size",
                                          "model_size_compiled", "hard_cases", "cold_solve",
@@ -902,6 +934,8 @@ def main() -> None:
     lines += robots(docs["robots"])
     lines += any_request(docs["any_request"], docs["any_request_cold"],
                          docs["any_request_library"])
+    lines += replan_walk([doc for name in ("replan_walk", "replan_walk_walker3d_moving")
+                          if (doc := load_results(name))])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
