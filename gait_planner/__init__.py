@@ -4,7 +4,8 @@ The Python API (`gait_planner.api`; loaded on first use, so importing a submodul
 light): ``from gait_planner import PlanRequest, plan, check, record, summary``, and for a
 plan that begins at a given state ``standing_start`` or ``start_of_recording`` (or
 ``start_of_plan``, ``start_of_velocity``, ``start_of_joint_state``) passed to
-``plan(..., start=)``.
+``plan(..., start=)``; ``walk_replanned`` walks a request from standing in MuJoCo,
+re-planned at every strike.
 
 One BLAS thread for CasADi's bundled OpenBLAS (read when CasADi first loads its IPOPT
 plugin, so this has to run before the first solver is built): MUMPS then factorises the
@@ -33,7 +34,7 @@ if platform.machine() in ("x86_64", "AMD64"):
 
 _API = ("PlanRequest", "PlanResult", "Planner", "RequestError", "StartError", "StartState",
         "check", "plan", "record", "standing_start", "start_of_joint_state", "start_of_plan",
-        "start_of_recording", "start_of_velocity", "summary")
+        "start_of_recording", "start_of_velocity", "summary", "walk_replanned")
 __all__ = list(_API)
 
 from gait_planner.lazy import lazy_exports  # noqa: E402  (after the environment above)
