@@ -207,13 +207,12 @@ def test_a_standing_start_begins_with_the_scenes_start_phases(gait):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("gait", ["walker2d"], indirect=True)
 def test_from_standing_the_walker_sets_off_onto_the_gait(gait):
-    """From the scene's standing pose at rest (two half cycles, the first step half the
-    gait's): node 0 is that pose, all four contact points loaded there, the motion joins
-    the gait and passes every check of the verifier, the certificate included. (walker3d's
-    converged from the warm-start store's gait in 302 iterations and not from the same
-    gait planned cold, as this module's is: 2706, the time limit; benchmarks/HISTORY.md.)"""
+    """From the scene's standing pose at rest (two half cycles, the first step 0.7 of the
+    gait's, `transitions.FIRST_STEP`): node 0 is that pose, all four contact points loaded
+    there, the motion joins the gait and passes every check of the verifier, the
+    certificate included; from this module's gait, planned cold (walker3d's did not
+    converge with a first step half the gait's: 2706 iterations; benchmarks/HISTORY.md)."""
     scene, settings, planner, plan = gait
     start = standing_start(scene)
     result = plan_transition(planner, scene, settings, start, steps=1, from_last=False)
