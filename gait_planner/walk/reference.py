@@ -78,6 +78,16 @@ def _omega(D: np.ndarray, D_dot: np.ndarray) -> np.ndarray:
     return 0.5 * np.array([W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1]])
 
 
+def _first_rates(scene: Scene, q: np.ndarray, times: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The root's centre-of-mass velocity and angular velocity (world) at node 0: the first
+    differences of nodes 0 and 1."""
+    i = scene.body_index(scene.root.body)
+    h = float(times[1] - times[0])
+    D, D1 = (q[n, 12 * i + 3:12 * i + 12].reshape(3, 3).T for n in (0, 1))
+    return (q[1, 12 * i:12 * i + 3] - q[0, 12 * i:12 * i + 3]) / h, _omega(D, (D1 - D) / h)
+
+
 def _angle_mirror(angles: np.ndarray, mirrored: np.ndarray, names) -> np.ndarray:
     """P (na, na), mirrored = angles @ P.T: each mirrored column is +- one plan column."""
     na = angles.shape[1]
@@ -160,15 +170,26 @@ class Reference:
         from gait_planner.io.messages import node_efforts
 
         scene, q, times = result.scene, np.asarray(result.q, float), np.asarray(result.times)
-        i = scene.body_index(scene.root.body)
-        h = float(times[1] - times[0])
-        D, D1 = (q[n, 12 * i + 3:12 * i + 12].reshape(3, 3).T for n in (0, 1))
         return cls(scene, 1, times - times[0], q, np.asarray(result.joint_angles, float),
                    np.asarray(result.joint_velocities, float), node_efforts(result),
                    tuple(result.active_contacts), float(times[-1] - times[0]),
-                   float(result.step_length),
-                   ((q[1, 12 * i:12 * i + 3] - q[0, 12 * i:12 * i + 3]) / h,
-                    _omega(D, (D1 - D) / h)), result.ground.normal)
+                   float(result.step_length), _first_rates(scene, q, times),
+                   result.ground.normal)
+
+    @classmethod
+    def as_recorded(cls, rec: RecordedPlan) -> "Reference":
+        """A recorded plan as it is (a transition, a stop, as the node records it), not
+        joined: its nodes, the planned joints of its trajectory (`planned_joints`), its
+        active contacts; period: its duration; the root's rates at node 0 its first
+        difference."""
+        rec = planned_joints(rec)
+        scene, ground = scene_of(rec), recorded_ground(rec)
+        q, times = np.asarray(rec.q, float), np.asarray(rec.times, float)
+        return cls(scene, 1, times - times[0], q, np.asarray(rec.positions, float),
+                   np.asarray(rec.velocities, float), np.asarray(rec.effort, float),
+                   tuple(rec.active_contacts), float(times[-1] - times[0]),
+                   float(rec.metadata["step_length"]), _first_rates(scene, q, times),
+                   ground.normal)
 
     def _node_weight(self, t: float) -> tuple[int, float]:
         """(n, a): t lies a of the way from node n to node n + 1 (clipped to the ends)."""

@@ -15,7 +15,8 @@ from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.transition import standing_start
 from gait_planner.transitions import plan_transition
-from gait_planner.walk.replan import measured_start, strikes, walk_replanned
+from gait_planner.walk.followed import Followed, measure, measured_start
+from gait_planner.walk.replan import walk_replanned
 
 SLOW_SOLVE = 0.9  # s added to every re-plan's measured wall time: more than a half cycle
 
@@ -78,13 +79,13 @@ def test_the_measured_state_of_the_walker_placed_at_a_plan_node_is_that_node(wal
 
     scene, settings, planner = walker2d
     plan = plan_transition(planner, scene, settings, standing_start(scene), steps=1)
-    assert plan.success and len(strikes(plan)) >= 2
+    assert plan.success and len(Followed.of_result(plan).strikes) >= 2
 
     with tempfile.TemporaryDirectory() as folder:
         rec = read_plan_mcap(write_plan_mcap(plan, Path(folder) / "p.mcap"))
     sim = Simulation.build(rec, scene, load_config())
     sim.place(Reference.from_result(plan))
-    start = measured_start(sim, scene, "placed")
+    start = measured_start(scene, measure(sim, scene), "placed")
     # the root's frame and the joints as MuJoCo holds them are the plan's configuration
     assert np.abs(start.q - plan.q[0]).max() < 1e-9
     assert np.all(np.isfinite(start.momentum))
