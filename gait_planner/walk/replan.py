@@ -13,20 +13,22 @@ again from the walker's measured state.
    reference controller (`walk.simulation`, config/walk.yaml).
 3. At every strike of the plan it follows (a node where the gait's first phase begins:
    `walk.followed.strikes`), the walker's state is measured (`walk.followed.measure`: the
-   joints and the root body's frame, as a robot publishes them) and a transition from it back onto the gait is
-   planned (`HALVES` half cycles, then `AHEAD` of the gait's). **The simulated clock waits
-   for no plan**: the walker goes on with the plan it has for as long as the solve took on
-   this machine (wall time), then switches to the new plan at that plan's time (the new
-   plan begins at the measured state, so it starts late by the solve). A strike passed
-   while a plan is being solved is not re-planned; a re-plan's solver stops after `DEADLINE`
-   of the gait's half cycle; one that fails, stops or is refused is recorded and the walker
-   keeps its plan.
+   joints and the root body's frame, as a robot publishes them) and a transition from it
+   back onto the gait is planned (`HALVES` half cycles, then `AHEAD` of the gait's). **The
+   simulated clock waits for no plan**: the walker goes on with the plan it has for as
+   long as the solve took on this machine (wall time), then switches to the new plan at
+   that plan's time (the new plan begins at the measured state, so it starts late by the
+   solve). A strike passed while a plan is being solved is not re-planned; a re-plan's
+   solver stops after `DEADLINE` of the gait's half cycle; one that fails, stops or is
+   refused is recorded and the walker keeps its plan.
 4. At strike `half_cycles` - `STOP_LEAD` the stop is planned (`plan_transition(stop=True)`,
    `STOP_HALVES`: to standing at rest) from the plan's own state at strike `half_cycles`,
-   where it takes over; a stop that arrives after that strike is dropped and planned again
-   for a strike further on (a stop taking over 0.74 s late made walker2d fall at once);
-   planned from the measured state it took 165-208 iterations (walker2d, 2.5-3.4 s,
-   2026-12-07) and the walker was far past it when it arrived. When the stop ends the walker holds its last node for `stand` s.
+   where it takes over. A stop that arrives after that strike is dropped (one taking over
+   0.74 s late made walker2d fall at once) and planned again for a strike further on,
+   re-planning, after a re-plan that extends the walk. Planned from the measured state the
+   stop took 165-208 iterations (walker2d, 2.5-3.4 s, 2026-12-07) and the walker was far
+   past it when it arrived. When the stop ends the walker holds its last node for `stand`
+   s.
 
 standing=False begins the walk moving at the gait's first node instead. replan=False is
 the same walk with one plan: the start plan carries `half_cycles` of the gait and only the
@@ -177,6 +179,8 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     busy_until = 0.0  # simulated time at which the solver is free again
     walked, next_strike, standing_since = 0, 0, None
     followed = 0  # the plans the walker has followed before the current one
+    stop_late = False  # the last stop arrived after its strike (a re-plan comes first)
+    stop_strike = 0  # the strike the pending stop takes over at
     reason = "completed"
     while True:
         ref = seg.plan.ref
@@ -198,6 +202,8 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             strikes = seg.plan.strikes if seg.kind != "stop" else np.array([])
             pending, next_strike = None, int(np.sum(strikes <= seg.clock(t) + 0.5 * h))
             plans[-1]["took_over_s"] = round(t, 4)
+            if seg.kind == "stop":  # at its strike, whichever step saw it first
+                walked = max(walked, stop_strike)
             continue
         if seg.kind == "stop" and tau >= ref.times[-1]:
             standing_since = t if standing_since is None else standing_since
@@ -215,7 +221,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             if pending is not None or t < busy_until or seg.kind == "stop":
                 continue  # a plan is being solved, or the walker stops
             ahead = min(STOP_LEAD, len(strikes) - next_strike) - 1
-            if walked >= half_cycles - STOP_LEAD and ahead >= 0:
+            if walked >= half_cycles - STOP_LEAD and ahead >= 0 and not (stop_late and replan):
                 # the stop, from the plan's state at a strike ahead, taking over there
                 n = int(np.searchsorted(ref.times, strikes[next_strike + ahead] - 0.5 * h))
                 at = t + float(ref.times[n]) - tau
@@ -225,14 +231,17 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
                 r = timed("stop", start, at, stop=True, halves=STOP_HALVES, steps=1,
                           source=(seg.plan, n))
                 busy_until = t + plans[-1]["wall_s"]
-                if r is not None and busy_until > at + 0.5 * h:  # planned again further on
+                stop_late = r is not None and busy_until > at + 0.5 * h
+                if stop_late:  # a re-plan next (the walk goes on), then the stop again
                     plans[-1].update(dropped=True, message=f"arrived {busy_until - at:.3f} s "
                                      "after its strike: dropped")
                 elif r is not None:
                     pending = (at, at, r, "stop")
+                    stop_strike = walked + ahead + 1  # the strike it takes over at
                 continue
             if not replan or (standing and seg.kind == "start" and next_strike == 1):
                 continue  # one plan / the end of the start phases
+            stop_late = False
             state = measure(sim, scene)
             start = measured_start(scene, state, f"the walker at t = {t:.3f} s")
             r = timed("re-plan", start, t, DEADLINE * period, state, steps=AHEAD,
