@@ -2,7 +2,7 @@
 stop, stand 2 s, in MuJoCo (`gait_planner.walk.replan.walk_replanned`).
 
 Usage: .venv/bin/python benchmarks/replan_walk.py [--scenes walker2d walker3d]
-       [--half-cycles 10] [--moving] [--json NAME]
+       [--half-cycles 10] [--deadline 0.75] [--moving] [--json NAME]
 
 For each scene two rows, each in a fresh Planner with the warm-start store (derivatives
 compiled; the gait from the store, as `gait-planner walk --replan` and the API meet it:
@@ -28,16 +28,17 @@ from gait_planner.model.loader import load_scene
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.warm_starts import WarmStartStore
-from gait_planner.walk.replan import walk_replanned
+from gait_planner.walk.replan import DEADLINE, walk_replanned
 
 
-def row(name: str, replan: bool, half_cycles: int, standing: bool) -> dict:
+def row(name: str, replan: bool, half_cycles: int, standing: bool, deadline: float) -> dict:
     scene = load_scene(name)
     began = time.perf_counter()
     r = walk_replanned(Planner(library=WarmStartStore()), scene, settings_for(scene, compiled=True), half_cycles,
-                       replan=replan, standing=standing)
+                       replan=replan, standing=standing, deadline=deadline)
     slides = r.get("foot_slide") or {}
     return {"scene": name, "mode": "re-planned" if replan else "one plan",
+            "deadline": deadline,
             "start": "standing" if standing else "moving",
             "half_cycles_walked": r["half_cycles_walked"], "stopped": r["stopped"],
             "stood": r.get("stood", False), "replans": r.get("replans", 0),
@@ -59,6 +60,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenes", nargs="+", default=["walker2d", "walker3d"])
     parser.add_argument("--half-cycles", type=int, default=10)
+    parser.add_argument("--deadline", type=float, default=DEADLINE,
+                        help=f"a re-plan's time limit in half cycles (default {DEADLINE})")
     parser.add_argument("--moving", action="store_true",
                         help="begin moving at the gait's first node, not from standing")
     parser.add_argument("--json", metavar="NAME",
@@ -73,7 +76,7 @@ def main() -> None:
     rows = []
     for name in args.scenes:
         for replan in (True, False):
-            x = row(name, replan, args.half_cycles, not args.moving)
+            x = row(name, replan, args.half_cycles, not args.moving, args.deadline)
             rows.append(x)
             print(f"| {name} | {x['mode']} | {x['half_cycles_walked']} | {x['stopped'][:60]} "
                   f"| {x['stood']} | {x['replans_converged']}/{x['replans']} | "
@@ -85,6 +88,7 @@ def main() -> None:
         from results_io import write_results
 
         print(write_results(args.json, rows, {"half_cycles": args.half_cycles,
+                                              "deadline": args.deadline,
                                               "start": "moving" if args.moving else "standing"}))
 
 

@@ -99,14 +99,16 @@ class _Segment:
 
 def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings | None,
                    half_cycles: int = 10, *, replan: bool = True, standing: bool = True,
-                   stand: float = 2.0, config: dict[str, Any] | None = None,
+                   stand: float = 2.0, deadline: float = DEADLINE,
+                   config: dict[str, Any] | None = None,
                    wall: Callable[[], float] = time.perf_counter,
                    plan: Callable[..., PlanResult] = plan_transition,
                    planning: Planning | None = None,
                    progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """The walk of the module docstring. standing False: the walk begins moving, at the
     gait's first node (its start plan the transition from it, which is the gait), as
-    `walk.walk_plan.walk` begins. wall: the clock the solves are timed with; plan:
+    `walk.walk_plan.walk` begins. deadline: a re-plan's time limit in half cycles of the
+    gait (`DEADLINE`). wall: the clock the solves are timed with; plan:
     `transitions.plan_transition` (a test may pass a slower one) for `local_planning` of
     (planner, scene, settings); planning: another `walk.followed.Planning` instead (planner
     and settings unused); progress(line) hears each plan and strike."""
@@ -211,7 +213,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
                 break
             continue
         if tau > ref.times[-1]:
-            reason = f"the plan ran out at t = {t:.3f} s (its re-plans failed)"
+            reason = f"the plan ran out at t = {t:.3f} s (no new plan took over in time)"
             break
         strikes = seg.plan.strikes if seg.kind != "stop" else np.array([])
         if next_strike < len(strikes) and tau >= strikes[next_strike] - 0.5 * h:
@@ -244,7 +246,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             stop_late = False
             state = measure(sim, scene)
             start = measured_start(scene, state, f"the walker at t = {t:.3f} s")
-            r = timed("re-plan", start, t, DEADLINE * period, state, steps=AHEAD,
+            r = timed("re-plan", start, t, deadline * period, state, steps=AHEAD,
                       halves=HALVES)
             busy_until = t + plans[-1]["wall_s"]
             if r is not None:
