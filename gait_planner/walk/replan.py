@@ -43,6 +43,7 @@ in its own time), slides, the walker's centre-of-mass speed when it stood still 
 
 from __future__ import annotations
 
+import math
 import tempfile
 import time
 from dataclasses import dataclass
@@ -108,7 +109,8 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     """The walk of the module docstring. standing False: the walk begins moving, at the
     gait's first node (its start plan the transition from it, which is the gait), as
     `walk.walk_plan.walk` begins. deadline: a re-plan's time limit in half cycles of the
-    gait (`DEADLINE`). wall: the clock the solves are timed with; plan:
+    gait (`DEADLINE`; above 1, the stop is planned ceil(deadline) + 1 strikes ahead and a
+    plan carries 2 ceil(deadline) + 2 of the gait's half cycles). wall: the clock the solves are timed with; plan:
     `transitions.plan_transition` (a test may pass a slower one) for `local_planning` of
     (planner, scene, settings); planning: another `walk.followed.Planning` instead (planner
     and settings unused); progress(line) hears each plan and strike."""
@@ -137,7 +139,11 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             f"({answer.iterations} iterations, {took:.2f} s)")
         return answer.followed if answer.success else None
 
-    ahead = AHEAD if replan else half_cycles + 1
+    # a slower limit keeps more of the gait ahead and plans the stop earlier: two late
+    # plans in a row must not run the walker out of plan (walker3d, limit 2 half cycles)
+    lead = max(STOP_LEAD, math.ceil(deadline) + 1)
+    carried = max(AHEAD, 2 * math.ceil(deadline) + 2)
+    ahead = carried if replan else half_cycles + 1
     first = timed("start", standing_start(scene) if standing else None, 0.0, steps=ahead,
                   halves=START_HALVES)
     if first is None:
@@ -145,7 +151,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
                 "stopped": f"the start was not planned: {plans[-1]['message']}",
                 "plans": plans}
     if replan:  # build the re-plan's problem and give it a last transition to start from
-        timed("prepare re-plan", None, 0.0, steps=AHEAD, halves=HALVES)
+        timed("prepare re-plan", None, 0.0, steps=carried, halves=HALVES)
     timed("prepare stop", None, 0.0, stop=True, halves=STOP_HALVES, steps=1)
     prepared = len(plans)
 
@@ -222,8 +228,8 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             say(f"strike {walked} at t = {t:.3f} s")
             if pending is not None or t < busy_until or seg.kind == "stop":
                 continue  # a plan is being solved, or the walker stops
-            ahead = min(STOP_LEAD, len(strikes) - next_strike) - 1
-            if walked >= half_cycles - STOP_LEAD and ahead >= 0 and not (stop_late and replan):
+            ahead = min(lead, len(strikes) - next_strike) - 1
+            if walked >= half_cycles - lead and ahead >= 0 and not (stop_late and replan):
                 # the stop, from the plan's state at a strike ahead, taking over there
                 n = int(np.searchsorted(ref.times, strikes[next_strike + ahead] - 0.5 * h))
                 at = t + float(ref.times[n]) - tau
@@ -246,7 +252,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             stop_late = False
             state = measure(sim, scene)
             start = measured_start(scene, state, f"the walker at t = {t:.3f} s")
-            r = timed("re-plan", start, t, deadline * period, state, steps=AHEAD,
+            r = timed("re-plan", start, t, deadline * period, state, steps=carried,
                       halves=HALVES)
             busy_until = t + plans[-1]["wall_s"]
             if r is not None:
