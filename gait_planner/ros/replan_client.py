@@ -19,23 +19,17 @@ from __future__ import annotations
 import itertools
 from typing import Callable
 
-import numpy as np
-
 from gait_planner.io.mcap_reader import read_plan_mcap
 from gait_planner.io.messages import WORLD_FRAME, frame_tree, quaternion_msg
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.transition import StartState
 from gait_planner.walk.followed import Answer, Followed, Measured
+from gait_planner.walk.reference import angular_velocity, planned_joints
 
 __all__ = ["NodePlanning", "RESULT_WAIT"]
 
 RESULT_WAIT = 300.0  # s, the longest a goal's result is waited for
 PUBLISH_SPIN = 0.1  # s spun after publishing a measured state, so the node has it
-
-
-def _omega(D: np.ndarray, D_dot: np.ndarray) -> np.ndarray:
-    W = D_dot @ D.T
-    return 0.5 * np.array([W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1]])
 
 
 class NodePlanning:
@@ -115,15 +109,13 @@ class NodePlanning:
         there, the root's pose, and the rates after the node (forward differences to node
         n + 1: at a strike the central differences would straddle the impact, and a stop
         from them took 117-136 iterations, 2026-12-07)."""
-        from gait_planner.walk.reference import planned_joints
-
         rec = planned_joints(followed.recording)
         i = self.scene.body_index(self.root)
         q, h = followed.q, float(followed.times[n + 1] - followed.times[n])
         D = q[n, 12 * i + 3:12 * i + 12].reshape(3, 3).T
         D_dot = (q[n + 1, 12 * i + 3:12 * i + 12] - q[n, 12 * i + 3:12 * i + 12]).reshape(3, 3).T
         velocity = (q[n + 1, 12 * i:12 * i + 3] - q[n, 12 * i:12 * i + 3]) / h
-        angular = _omega(D, D_dot / h)
+        angular = angular_velocity(D, D_dot / h)
         goal.start = "state"
         goal.state.name = list(rec.joint_names)
         goal.state.position = [float(v) for v in rec.positions[n]]

@@ -31,7 +31,7 @@ from gait_planner.ocp.mirror import configuration_mirror, contact_partners
 from gait_planner.verify.joined import half_cycle
 from gait_planner.walk.mujoco_model import recorded_ground
 
-__all__ = ["Reference", "scene_of"]
+__all__ = ["Reference", "angular_velocity", "scene_of"]
 
 
 def scene_of(rec: RecordedPlan) -> Scene:
@@ -71,7 +71,7 @@ def _first_half_cycle(rec: RecordedPlan) -> RecordedPlan:
     return half_cycle(rec, H)
 
 
-def _omega(D: np.ndarray, D_dot: np.ndarray) -> np.ndarray:
+def angular_velocity(D: np.ndarray, D_dot: np.ndarray) -> np.ndarray:
     """Angular velocity (world) of a rotation D with rate D_dot: the axial vector of
     D_dot D^T (antisymmetrised)."""
     W = D_dot @ D.T
@@ -85,7 +85,8 @@ def _first_rates(scene: Scene, q: np.ndarray, times: np.ndarray
     i = scene.body_index(scene.root.body)
     h = float(times[1] - times[0])
     D, D1 = (q[n, 12 * i + 3:12 * i + 12].reshape(3, 3).T for n in (0, 1))
-    return (q[1, 12 * i:12 * i + 3] - q[0, 12 * i:12 * i + 3]) / h, _omega(D, (D1 - D) / h)
+    return ((q[1, 12 * i:12 * i + 3] - q[0, 12 * i:12 * i + 3]) / h,
+            angular_velocity(D, (D1 - D) / h))
 
 
 def _angle_mirror(angles: np.ndarray, mirrored: np.ndarray, names) -> np.ndarray:
@@ -155,7 +156,7 @@ class Reference:
         v = (rec.q[N, 12 * i:12 * i + 3] - rec.q[N - 2, 12 * i:12 * i + 3]) / dt
         D = rec.q[N - 1, 12 * i + 3:12 * i + 12].reshape(3, 3).T
         Ddot = (rec.q[N, 12 * i + 3:12 * i + 12] - rec.q[N - 2, 12 * i + 3:12 * i + 12]) / dt
-        w = _omega(D, Ddot.reshape(3, 3).T)
+        w = angular_velocity(D, Ddot.reshape(3, 3).T)
         flip = np.array([1.0, -1.0, 1.0])
         return cls(scene, steps, np.concatenate(parts["t"]), q, joint_angles(scene, q),
                    np.vstack(parts["r"]), np.vstack(parts["e"]), tuple(parts["a"]), period, s,
@@ -242,7 +243,7 @@ class Reference:
     def root_rate_at(self, t: float, h: float) -> np.ndarray:
         """The root's angular velocity (world) at t (`rate_at` over +-h)."""
         D_dot = self.rate_at(lambda s: self.root_at(s)[1], t, h)
-        return _omega(self.root_at(t)[1], D_dot)
+        return angular_velocity(self.root_at(t)[1], D_dot)
 
     def root_velocity_at(self, t: float, h: float) -> np.ndarray:
         """The root's centre-of-mass velocity (3,) m/s, world, at t (`rate_at` over +-h)."""
