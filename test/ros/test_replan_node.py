@@ -27,10 +27,11 @@ def test_the_node_replans_walker2d_from_its_published_state_to_standing(
     assert r["stopped"] == "completed", (r["stopped"], r["plans"])
     assert r["half_cycles_walked"] >= 10 and r["stood"], r["plans"]
     replans = [p for p in r["plans"] if p["kind"] == "re-plan"]
-    # through the node a re-plan takes about 0.9 s (the answer recorded and read back),
-    # more than a half cycle: about every other strike is re-planned
-    took_over = [p for p in replans if "took_over_s" in p]
-    assert len(took_over) >= 2, replans
+    # every re-plan was planned from the published state: converged, or stopped at its
+    # time limit (through the node a re-plan takes about 0.9 s, the answer recorded and
+    # read back: about every other strike is re-planned), never refused or lost
+    assert all(p["success"] or "time limit" in p["message"] for p in replans), replans
+    assert any("took_over_s" in p for p in replans), replans
     # what the walker followed is what the node published on its trajectory topic
     spin_until(lambda: len(planning.heard) >= len(r["plans"]), 5.0)
     followed = [p for p in r["plans"] if p["success"]]
