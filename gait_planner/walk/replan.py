@@ -116,8 +116,8 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     and settings unused); progress(line) hears each plan and strike."""
     from gait_planner.io.mcap_reader import read_plan_mcap
     from gait_planner.io.mcap_writer import write_plan_mcap
-    from gait_planner.walk.walk_plan import (check_feet, load_config, stop_reason,
-                                             walking_direction)
+    from gait_planner.walk.walk_plan import (check_feet, load_config, recorded_robot,
+                                             stop_reason, walking_direction)
 
     if isinstance(half_cycles, bool) or not isinstance(half_cycles, int) or half_cycles < 1:
         raise ValueError(f"half_cycles must be an integer >= 1, got {half_cycles!r}")
@@ -159,7 +159,8 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     if rec is None:  # the walker's model from a recording of the start
         with tempfile.TemporaryDirectory() as folder:
             rec = read_plan_mcap(write_plan_mcap(first.result, Path(folder) / "start.mcap"))
-    sim = Simulation.build(rec, scene, cfg, None)
+    robot = recorded_robot(rec, scene) if scene.robot is not None else None  # as `walk`
+    sim = Simulation.build(rec, scene, cfg, robot)
     model, data, gains = sim.model, sim.data, sim.gains
     h = model.opt.timestep
     names = [c.name for c in scene.contacts]
