@@ -59,13 +59,23 @@ def plan(request: PlanRequest | str, planner: Planner | None = None,
     half cycles (`StartError` if the first phase's contacts cannot hold it); stop: instead
     of joining the gait, end standing at rest, both feet flat (from `start`, or the gait's
     first node)."""
+    return plan_problem(_planner_for(planner), _problem(request, scenes), start=start,
+                        halves=halves, stop=stop)
+
+
+def _planner_for(planner: Planner | None) -> Planner:
+    """`planner`, or the process's own (with the warm-start store), made on first use."""
     global _planner
     if planner is None:
         _planner = planner = _planner or Planner(library=WarmStartStore())
+    return planner
+
+
+def _problem(request: PlanRequest | str, scenes: SceneLookup):
+    """The request resolved (a scene's name: its default request, derivatives compiled)."""
     if isinstance(request, str):
         request = PlanRequest(request, compiled=True)
-    return plan_problem(planner, resolve(request, scenes), start=start, halves=halves,
-                        stop=stop)
+    return resolve(request, scenes)
 
 
 def walk_replanned(request: PlanRequest | str, half_cycles: int = 10, replan: bool = True,
@@ -77,14 +87,9 @@ def walk_replanned(request: PlanRequest | str, half_cycles: int = 10, replan: bo
     progress(line) hears each plan and strike."""
     from gait_planner.walk.replan import walk_replanned as walk
 
-    global _planner
-    if planner is None:
-        _planner = planner = _planner or Planner(library=WarmStartStore())
-    if isinstance(request, str):
-        request = PlanRequest(request, compiled=True)
-    problem = resolve(request, scenes)
-    return walk(planner, problem.scene, problem.settings, half_cycles, replan=replan,
-                progress=progress)
+    problem = _problem(request, scenes)
+    return walk(_planner_for(planner), problem.scene, problem.settings, half_cycles,
+                replan=replan, progress=progress)
 
 
 def check(result: PlanResult):

@@ -24,7 +24,6 @@ Named CasADi Functions (one definition each, used by simulation, optimisation an
 from __future__ import annotations
 
 import weakref
-
 from functools import cached_property
 
 import casadi as ca

@@ -24,12 +24,17 @@ from gait_planner.io.messages import WORLD_FRAME, frame_tree, quaternion_msg
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.transition import StartState
 from gait_planner.walk.followed import Answer, Followed, Measured
-from gait_planner.walk.reference import angular_velocity, planned_joints
+from gait_planner.walk.reference import planned_joints, root_rates_after
 
 __all__ = ["NodePlanning", "RESULT_WAIT"]
 
 RESULT_WAIT = 300.0  # s, the longest a goal's result is waited for
 PUBLISH_SPIN = 0.1  # s spun after publishing a measured state, so the node has it
+
+
+def _set_xyz(msg, values) -> None:
+    """Set a Vector3 or Point message's x, y, z from three numbers."""
+    msg.x, msg.y, msg.z = (float(v) for v in values)
 
 
 class NodePlanning:
@@ -59,8 +64,6 @@ class NodePlanning:
 
     def __call__(self, kind: str, start: StartState | None, measured: Measured | None,
                  limit: float | None, **fields) -> Answer:
-        from geometry_msgs.msg import Twist
-
         goal = self._goal(steps=int(fields.get("steps", 1)),
                           transition_half_cycles=int(fields.get("halves", 0)),
                           stop=bool(fields.get("stop", False)),
@@ -68,11 +71,9 @@ class NodePlanning:
                           output_name=f"{kind.replace(' ', '_')}_{next(self._names)}")
         if kind == "re-plan":
             self._publish(measured)
-            goal.start, goal.root_twist = "robot", Twist()
-            goal.root_twist.linear.x, goal.root_twist.linear.y, goal.root_twist.linear.z = (
-                float(v) for v in measured.root_linear)
-            goal.root_twist.angular.x, goal.root_twist.angular.y, goal.root_twist.angular.z = (
-                float(v) for v in measured.root_angular)
+            goal.start = "robot"
+            _set_xyz(goal.root_twist.linear, measured.root_linear)
+            _set_xyz(goal.root_twist.angular, measured.root_angular)
         elif kind == "stop":
             self._state_goal(goal, *fields["source"])
         elif start is not None and start.standing:
@@ -86,19 +87,20 @@ class NodePlanning:
 
     def _publish(self, m: Measured) -> None:
         """The measured state on /joint_states and /tf, stamped with its simulated time."""
+        from builtin_interfaces.msg import Time
         from geometry_msgs.msg import TransformStamped
         from sensor_msgs.msg import JointState
         from tf2_msgs.msg import TFMessage
 
-        stamp = self.node.get_clock().now().to_msg()
-        stamp.sec, stamp.nanosec = int(m.time), int(round((m.time % 1.0) * 1e9)) % 10**9
+        sec, nanosec = divmod(int(round(m.time * 1e9)), 10**9)
+        stamp = Time(sec=sec, nanosec=nanosec)
         state = JointState(name=list(m.names), position=[float(v) for v in m.positions],
                            velocity=[float(v) for v in m.velocities])
         state.header.stamp = stamp
         transform = TransformStamped(child_frame_id=self.root)
         transform.header.frame_id, transform.header.stamp = WORLD_FRAME, stamp
-        t, r = transform.transform.translation, transform.transform.rotation
-        t.x, t.y, t.z = (float(v) for v in m.root_position)
+        _set_xyz(transform.transform.translation, m.root_position)
+        r = transform.transform.rotation
         r.x, r.y, r.z, r.w = (float(v) for v in m.root_xyzw)
         self.joints.publish(state)
         self.tf.publish(TFMessage(transforms=[transform]))
@@ -106,28 +108,25 @@ class NodePlanning:
 
     def _state_goal(self, goal, followed: Followed, n: int) -> None:
         """goal's start "state": node n of the followed plan: its recording's joint angles
-        there, the root's pose, and the rates after the node (forward differences to node
-        n + 1: at a strike the central differences would straddle the impact, and a stop
-        from them took 117-136 iterations, 2026-12-07)."""
+        there, the root body's pose, and the rates after the node (forward differences to
+        node n + 1, `walk.reference.root_rates_after`: at a strike the central differences
+        would straddle the impact, and a stop from them took 117-136 iterations,
+        2026-12-07). The root body's pose is the root frame's of a shipped scene; a drafted
+        robot's base link pose is not derived from it here."""
         rec = planned_joints(followed.recording)
-        i = self.scene.body_index(self.root)
+        i = self.scene.body_index(self.scene.root.body)
         q, h = followed.q, float(followed.times[n + 1] - followed.times[n])
-        D = q[n, 12 * i + 3:12 * i + 12].reshape(3, 3).T
-        D_dot = (q[n + 1, 12 * i + 3:12 * i + 12] - q[n, 12 * i + 3:12 * i + 12]).reshape(3, 3).T
-        velocity = (q[n + 1, 12 * i:12 * i + 3] - q[n, 12 * i:12 * i + 3]) / h
-        angular = angular_velocity(D, D_dot / h)
+        velocity, angular = root_rates_after(self.scene, q, followed.times, n)
         goal.start = "state"
         goal.state.name = list(rec.joint_names)
         goal.state.position = [float(v) for v in rec.positions[n]]
         goal.state.velocity = [float(v) for v in (rec.positions[n + 1] - rec.positions[n]) / h]
-        p, o = goal.root_pose.position, goal.root_pose.orientation
-        p.x, p.y, p.z = (float(v) for v in q[n, 12 * i:12 * i + 3])
-        quaternion = quaternion_msg(D)
+        _set_xyz(goal.root_pose.position, q[n, 12 * i:12 * i + 3])
+        quaternion = quaternion_msg(q[n, 12 * i + 3:12 * i + 12].reshape(3, 3).T)
+        o = goal.root_pose.orientation
         o.x, o.y, o.z, o.w = (quaternion[k] for k in "xyzw")
-        goal.root_twist.linear.x, goal.root_twist.linear.y, goal.root_twist.linear.z = (
-            float(v) for v in velocity)
-        goal.root_twist.angular.x, goal.root_twist.angular.y, goal.root_twist.angular.z = (
-            float(v) for v in angular)
+        _set_xyz(goal.root_twist.linear, velocity)
+        _set_xyz(goal.root_twist.angular, angular)
 
     def _send(self, goal) -> Answer:
         from action_msgs.msg import GoalStatus

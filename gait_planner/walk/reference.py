@@ -31,7 +31,7 @@ from gait_planner.ocp.mirror import configuration_mirror, contact_partners
 from gait_planner.verify.joined import half_cycle
 from gait_planner.walk.mujoco_model import recorded_ground
 
-__all__ = ["Reference", "angular_velocity", "scene_of"]
+__all__ = ["Reference", "angular_velocity", "root_rates_after", "scene_of"]
 
 
 def scene_of(rec: RecordedPlan) -> Scene:
@@ -78,14 +78,15 @@ def angular_velocity(D: np.ndarray, D_dot: np.ndarray) -> np.ndarray:
     return 0.5 * np.array([W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1]])
 
 
-def _first_rates(scene: Scene, q: np.ndarray, times: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray]:
-    """The root's centre-of-mass velocity and angular velocity (world) at node 0: the first
-    differences of nodes 0 and 1."""
+def root_rates_after(scene: Scene, q: np.ndarray, times: np.ndarray, n: int = 0
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """The root body's centre-of-mass velocity and angular velocity (world) just after node
+    n: the forward differences of nodes n and n + 1 (at a strike, the rates after the
+    impact)."""
     i = scene.body_index(scene.root.body)
-    h = float(times[1] - times[0])
-    D, D1 = (q[n, 12 * i + 3:12 * i + 12].reshape(3, 3).T for n in (0, 1))
-    return ((q[1, 12 * i:12 * i + 3] - q[0, 12 * i:12 * i + 3]) / h,
+    h = float(times[n + 1] - times[n])
+    D, D1 = (q[m, 12 * i + 3:12 * i + 12].reshape(3, 3).T for m in (n, n + 1))
+    return ((q[n + 1, 12 * i:12 * i + 3] - q[n, 12 * i:12 * i + 3]) / h,
             angular_velocity(D, (D1 - D) / h))
 
 
@@ -174,7 +175,7 @@ class Reference:
         return cls(scene, 1, times - times[0], q, np.asarray(result.joint_angles, float),
                    np.asarray(result.joint_velocities, float), node_efforts(result),
                    tuple(result.active_contacts), float(times[-1] - times[0]),
-                   float(result.step_length), _first_rates(scene, q, times),
+                   float(result.step_length), root_rates_after(scene, q, times),
                    result.ground.normal)
 
     @classmethod
@@ -189,7 +190,7 @@ class Reference:
         return cls(scene, 1, times - times[0], q, np.asarray(rec.positions, float),
                    np.asarray(rec.velocities, float), np.asarray(rec.effort, float),
                    tuple(rec.active_contacts), float(times[-1] - times[0]),
-                   float(rec.metadata["step_length"]), _first_rates(scene, q, times),
+                   float(rec.metadata["step_length"]), root_rates_after(scene, q, times),
                    ground.normal)
 
     def _node_weight(self, t: float) -> tuple[int, float]:

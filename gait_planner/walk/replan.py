@@ -6,7 +6,7 @@ again from the walker's measured state.
 
 1. Before the walk, with the walker standing (not charged to the walk): the start from
    standing (`transitions.plan_transition` from `standing_start`: the scene's start phases,
-   `START_HALVES` half cycles onto the gait, then `AHEAD` of the gait's half cycles), and
+   `transitions.HALVES` half cycles onto the gait, then `AHEAD` of the gait's), and
    one re-plan and one stop planned from the gait's own first node, so that the problems of
    the walk's re-plans are built and each has a last transition to start from.
 2. The walker stands at the start plan's first node, at rest, and tracks it with the
@@ -14,7 +14,7 @@ again from the walker's measured state.
 3. At every strike of the plan it follows (a node where the gait's first phase begins:
    `walk.followed.strikes`), the walker's state is measured (`walk.followed.measure`: the
    joints and the root body's frame, as a robot publishes them) and a transition from it
-   back onto the gait is planned (`HALVES` half cycles, then `AHEAD` of the gait's). **The
+   back onto the gait is planned (`HALVES` half cycles again, then `AHEAD`). **The
    simulated clock waits for no plan**: the walker goes on with the plan it has for as
    long as the solve took on this machine (wall time), then switches to the new plan at
    that plan's time (the new plan begins at the measured state, so it starts late by the
@@ -22,10 +22,10 @@ again from the walker's measured state.
    solver stops after `DEADLINE` of the gait's half cycle; one that fails, stops or is
    refused is recorded and the walker keeps its plan.
 4. At strike `half_cycles` - `STOP_LEAD` the stop is planned (`plan_transition(stop=True)`,
-   `STOP_HALVES`: to standing at rest) from the plan's own state at strike `half_cycles`,
-   where it takes over. A stop that arrives after that strike is dropped (one taking over
-   0.74 s late made walker2d fall at once) and planned again for a strike further on,
-   re-planning, after a re-plan that extends the walk. Planned from the measured state the
+   `transitions.STOP_HALVES`: to standing at rest) from the plan's own state at strike
+   `half_cycles`, where it takes over. A stop that arrives after that strike is dropped
+   (one taking over 0.74 s late made walker2d fall at once) and planned again for a strike
+   further on, after a re-plan that extends the walk. Planned from the measured state the
    stop took 165-208 iterations (walker2d, 2.5-3.4 s, 2026-12-07) and the walker was far
    past it when it arrived. When the stop ends the walker holds its last node for `stand`
    s.
@@ -58,7 +58,7 @@ from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.transition import StartState, standing_start
 from gait_planner.result import PlanResult
-from gait_planner.transitions import plan_transition, start_of_node
+from gait_planner.transitions import HALVES, STOP_HALVES, plan_transition, start_of_node
 from gait_planner.walk.clock import PlanClock
 from gait_planner.walk.controller import ReferenceController
 from gait_planner.walk.followed import (Answer, Followed, Measured, Planning, local_planning,
@@ -67,12 +67,8 @@ from gait_planner.walk.simulation import Simulation
 from gait_planner.walk.slides import Slides
 from gait_planner.walk.touches import Touches
 
-__all__ = ["AHEAD", "DEADLINE", "HALVES", "START_HALVES", "STOP_HALVES", "STOP_LEAD",
-           "walk_replanned"]
+__all__ = ["AHEAD", "DEADLINE", "STOP_LEAD", "walk_replanned"]
 
-START_HALVES = 2  # half cycles of the start from standing (issue #62: K=1 missed the check)
-HALVES = 2  # half cycles of a re-plan onto the gait (`transitions.HALVES`)
-STOP_HALVES = 1  # of the stop (`transitions.STOP_HALVES`)
 AHEAD = 4  # the gait's half cycles a plan carries after its transition: what the walker
 #            follows while the next plan is solved
 # A re-plan's solver stops after this share of the gait's half cycle (its time limit): a
@@ -84,7 +80,6 @@ DEADLINE = 0.75
 # strike that ends the walk's last half cycle (one strike ahead, walker2d's stop of 72
 # iterations took 1.2 s and the walker was past that strike when it arrived, 2026-12-07).
 STOP_LEAD = 2
-TOUCH_SHARE = 0.1  # of the weight: a point carrying more is touching (`walk_plan`)
 
 
 @dataclass
@@ -96,6 +91,7 @@ class _Segment:
     control: ReferenceController
     touches: Touches
     kind: str  # "start", "walk" (a re-plan), "stop"
+    strikes: np.ndarray  # where a re-plan may start (none once the walker stops)
 
 
 def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings | None,
@@ -110,14 +106,15 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     gait's first node (its start plan the transition from it, which is the gait), as
     `walk.walk_plan.walk` begins. deadline: a re-plan's time limit in half cycles of the
     gait (`DEADLINE`; above 1, the stop is planned ceil(deadline) + 1 strikes ahead and a
-    plan carries 2 ceil(deadline) + 2 of the gait's half cycles). wall: the clock the solves are timed with; plan:
+    plan carries 2 ceil(deadline) + 2 of the gait's half cycles). wall: the clock the
+    solves are timed with; plan:
     `transitions.plan_transition` (a test may pass a slower one) for `local_planning` of
     (planner, scene, settings); planning: another `walk.followed.Planning` instead (planner
     and settings unused); progress(line) hears each plan and strike."""
     from gait_planner.io.mcap_reader import read_plan_mcap
     from gait_planner.io.mcap_writer import write_plan_mcap
-    from gait_planner.walk.walk_plan import (check_feet, load_config, recorded_robot,
-                                             stop_reason, walking_direction)
+    from gait_planner.walk.walk_plan import (TOUCH_SHARE, check_feet, load_config,
+                                             recorded_robot, stop_reason, walking_direction)
 
     if isinstance(half_cycles, bool) or not isinstance(half_cycles, int) or half_cycles < 1:
         raise ValueError(f"half_cycles must be an integer >= 1, got {half_cycles!r}")
@@ -145,7 +142,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     carried = max(AHEAD, 2 * math.ceil(deadline) + 2)
     ahead = carried if replan else half_cycles + 1
     first = timed("start", standing_start(scene) if standing else None, 0.0, steps=ahead,
-                  halves=START_HALVES)
+                  halves=HALVES)
     if first is None:
         return {"scene": scene.name, "half_cycles_walked": 0, "replan": replan,
                 "stopped": f"the start was not planned: {plans[-1]['message']}",
@@ -163,6 +160,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     sim = Simulation.build(rec, scene, cfg, robot)
     model, data, gains = sim.model, sim.data, sim.gains
     h = model.opt.timestep
+    joint_names = angle_names(scene)
     names = [c.name for c in scene.contacts]
     threshold = TOUCH_SHARE * sim.weight()
     slides = Slides(names, threshold, np.asarray(first.ref.normal, float))
@@ -177,7 +175,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
                                       1.0, clock)
         return _Segment(followed, clock, control,
                         Touches(followed.ref.times, followed.ref.active, names, threshold),
-                        kind)
+                        kind, followed.strikes if kind != "stop" else np.array([]))
 
     seg = segment(first, 0.0, "start")
     sim.place(seg.plan.ref)
@@ -200,7 +198,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
         seg.clock.pace(h, float(along @ (data.subtree_com[seg.control.root]
                                          - ref.com_at(step.tau))), gait_speed)
         reason = stop_reason(stop, data, step.com[2], step.phi_ref[2], step.tilt, step.error,
-                             angle_names(scene), step.time)
+                             joint_names, step.time)
         if reason != "completed":
             break
         t, tau = data.time, seg.clock(data.time)
@@ -208,8 +206,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             touches += [dict(x, plan=followed) for x in seg.touches.summary()]
             seg, followed = segment(pending[2], pending[1], pending[3]), followed + 1
             # the strikes the new plan had before it took over are the old plan's
-            strikes = seg.plan.strikes if seg.kind != "stop" else np.array([])
-            pending, next_strike = None, int(np.sum(strikes <= seg.clock(t) + 0.5 * h))
+            pending, next_strike = None, int(np.sum(seg.strikes <= seg.clock(t) + 0.5 * h))
             plans[-1]["took_over_s"] = round(t, 4)
             if seg.kind == "stop":  # at its strike, whichever step saw it first
                 walked = max(walked, stop_strike)
@@ -222,7 +219,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
         if tau > ref.times[-1]:
             reason = f"the plan ran out at t = {t:.3f} s (no new plan took over in time)"
             break
-        strikes = seg.plan.strikes if seg.kind != "stop" else np.array([])
+        strikes = seg.strikes
         if next_strike < len(strikes) and tau >= strikes[next_strike] - 0.5 * h:
             next_strike += 1
             walked += 1

@@ -8,8 +8,8 @@ its torque delay (with config delay.predict, the prediction through the nominal 
 under `control` (`walk.controller.ReferenceController`) at the plan's time `clock(t)`: the
 kinematics of the current state, the control on it, then the step (mj_step1/2), so that
 what a step reports is all of one state; the ground forces of that state feed the touches
-and slides, the loaded points go back to the controller and the plan's clock is paced
-(`walk.clock`).
+and slides and the loaded points go back to the controller (the caller paces the plan's
+clock, `walk.clock`, by the walker's progress).
 """
 
 from __future__ import annotations
@@ -126,18 +126,18 @@ class Simulation:
         """N: the walker's weight."""
         return float(np.sum(self.model.body_mass)) * float(-self.model.opt.gravity[2])
 
-    def place(self, ref, node: int = 0) -> None:
-        """Set the walker at the plan's node (0: with the root's rates at node 0,
-        `Reference.root_rate0`; the joints at the node's rates)."""
+    def place(self, ref) -> None:
+        """Set the walker at the plan's node 0, with the root's rates there
+        (`Reference.root_rate0`) and the joints at the node's rates."""
         from gait_planner.walk.mujoco_model import plan_qpos, plan_root_qvel
 
         scene, data = ref.scene, self.data
         i_root = scene.body_index(scene.root.body)
-        data.qpos[:] = plan_qpos(self.wm, i_root, ref.q[node], ref.angles[node])
-        root_qvel = plan_root_qvel(self.wm, ref.root_at(float(ref.times[node]))[1],
+        data.qpos[:] = plan_qpos(self.wm, i_root, ref.q[0], ref.angles[0])
+        root_qvel = plan_root_qvel(self.wm, ref.root_at(float(ref.times[0]))[1],
                                    *ref.root_rate0)
         data.qvel[:len(root_qvel)] = root_qvel
-        data.qvel[self.wm.dof] = ref.rates[node]
+        data.qvel[self.wm.dof] = ref.rates[0]
 
     def step(self, control, clock, ref, touches, slides,
              before: Callable[[Any, float], None] | None = None) -> Step:
