@@ -5,9 +5,8 @@ Usage: .venv/bin/python benchmarks/replan_walk.py [--scenes walker2d walker3d]
        [--half-cycles 10] [--deadline 0.75] [--moving] [--json NAME]
 
 For each scene two rows, each in a fresh Planner with the warm-start store (derivatives
-compiled; the gait from the store, as `gait-planner walk --replan` and the API meet it:
-walker3d's start from standing converges from the store's gait, not from one planned
-cold, benchmarks/HISTORY.md 2026-12-07): "re-planned" (a transition from the walker's
+compiled; the gait from the store, as `gait-planner walk --replan` and the API meet it):
+"re-planned" (a transition from the walker's
 measured state at every strike, its wall time on this machine charged to the simulated
 clock) and "one plan" (the start plan carries every half cycle; only the stop is planned
 during the walk). Each row: half cycles walked, why it ended, whether it stood still at the
@@ -34,8 +33,9 @@ from gait_planner.walk.replan import DEADLINE, walk_replanned
 def row(name: str, replan: bool, half_cycles: int, standing: bool, deadline: float) -> dict:
     scene = load_scene(name)
     began = time.perf_counter()
-    r = walk_replanned(Planner(library=WarmStartStore()), scene, settings_for(scene, compiled=True), half_cycles,
-                       replan=replan, standing=standing, deadline=deadline)
+    r = walk_replanned(Planner(library=WarmStartStore()), scene,
+                       settings_for(scene, compiled=True), half_cycles, replan=replan,
+                       standing=standing, deadline=deadline)
     slides = r.get("foot_slide") or {}
     return {"scene": name, "mode": "re-planned" if replan else "one plan",
             "deadline": deadline,
@@ -48,7 +48,7 @@ def row(name: str, replan: bool, half_cycles: int, standing: bool, deadline: flo
             "feedback_share": r.get("feedback_share"),
             "feedback_share_by_part": r.get("feedback_share_by_part"),
             "touches": len(r.get("unplanned_touches", [])),
-            "largest_slide_mm": slides.get("slide_mm") if isinstance(slides, dict) else None,
+            "largest_slide_mm": slides.get("slide_mm"),
             "plans": r["plans"], "run_s": round(time.perf_counter() - began, 1)}
 
 

@@ -129,8 +129,9 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
         began = wall()
         answer: Answer = planning(kind, start, measured, limit, **fields)
         took = wall() - began
-        plans.append({"kind": kind, "measured_at_s": round(at, 4), "success": answer.success,
-                      "iterations": answer.iterations, "wall_s": round(took, 4),
+        # unrounded: the walk compares them (a plan takes over at measured_at_s + wall_s)
+        plans.append({"kind": kind, "measured_at_s": at, "success": answer.success,
+                      "iterations": answer.iterations, "wall_s": took,
                       "message": answer.message[:200]})
         say(f"{kind} at t = {at:.3f} s: {answer.message[:80]} "
             f"({answer.iterations} iterations, {took:.2f} s)")
@@ -207,7 +208,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             seg, followed = segment(pending[2], pending[1], pending[3]), followed + 1
             # the strikes the new plan had before it took over are the old plan's
             pending, next_strike = None, int(np.sum(seg.strikes <= seg.clock(t) + 0.5 * h))
-            plans[-1]["took_over_s"] = round(t, 4)
+            plans[-1]["took_over_s"] = float(t)
             if seg.kind == "stop":  # at its strike, whichever step saw it first
                 walked = max(walked, stop_strike)
             continue
