@@ -12,6 +12,10 @@
 VENV ?= .venv
 PYTHON := $(VENV)/bin/python
 PYTEST_ARGS ?=
+# the tests run on TEST_WORKERS processes (pytest-xdist; 0: in this one): each module's tests
+# on one worker, the whole-robot plans one after another on one (test/conftest.py)
+TEST_WORKERS ?= 2
+PYTEST := $(PYTHON) -m pytest -n $(TEST_WORKERS) --dist loadfile --durations=15
 FUZZ_EXAMPLES ?= 1000
 PREPARE_SCENES ?= walker3d walker2d compass
 
@@ -24,10 +28,14 @@ prepare: setup
 	$(VENV)/bin/gait-planner prepare $(PREPARE_SCENES)
 
 test: prepare
-	$(PYTHON) -m pytest test -m "not slow" $(PYTEST_ARGS)
+	$(PYTEST) test -m "not slow" $(PYTEST_ARGS)
 
+# the tests marked `alone` (re-planned walks charge this machine's wall time) run after
+# the others, with no test beside them
 test-slow: prepare
-	$(PYTHON) -m pytest test -m slow $(PYTEST_ARGS)
+	$(PYTEST) test -m "slow and not alone" $(PYTEST_ARGS); others=$$?; \
+	$(PYTHON) -m pytest test -m "slow and alone" --durations=5 $(PYTEST_ARGS); alone=$$?; \
+	exit $$((others || alone))
 
 test-all: test test-slow
 

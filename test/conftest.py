@@ -8,6 +8,14 @@
   runs every other test (``-m "not slow"``, a few minutes on 2 cores), `make test-slow` runs
   these, and CI (`.ci/run`) runs both.
 * After a slow test the freed heap goes back to the system (`_release_memory_after_slow_tests`).
+* `make test` and `make test-slow` run the tests on two workers (pytest-xdist, `--dist
+  loadfile`, TEST_WORKERS in the Makefile): each module's tests on one worker (its module
+  fixtures built once), and the modules of `WHOLE_ROBOTS` one after another on one worker
+  (`pytest_xdist_make_scheduler`), so that two whole-robot plans never share the machine's
+  memory (two G1 plans side by side, 12 GB each, ran it out on 2026-12-07). The tests
+  marked ``alone`` run after the rest, in one process: a re-planned walk charges each
+  solve's wall time to the simulation, and beside another test the node's re-plans of
+  walker2d arrived too late and its walk ran out of plan (2026-12-07).
 * The `model` fixture returns a cached factory ``model(name) -> Model`` (scene, Multibody,
   DiscreteMechanics), so each scene's CasADi Functions are built once per session.
 """
@@ -34,12 +42,35 @@ from gait_planner.result import PlanResult
 from synthetic_result import START_NS, make_result
 
 SCENES = ("compass", "walker2d", "walker3d")
+# The modules that plan robots from their URDFs (G1's plan peaks at 12 GB, iCub's at 6 GB)
+WHOLE_ROBOTS = ("test/ocp/test_ocp_robot.py", "test/ocp/test_ocp_robot_axes.py",
+                "test/ros/test_node_robot.py", "test/walk/test_walk_g1.py")
 
 
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
         "markers", "slow: an end-to-end test of ten seconds or more (make test-slow; CI runs it)"
     )
+    config.addinivalue_line(
+        "markers", "alone: charges this machine's wall time to a simulation (a re-planned "
+        "walk): `make test-slow` runs it after the others, with no test beside it")
+
+
+def pytest_xdist_make_scheduler(config: pytest.Config, log):
+    """With `--dist loadfile`: each module one unit of work, the `WHOLE_ROBOTS` modules
+    together one (xdist's own `loadgroup` does not group under pytest 9.2:
+    pytest-dev/pytest-xdist#1386). xdist hands out the units with the most tests first, so
+    the robots' unit, the slow suite's longest, starts first."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class OneRobotAtATime(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            module = nodeid.split("::", 1)[0]
+            return "whole robots" if module in WHOLE_ROBOTS else module
+
+    return OneRobotAtATime(config, log)
 
 
 @pytest.fixture(autouse=True)

@@ -23,7 +23,16 @@ from gait_planner.model.loader import (SceneError, available_scenes, find_scene,
 from gait_planner.model.scene import JointType, RootType
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
-DELETE = object()
+
+
+class _Delete:
+    """The value that deletes a key (`set_path`); its repr names the test case stably."""
+
+    def __repr__(self) -> str:
+        return "DELETE"
+
+
+DELETE = _Delete()
 _YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 _YAML_DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
 _PARSED: dict[str, dict] = {}

@@ -12,7 +12,7 @@ from gait_planner.model.loader import load_scene
 from gait_planner.ros.replan_client import NodePlanning
 from gait_planner.walk.replan import walk_replanned
 
-pytestmark = pytest.mark.timeout(900)
+pytestmark = [pytest.mark.timeout(900), pytest.mark.alone]  # conftest: wall time charged
 
 
 @pytest.mark.slow

@@ -18,6 +18,8 @@ from gait_planner.transitions import plan_transition
 from gait_planner.walk.followed import Followed, measure, measured_start
 from gait_planner.walk.replan import walk_replanned
 
+pytestmark = pytest.mark.alone  # conftest: each solve's wall time is charged to the walk
+
 SLOW_SOLVE = 0.9  # s added to every re-plan's measured wall time: more than a half cycle
 
 
