@@ -5,7 +5,7 @@
 # (test/ros/test_fuzz.py; `make test` runs a seeded 40 of them).
 # All set up .venv/ first (tools/setup.sh; quick when nothing changed), which compiles only
 # what `make run` plans (walker3d's default problem). `make prepare` builds the rest: every
-# ground form and gait of the shipped scenes and their warm-start anchors (about 6 min on 2
+# ground form and gait of the shipped scenes and their warm-start anchors (about 5 min on 2
 # idle cores from an empty compile cache, 14 min under load 3-5; a second once the cache
 # marks them prepared); the test targets run it first.
 

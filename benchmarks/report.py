@@ -937,7 +937,7 @@ def main() -> None:
     lines += any_request(docs["any_request"], docs["any_request_cold"],
                          docs["any_request_library"])
     lines += replan_walk([doc for name in ("replan_walk", "replan_walk_walker3d",
-                                          "replan_walk_walker3d_deadline2")
+                                          "replan_walk_walker3d_deadline2", "replan_walk_20")
                           if (doc := load_results(name))])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
