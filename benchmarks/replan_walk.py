@@ -2,7 +2,7 @@
 stop, stand 2 s, in MuJoCo (`gait_planner.walk.replan.walk_replanned`).
 
 Usage: .venv/bin/python benchmarks/replan_walk.py [--scenes walker2d walker3d]
-       [--half-cycles 10] [--deadline 0.75] [--moving] [--json NAME]
+       [--half-cycles 10] [--deadline 0.75] [--moving] [--model-error SEEDS] [--json NAME]
 
 For each scene two rows, each in a fresh Planner with the warm-start store (derivatives
 compiled; the gait from the store, as `gait-planner walk --replan` and the API meet it):
@@ -11,7 +11,10 @@ measured state at every strike, its wall time on this machine charged to the sim
 clock) and "one plan" (the start plan carries every half cycle; only the stop is planned
 during the walk). Each row: half cycles walked, why it ended, whether it stood still at the
 end, the re-plans (converged of asked, median iterations and wall time), the feedback share,
-unplanned touches, the largest slide. Wall times depend on the machine and its load (the
+unplanned touches, the largest slide. `--model-error SEEDS`: each row walked SEEDS times
+with every model error at once (masses and inertias x U[0.9, 1.1], friction 0.5, a contact
+time constant of 2-10 ms, a 50 ms torque delay: `model_error.py`'s last row, its seeds), the
+plans made for the nominal model. Wall times depend on the machine and its load (the
 load is printed): they decide when a plan takes over, so two runs differ. Threads: one
 (OPENBLAS_NUM_THREADS=1, the package's default).
 """
@@ -28,17 +31,20 @@ from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.warm_starts import WarmStartStore
 from gait_planner.walk.replan import DEADLINE, walk_replanned
+from model_error import perturbations
 
 
-def row(name: str, replan: bool, half_cycles: int, standing: bool, deadline: float) -> dict:
+def row(name: str, replan: bool, half_cycles: int, standing: bool, deadline: float,
+        error=None) -> dict:
     scene = load_scene(name)
     began = time.perf_counter()
     r = walk_replanned(Planner(library=WarmStartStore()), scene,
                        settings_for(scene, compiled=True), half_cycles, replan=replan,
-                       standing=standing, deadline=deadline)
+                       standing=standing, deadline=deadline, model_error=error)
     slides = r.get("foot_slide") or {}
     return {"scene": name, "mode": "re-planned" if replan else "one plan",
             "deadline": deadline,
+            "model_error": r.get("model_error", {}).get("differences", "none"),
             "start": "standing" if standing else "moving",
             "half_cycles_walked": r["half_cycles_walked"], "stopped": r["stopped"],
             "stood": r.get("stood", False), "replans": r.get("replans", 0),
@@ -64,6 +70,8 @@ def main() -> None:
                         help=f"a re-plan's time limit in half cycles (default {DEADLINE})")
     parser.add_argument("--moving", action="store_true",
                         help="begin moving at the gait's first node, not from standing")
+    parser.add_argument("--model-error", type=int, metavar="SEEDS", default=0,
+                        help="walk each row SEEDS times with every model error at once")
     parser.add_argument("--json", metavar="NAME",
                         help="also write the rows to benchmarks/results/NAME.json")
     args = parser.parse_args()
@@ -71,23 +79,26 @@ def main() -> None:
           f"{time.strftime('%Y-%m-%d %H:%M')}, load {os.getloadavg()[0]:.2f}, "
           f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
     print("| scene | mode | half cycles | ended | stood | re-plans converged | median it "
-          "| median wall s | feedback | touches |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+          "| median wall s | feedback | touches | model error |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    errors = perturbations(args.model_error)[-1][1] if args.model_error else [None]
     rows = []
     for name in args.scenes:
-        for replan in (True, False):
-            x = row(name, replan, args.half_cycles, not args.moving, args.deadline)
+        for replan, error in ((r, e) for r in (True, False) for e in errors):
+            x = row(name, replan, args.half_cycles, not args.moving, args.deadline, error)
             rows.append(x)
             print(f"| {name} | {x['mode']} | {x['half_cycles_walked']} | {x['stopped'][:60]} "
                   f"| {x['stood']} | {x['replans_converged']}/{x['replans']} | "
                   f"{x['replan_iterations_median']} | {x['replan_wall_median_s']} | "
-                  f"{_number(x['feedback_share'])} | {x['touches']} |", flush=True)
+                  f"{_number(x['feedback_share'])} | {x['touches']} | {x['model_error']} |",
+                  flush=True)
             if not x["plans"][0]["success"]:
                 print(f"  the start: {x['plans'][0]['message']}")
     if args.json:
         from results_io import write_results
 
         print(write_results(args.json, rows, {"half_cycles": args.half_cycles,
+                                              "model_error_seeds": args.model_error,
                                               "deadline": args.deadline,
                                               "start": "moving" if args.moving else "standing"}))
 

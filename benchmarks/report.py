@@ -890,10 +890,11 @@ def replan_walk(docs: list[dict]) -> list[str]:
     for doc in docs:
         rows = [dict(r, walked=f"{r['half_cycles_walked']} of {doc['header']['half_cycles']}",
                      deadline=r.get("deadline", 0.75),  # the default before it was a row's
+                     model_error=r.get("model_error", "none"),
                      replans=(f"{r['replans_converged']} of {r['replans']}"
                               if r["replans"] else "–"))
                 for r in doc["rows"]]
-        out += [provenance(doc), ""] + table(rows, [
+        out += [provenance(doc), ""] + _completed(rows, doc["header"]) + table(rows, [
             ("scene", "scene", ""), ("start", "start", ""), ("mode", "mode", ""),
             ("re-plan limit (half cycles)", "deadline", ".2f"),
             ("half cycles walked", "walked", ""), ("stood at the end", "stood", ""),
@@ -901,8 +902,22 @@ def replan_walk(docs: list[dict]) -> list[str]:
             ("median iterations", "replan_iterations_median", ".0f"),
             ("median wall s", "replan_wall_median_s", ".2f"),
             ("feedback share", "feedback_share", ".0%"), ("unplanned touches", "touches", ""),
-            ("why it ended", "stopped", "")]) + [""]
+            ("why it ended", "stopped", ""), ("model error", "model_error", "")]) + [""]
     return out
+
+
+def _completed(rows: list[dict], header: dict) -> list[str]:
+    """Under model error (several walks a row): how many walks of each scene and mode
+    completed (walked every half cycle asked, stopped and stood)."""
+    if not header.get("model_error_seeds"):
+        return []
+    counts: dict[tuple, list] = {}
+    for r in rows:
+        done = r["stood"] and r["half_cycles_walked"] >= header["half_cycles"]
+        counts.setdefault((r["scene"], r["mode"]), []).append(done)
+    return ["Complete under every model error at once: " + "; ".join(
+        f"{scene} {mode} {sum(d)} of {len(d)}" for (scene, mode), d in counts.items())
+        + ".", ""]
 
 
 def main() -> None:
@@ -937,7 +952,8 @@ def main() -> None:
     lines += any_request(docs["any_request"], docs["any_request_cold"],
                          docs["any_request_library"])
     lines += replan_walk([doc for name in ("replan_walk", "replan_walk_walker3d",
-                                          "replan_walk_walker3d_deadline2", "replan_walk_20")
+                                          "replan_walk_walker3d_deadline2", "replan_walk_20",
+                                          "replan_walk_model_error")
                           if (doc := load_results(name))])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")

@@ -63,6 +63,7 @@ from gait_planner.walk.clock import PlanClock
 from gait_planner.walk.controller import ReferenceController
 from gait_planner.walk.followed import (Answer, Followed, Measured, Planning, local_planning,
                                         measure, measured_start)
+from gait_planner.walk.model_error import ModelError
 from gait_planner.walk.simulation import Simulation
 from gait_planner.walk.slides import Slides
 from gait_planner.walk.touches import Touches
@@ -101,7 +102,8 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
                    wall: Callable[[], float] = time.perf_counter,
                    plan: Callable[..., PlanResult] = plan_transition,
                    planning: Planning | None = None,
-                   progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+                   progress: Callable[[str], None] | None = None,
+                   model_error: ModelError | None = None) -> dict[str, Any]:
     """The walk of the module docstring. standing False: the walk begins moving, at the
     gait's first node (its start plan the transition from it, which is the gait), as
     `walk.walk_plan.walk` begins. deadline: a re-plan's time limit in half cycles of the
@@ -110,7 +112,10 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     solves are timed with; plan:
     `transitions.plan_transition` (a test may pass a slower one) for `local_planning` of
     (planner, scene, settings); planning: another `walk.followed.Planning` instead (planner
-    and settings unused); progress(line) hears each plan and strike."""
+    and settings unused); progress(line) hears each plan and strike; model_error: how the
+    simulated walker differs from the plans' model (`walk.model_error`, as in
+    `walk.walk_plan.walk`, whose summary key "model_error" this one has too; the plans
+    know nothing of it)."""
     from gait_planner.io.mcap_reader import read_plan_mcap
     from gait_planner.io.mcap_writer import write_plan_mcap
     from gait_planner.walk.walk_plan import (TOUCH_SHARE, check_feet, load_config,
@@ -158,7 +163,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
         with tempfile.TemporaryDirectory() as folder:
             rec = read_plan_mcap(write_plan_mcap(first.result, Path(folder) / "start.mcap"))
     robot = recorded_robot(rec, scene) if scene.robot is not None else None  # as `walk`
-    sim = Simulation.build(rec, scene, cfg, robot)
+    sim = Simulation.build(rec, scene, cfg, robot, model_error)
     model, data, gains = sim.model, sim.data, sim.gains
     h = model.opt.timestep
     joint_names = angle_names(scene)
@@ -282,4 +287,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             p["iterations"] for p in replans if p["iterations"] is not None]) else None),
         "plans": plans, "unplanned_touches": touches, "foot_slide": slides.summary(),
         "charged": "each plan took over after its solve's wall time on this machine",
+        **({"model_error": {"differences": model_error.describe(),
+                            "mass_factors": sim.factors}}
+           if model_error is not None else {}),
     }

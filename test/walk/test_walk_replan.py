@@ -72,6 +72,20 @@ def test_a_replan_slower_than_a_half_cycle_takes_over_late_by_its_wall_time(walk
 
 
 @pytest.mark.slow
+def test_the_walker_of_a_replanned_walk_differs_from_the_plans_model_as_asked(walker2d):
+    from gait_planner.walk.model_error import ModelError
+
+    scene, settings, planner = walker2d
+    error = ModelError(seed=3, mass_spread=0.1, friction=0.5)
+    r = walk_replanned(planner, scene, settings, 2, model_error=error)
+    assert r["model_error"]["differences"] == error.describe()
+    factors = np.array(list(r["model_error"]["mass_factors"].values()))
+    assert factors.size > 0 and np.all(np.abs(factors - 1.0) <= 0.1)
+    assert np.any(np.abs(factors - 1.0) > 1e-3)  # drawn, not the plan's masses
+    assert "model_error" not in walk_replanned(planner, scene, settings, 2)
+
+
+@pytest.mark.slow
 def test_the_measured_state_of_the_walker_placed_at_a_plan_node_is_that_node(walker2d):
     from gait_planner.io.mcap_reader import read_plan_mcap
     from gait_planner.io.mcap_writer import write_plan_mcap
