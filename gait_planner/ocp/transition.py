@@ -72,8 +72,53 @@ def standing_start(scene: Scene) -> StartState:
     if scene.gait is None or not scene.gait.start:
         raise StartError(f"scene {scene.name!r} declares no start from standing (gait.start "
                          f"phases, docs/user-guide.md)")
-    q = configuration(scene)
+    q = standing_configuration(scene)
     return StartState(q, np.zeros_like(q), "standing", standing=True)
+
+
+def standing_configuration(scene: Scene, tolerance: float = 1e-13) -> np.ndarray:
+    """q (k,): the scene's standing pose (`initial_pose`) moved the least so that every
+    contact point of its first start phase is on the level ground and, in 3D, every body
+    with two of them lies flat (n . d2 = 0: the roll row of a full contact,
+    `ocp.contacts`), to `tolerance`: Gauss-Newton with least-norm steps on the root's
+    position and angles and the joint angles. A drafted robot's pose is its URDF's zero
+    pose, whose feet need not be flat (G1's stand rolled by 1.55e-3, which a standing start
+    holds through its start phases and the verifier refuses, 2026-12-07); the shipped
+    walkers' poses are already (no step). ValueError if no such pose is found near it."""
+    pose = scene.initial_pose
+    points = [scene.contact(name) for name in scene.gait.start[0].contacts]
+    bodies = {c.body for c in points}
+    mb = Multibody.of(scene)
+    flat = [] if scene.planar else sorted(  # where each flat body's d2_z is in q
+        mb.block(b).start + 8 for b in bodies if sum(c.body == b for c in points) > 1)
+    heights = np.array([mb.point_matrix(c.body, c.point)[2] for c in points])
+    joints = [(j.name, j.dof) for j in scene.joints]
+
+    def pose_of(p: np.ndarray):
+        angles, at = {}, 6
+        for name, dof in joints:
+            angles[name], at = tuple(p[at : at + dof]), at + dof
+        return dataclasses.replace(pose, root_position=tuple(p[:3]),
+                                   root_angles=tuple(p[3:6]), joint_angles=angles)
+
+    def residual(p: np.ndarray) -> np.ndarray:
+        q = configuration(scene, pose_of(p))
+        return np.concatenate([heights @ q, q[flat]])
+
+    p = np.concatenate([pose.root_position, pose.root_angles, *[
+        pose.joint_angles.get(name, (0.0,) * dof) for name, dof in joints]]).astype(float)
+    free = np.ones(p.size, bool)
+    if scene.planar:  # in the plane: x, z and pitch of the root, and the joints
+        free[[1, 3, 5]] = False
+    for _ in range(20):
+        r = residual(p)
+        if np.abs(r).max() <= tolerance:
+            return configuration(scene, pose_of(p))
+        J = np.array([(residual(p + 1e-7 * e) - r) / 1e-7 for e in np.eye(p.size)[free]]).T
+        p[free] -= np.linalg.lstsq(J, r, rcond=None)[0]
+    raise ValueError(f"scene {scene.name!r}: no standing pose near its initial_pose puts the "
+                     f"start phase's contacts on the ground and its feet flat (residual "
+                     f"{np.abs(residual(p)).max():.2e})")
 
 
 def start_of_plan(plan: PlanResult) -> StartState:
