@@ -30,6 +30,7 @@ from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.angles import angle_names, configuration, joint_angles
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Phase, Scene
+from gait_planner.ocp.contacts import body_contacts
 from gait_planner.ocp.mirror import (configuration_mirror, contact_partners, mirror_parts,
                                      torque_mirror)
 from gait_planner.ocp.walk_on import mirror_nodes, walk_on
@@ -86,11 +87,11 @@ def standing_configuration(scene: Scene, tolerance: float = 1e-13) -> np.ndarray
     holds through its start phases and the verifier refuses, 2026-12-07); the shipped
     walkers' poses are already (no step). ValueError if no such pose is found near it."""
     pose = scene.initial_pose
-    points = [scene.contact(name) for name in scene.gait.start[0].contacts]
-    bodies = {c.body for c in points}
+    names = scene.gait.start[0].contacts
+    points = [scene.contact(name) for name in names]
     mb = Multibody.of(scene)
-    flat = [] if scene.planar else sorted(  # where each flat body's d2_z is in q
-        mb.block(b).start + 8 for b in bodies if sum(c.body == b for c in points) > 1)
+    flat = [mb.block(c.body).start + 8  # d2_z in q: n . d2 on level ground
+            for c in body_contacts(mb, names) if c.full and not c.planar]
     heights = np.array([mb.point_matrix(c.body, c.point)[2] for c in points])
     joints = [(j.name, j.dof) for j in scene.joints]
 

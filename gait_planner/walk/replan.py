@@ -287,7 +287,5 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             p["iterations"] for p in replans if p["iterations"] is not None]) else None),
         "plans": plans, "unplanned_touches": touches, "foot_slide": slides.summary(),
         "charged": "each plan took over after its solve's wall time on this machine",
-        **({"model_error": {"differences": model_error.describe(),
-                            "mass_factors": sim.factors}}
-           if model_error is not None else {}),
+        **sim.model_error_summary(),
     }

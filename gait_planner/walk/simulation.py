@@ -97,6 +97,7 @@ class Simulation:
     delayed: DelayedTorque | None
     predictor: DelayPredictor | None
     factors: dict  # the model error's mass factors as drawn
+    model_error: ModelError | None  # how the walker differs from the plan's model
 
     @property
     def model(self):
@@ -120,7 +121,17 @@ class Simulation:
         gains = Gains(cfg["joints"]["kp"], cfg["joints"]["kd"], torso["kp"], torso["kd"],
                       place["kp"], place["kd"], place["height_kp"], torso["position_kp"],
                       torso["position_kd"], place["swing_margin"])
-        return cls(wm, mujoco.MjData(wm.model), gains, delayed, predictor, factors)
+        return cls(wm, mujoco.MjData(wm.model), gains, delayed, predictor, factors,
+                   model_error)
+
+    def model_error_summary(self) -> dict:
+        """A walk summary's entry: {"model_error": {"differences": in words,
+        "mass_factors": as drawn, by body}} for a walker built with a model error, else
+        {}."""
+        if self.model_error is None:
+            return {}
+        return {"model_error": {"differences": self.model_error.describe(),
+                                "mass_factors": self.factors}}
 
     def weight(self) -> float:
         """N: the walker's weight."""

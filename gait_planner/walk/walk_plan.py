@@ -219,9 +219,7 @@ def walk(path: str | Path, steps: int = 10, scale: float = 1.0,
         "controller": {"joints": cfg["joints"], "torso": cfg["torso"], "placement": place,
                        "delay": cfg["delay"],
                        "simulation": cfg["simulation"], "foot_half_width": foot_half_width(rec)},
-        **({"model_error": {"differences": model_error.describe(),
-                            "mass_factors": sim.factors}}
-           if model_error is not None else {}),
+        **sim.model_error_summary(),
         **({"series": extra} if series else {}),
     }
 
