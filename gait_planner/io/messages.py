@@ -55,7 +55,7 @@ import numpy as np
 from gait_planner.io.urdf import (WORLD_FRAME, KinematicJoint, KinematicTree, kinematic_tree,
                                  scene_to_urdf)
 from gait_planner.model.angles import angle_names, conjugate_torques
-from gait_planner.model.rotations import rot_axis, rpy_matrix
+from gait_planner.model.rotations import cross, rot_axis, rpy_matrix
 from gait_planner.result import PlanResult
 
 __all__ = ["check_result", "contact_forces", "contact_points", "fill_message", "foot_wrenches",
@@ -303,13 +303,13 @@ def foot_wrenches(result: PlanResult, node: int) -> list[tuple[str, np.ndarray, 
         r = np.mean([points[c] for c in mine], axis=0)
         forces = [np.asarray(result.contact_forces[c], dtype=float)[node] for c in mine]
         F = np.sum(forces, axis=0)
-        M = np.sum([np.cross(points[c] - r, f) for c, f in zip(mine, forces)], axis=0)
+        M = np.sum([cross(points[c] - r, f) for c, f in zip(mine, forces)], axis=0)
         roll = result.roll_moments.get(body)
         if roll is not None:
             d2 = frames[scene.body_index(body)][1][:, 1]
-            M = M + float(roll[node]) * np.cross(d2, normal)
+            M = M + float(roll[node]) * cross(d2, normal)
         pressing = float(normal @ F)
-        cop = r + (np.cross(normal, M) / pressing if pressing > 0 else 0.0)
+        cop = r + (cross(normal, M) / pressing if pressing > 0 else 0.0)
         out.append((body, r, F, M, cop))
     return out
 

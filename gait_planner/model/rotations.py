@@ -57,6 +57,13 @@ def axis_rotation(k, angle):
 # ---- numeric (numpy) -------------------------------------------------------------------
 
 
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b of two 3-vectors (3,), as np.cross without its general-axis machinery (1 us a
+    call instead of 13: a plan's per-node foot wrenches take thousands)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
 def rot_x(a: float) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])

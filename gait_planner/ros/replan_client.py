@@ -6,12 +6,14 @@ does (`/joint_states` and the world -> root transform on `/tf`, stamped with the
 time) and sends a goal with `start: "robot"` (the root's twist in the goal) at every
 re-plan; the start from standing is `start: "standing"`, the stop a `start: "state"` goal
 from the followed plan's own node (its joint angles, the root's pose, and the rates after
-it by forward differences of the plan's nodes), the preparations goals from the gait's
-first node. Each answer is followed as the node recorded it (its MCAP: the trajectory the
-node published on `/gait_planner/joint_trajectory`, with the root's states); the
-trajectories heard on that topic are kept in `heard` for comparison. A goal rejected
-(busy), aborted or not answered within `RESULT_WAIT` s is an `Answer` that failed, saying
-why.
+it by forward differences of the plan's nodes), the preparations such goals from the
+gait's first node (the walk's stops start from the prepared one: prepared from the gait's
+exact first state instead, walker2d's stops through the node took 86-130 iterations and
+missed their strikes, 2026-12-07; prepared as they are sent, 7). Each answer is followed
+as the node recorded it (its MCAP: the trajectory the node published on
+`/gait_planner/joint_trajectory`, with the root's states); the trajectories heard on that
+topic are kept in `heard` for comparison. A goal rejected (busy), aborted or not answered
+within `RESULT_WAIT` s is an `Answer` that failed, saying why.
 """
 
 from __future__ import annotations
@@ -78,7 +80,7 @@ class NodePlanning:
             self._state_goal(goal, *fields["source"])
         elif start is not None and start.standing:
             goal.start = "standing"
-        elif kind == "prepare re-plan":  # from the gait's first node
+        elif kind in ("prepare re-plan", "prepare stop"):  # from the gait's first node
             gait = self._send(self._goal(steps=1, output_name="gait"))
             if not gait.success:
                 return gait

@@ -23,11 +23,15 @@ again from the walker's measured state.
    refused is recorded and the walker keeps its plan.
 4. At strike `half_cycles` - `STOP_LEAD` the stop is planned (`plan_transition(stop=True)`,
    `transitions.STOP_HALVES`: to standing at rest) from the plan's own state at strike
-   `half_cycles`, where it takes over. A stop that arrives after that strike is dropped
-   (one taking over 0.74 s late made walker2d fall at once) and planned again for a strike
-   further on, after a re-plan that extends the walk. Planned from the measured state the
-   stop took 165-208 iterations (walker2d, 2.5-3.4 s, 2026-12-07) and the walker was far
-   past it when it arrived. When the stop ends the walker holds its last node for `stand`
+   `half_cycles`, where it takes over. A stop that fails or arrives after that strike is
+   dropped (one taking over 0.74 s late made walker2d fall at once) and planned again for a
+   strike further on, after a re-plan that extends the walk. It is solved to the end, not
+   stopped at its strike's time: a late stop is kept by the planner and the next starts
+   from it (through the node walker2d's stops stopped at their strikes failed 40 times in
+   a row, 80-130 iterations each; solved to the end, the third took 7, 2026-12-07). A walk
+   that has not stopped `half_cycles` + `lead` strikes past the last asked ends there.
+   Planned from the measured state the stop took 165-208 iterations (walker2d, 2.5-3.4 s,
+   2026-12-07) and the walker was far past it when it arrived. When the stop ends the walker holds its last node for `stand`
    s.
 
 standing=False begins the walk moving at the gait's first node instead. replan=False is
@@ -97,7 +101,7 @@ class _Segment:
 
 def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings | None,
                    half_cycles: int = 10, *, replan: bool = True, standing: bool = True,
-                   stand: float = 2.0, deadline: float = DEADLINE,
+                   stand: float = 2.0, deadline: float = DEADLINE, carry: int | None = None,
                    config: dict[str, Any] | None = None,
                    wall: Callable[[], float] = time.perf_counter,
                    plan: Callable[..., PlanResult] = plan_transition,
@@ -108,7 +112,9 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     gait's first node (its start plan the transition from it, which is the gait), as
     `walk.walk_plan.walk` begins. deadline: a re-plan's time limit in half cycles of the
     gait (`DEADLINE`; above 1, the stop is planned ceil(deadline) + 1 strikes ahead and a
-    plan carries 2 ceil(deadline) + 2 of the gait's half cycles). wall: the clock the
+    plan carries 2 ceil(deadline) + 2 of the gait's half cycles); carry: how many of the
+    gait's half cycles a plan carries instead (more keeps the walker in plan through more
+    late answers; each answer is larger). wall: the clock the
     solves are timed with; plan:
     `transitions.plan_transition` (a test may pass a slower one) for `local_planning` of
     (planner, scene, settings); planning: another `walk.followed.Planning` instead (planner
@@ -145,7 +151,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     # a slower limit keeps more of the gait ahead and plans the stop earlier: two late
     # plans in a row must not run the walker out of plan (walker3d, limit 2 half cycles)
     lead = max(STOP_LEAD, math.ceil(deadline) + 1)
-    carried = max(AHEAD, 2 * math.ceil(deadline) + 2)
+    carried = carry or max(AHEAD, 2 * math.ceil(deadline) + 2)
     ahead = carried if replan else half_cycles + 1
     first = timed("start", standing_start(scene) if standing else None, 0.0, steps=ahead,
                   halves=HALVES)
@@ -192,7 +198,7 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
     busy_until = 0.0  # simulated time at which the solver is free again
     walked, next_strike, standing_since = 0, 0, None
     followed = 0  # the plans the walker has followed before the current one
-    stop_late = False  # the last stop arrived after its strike (a re-plan comes first)
+    stop_late = False  # the last stop failed or came late (a re-plan comes first)
     stop_strike = 0  # the strike the pending stop takes over at
     reason = "completed"
     while True:
@@ -230,6 +236,10 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
             next_strike += 1
             walked += 1
             say(f"strike {walked} at t = {t:.3f} s")
+            if walked > 2 * half_cycles + lead and seg.kind != "stop":
+                reason = (f"no stop arrived in time in the {walked - half_cycles - 1} half "
+                          f"cycles walked past the {half_cycles} asked")
+                break
             if pending is not None or t < busy_until or seg.kind == "stop":
                 continue  # a plan is being solved, or the walker stops
             ahead = min(lead, len(strikes) - next_strike) - 1
@@ -243,11 +253,12 @@ def walk_replanned(planner: Planner | None, scene: Scene, settings: GaitSettings
                 r = timed("stop", start, at, stop=True, halves=STOP_HALVES, steps=1,
                           source=(seg.plan, n))
                 busy_until = t + plans[-1]["wall_s"]
-                stop_late = r is not None and busy_until > at + 0.5 * h
-                if stop_late:  # a re-plan next (the walk goes on), then the stop again
+                # failed or late: a re-plan next (the walk goes on), then the stop again
+                stop_late = r is None or busy_until > at + 0.5 * h
+                if r is not None and stop_late:
                     plans[-1].update(dropped=True, message=f"arrived {busy_until - at:.3f} s "
                                      "after its strike: dropped")
-                elif r is not None:
+                if not stop_late:
                     pending = (at, at, r, "stop")
                     stop_strike = walked + ahead + 1  # the strike it takes over at
                 continue
