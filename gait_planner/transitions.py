@@ -36,7 +36,7 @@ from gait_planner.ocp.walk_on import walk_on
 from gait_planner.result import PlanResult
 from gait_planner.strategies import COLD_ATTEMPTS, plan_certified
 
-VARIANTS = ("cold", "cold_inertia")  # the IPOPT instances a transition may use
+VARIANTS = ("cold", "cold_inertia", "warm")  # the IPOPT instances a transition may use
 # A transition's first attempt, from the gait or from the last transition: IPOPT's cold
 # variant without its relaxed stage. Its bound push and adaptive barrier beat the warm
 # variant's (built for a previous optimum's active set) here: walker3d, two half cycles,
@@ -44,6 +44,16 @@ VARIANTS = ("cold", "cold_inertia")  # the IPOPT instances a transition may use
 # off, 21 and 23 iterations against 279 and 162; re-planned from the last transition with
 # its multipliers, 5 seeded starts, median 16 against 22 (2026-12-07, benchmarks/HISTORY.md).
 FIRST_ATTEMPT = ([("cold", False, False)],)
+# ... except from a last transition that began where this one does (moved along x; the
+# same configuration to SAME_START m): then IPOPT's warm variant, which keeps that
+# optimum's active set. A walk's stop starts at a strike of its plan's gait, the state the
+# prepared stop began at: walker2d's stop from it took 8 iterations cold, 1 warm; from the
+# same foot's strike a half cycle later, after two other stops, 634 cold and 18 warm
+# (2026-12-07, benchmarks/HISTORY.md). Measured states never repeat a start. The gait
+# repeats itself mirrored to its solver's tolerance: walker3d's first node and its next
+# half cycle's mirrored back differ by 1.4e-7 m (a stop from it took 11 iterations cold).
+REPEATED_ATTEMPT = ([("warm", False, False)],)
+SAME_START = 1e-6
 MAX_HALVES = 4  # half cycles a transition may take
 # Half cycles by default: walker3d from starts 1.3-1.4 cm and 0.1 rad/s off its first node
 # needed 2 (in one: 2021-4621 iterations, J 40-43 against 21, the certificate missed or the
@@ -132,12 +142,27 @@ def last_transition(tr: Transcription, last: StoredPlan, start: StartState, offs
     start and targets at the ends."""
     N = tr.N
     along = mirror_parts(tr.mb)[1]
-    shift = stance_offset(tr.mb.scene, start.q, gait) - stance_offset(tr.mb.scene,
-                                                                       last.qref[0], gait)
+    shift = _shift(tr, last, start, gait)
     ends = [] if tr.layout.rest else [join_targets(gait, offset, halves)]
     qref = np.vstack([start.q, last.qref[1 : N - 1] + shift * along, *ends])
     return Start(last.x, last.lam_x, last.lam_g, qref,
                  f"a transition from {start.origin}, re-planned from the last transition")
+
+
+def repeats(tr: Transcription, last: StoredPlan, start: StartState, gait: PlanResult
+            ) -> bool:
+    """Whether `start` begins where the kept transition `last` began, moved along x (its
+    configuration within `SAME_START` m of last's first reference moved by their stance
+    offsets' difference, as `last_transition` moves it)."""
+    moved = last.qref[0] + _shift(tr, last, start, gait) * mirror_parts(tr.mb)[1]
+    return float(np.abs(start.q - moved).max()) <= SAME_START
+
+
+def _shift(tr: Transcription, last: StoredPlan, start: StartState, gait: PlanResult
+           ) -> float:
+    """How far (m) along x `start` is from where the kept transition `last` began."""
+    scene = tr.mb.scene
+    return stance_offset(scene, start.q, gait) - stance_offset(scene, last.qref[0], gait)
 
 
 def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
@@ -194,10 +219,11 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
                              halves)
     kept = planner.stored_plans(tr_scene, tr_settings) if from_last else []
     begin = last_transition(tr, kept[-1], start, offset, gait, halves) if kept else first
+    repeated = bool(kept) and repeats(tr, kept[-1], start, gait)
     clock = Clock.begin(settings.solve.max_solve_time)
-    attempts = FIRST_ATTEMPT + COLD_ATTEMPTS
+    attempts = (REPEATED_ATTEMPT if repeated else FIRST_ATTEMPT) + COLD_ATTEMPTS
     reached = planner.attempt(tr_scene, tr_settings, attempts[0], begin, clock)
-    origin = begin.origin
+    origin = begin.origin + (" (warm: it began at this start)" if repeated else "")
     for attempt in attempts[1:] if not reached.success else ():
         if planner.stopped() or clock.expired():
             break

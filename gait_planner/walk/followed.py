@@ -21,7 +21,7 @@ questions (a test drives the ROS node this way, test/ros/test_replan_node.py).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Protocol
+from typing import Any, Callable, Mapping, Protocol
 
 import numpy as np
 
@@ -86,14 +86,25 @@ def measured_start(scene: Scene, m: Measured, origin: str) -> StartState:
                                 m.root_xyzw, m.root_linear, m.root_angular, origin)
 
 
-def strikes(scene: Scene, phases, times) -> np.ndarray:
+def strikes(scene: Scene, phases, times, joined: Mapping[str, str] | None = None
+            ) -> np.ndarray:
     """Times (s from the plan's start) of the nodes after node 0 at which the gait's first
-    phase begins (phase names without their "~k" copy suffix): where a re-plan may start."""
+    phase begins (phase names without their "~k" copy suffix): where a re-plan may start.
+    joined: the plan's settings or recording metadata; where they say how its gait's half
+    cycles were joined (`ocp.walk_on`'s "half_cycle_nodes", and `ocp.transition.join`'s
+    "transition_nodes" after a transition), the first node of each of those half cycles,
+    which is recorded with the earlier half cycle's phase name (the name changes one node
+    later: walker2d's re-plans and stops began 15 ms after their strikes, 2026-12-07)."""
     first = scene.gait.phases[0].name
     base = [p.split("~")[0] for p in phases]
     t = np.asarray(times, float) - float(times[0])
-    return np.array([t[n] for n in range(1, len(base))
-                     if base[n] == first and base[n - 1] != first])
+    nodes = [n for n in range(1, len(base)) if base[n] == first and base[n - 1] != first]
+    if joined and "half_cycle_nodes" in joined:
+        start = int(joined.get("transition_nodes", 1)) - 1  # the gait's first node
+        span = int(joined["half_cycle_nodes"]) - 2  # intervals per half cycle
+        nodes = [n - 1 if n - 1 > 0 and n - 1 >= start and (n - 1 - start) % span == 0
+                 else n for n in nodes]
+    return np.array([t[n] for n in nodes])
 
 
 @dataclass(frozen=True)
@@ -116,7 +127,7 @@ class Followed:
     def of_result(cls, result: PlanResult) -> "Followed":
         return cls(result.scene, Reference.from_result(result), np.asarray(result.q, float),
                    np.asarray(result.times, float), np.asarray(result.generalized_force),
-                   strikes(result.scene, result.phases, result.times),
+                   strikes(result.scene, result.phases, result.times, result.settings),
                    float(result.step_length),
                    float(result.settings.get("gait_duration", result.duration)), result)
 
@@ -124,7 +135,8 @@ class Followed:
     def of_recording(cls, rec) -> "Followed":
         ref = Reference.as_recorded(rec)
         return cls(ref.scene, ref, np.asarray(rec.q, float), np.asarray(rec.times, float),
-                   np.asarray(rec.generalized_force), strikes(ref.scene, rec.phases, rec.times),
+                   np.asarray(rec.generalized_force),
+                   strikes(ref.scene, rec.phases, rec.times, rec.metadata),
                    float(rec.metadata["step_length"]),
                    float(rec.metadata.get("gait_duration", rec.metadata.get("duration"))),
                    recording=rec)

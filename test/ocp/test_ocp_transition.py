@@ -19,11 +19,13 @@ from gait_planner.ocp.transition import (StartError, StartState, check_start, st
                                          turned_start)
 from gait_planner.ocp.transcription import Transcription
 from gait_planner.dynamics.discrete import DiscreteMechanics
+from gait_planner.ocp.mirror import configuration_mirror, mirror_parts
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.strategies import plan_certified
 from gait_planner.io.mcap_writer import write_plan_mcap
-from gait_planner.transitions import plan_transition, start_of_recording
+from gait_planner.transitions import plan_transition, start_of_node, start_of_recording
 from gait_planner.verify import verify_result
+from gait_planner.walk.followed import Followed
 
 
 @pytest.fixture(scope="module", params=["walker2d", "walker3d"])
@@ -240,3 +242,63 @@ def test_a_stop_ends_standing_at_rest(gait):
     assert all(f[-2, 2] > 0 for f in result.contact_forces.values())
     report = verify_result(result)
     assert report.ok, report.summary()
+
+
+def _strike_nodes(plan) -> list[int]:
+    """The nodes of `walk.followed.Followed.strikes` of a plan."""
+    t = np.asarray(plan.times) - plan.times[0]
+    return [int(np.argmin(np.abs(t - s))) for s in Followed.of_result(plan).strikes]
+
+
+def test_a_walks_strikes_are_the_first_nodes_of_its_gaits_half_cycles(gait):
+    """Where a re-plan or a stop starts: at each strike of the gait walked on, and of the
+    gait's part after a transition, the configuration is the gait's first node's mirrored
+    k times and k steps on (a join node is recorded with the earlier half cycle's phase
+    name; the node after it is not the strike's: walker2d 0.12 off)."""
+    scene, settings, planner, plan = gait
+    mb = Multibody.of(scene)
+    A, e, c = configuration_mirror(mb, plan.ground)
+    along = mirror_parts(mb)[1]
+    s, N = plan.step_length, plan.n_nodes - 1
+
+    def on_gait(q: np.ndarray) -> int | None:
+        """k if q is the gait's first node k half cycles on, moved along x, else None."""
+        image = np.asarray(plan.q[0], float)
+        for k in range(8):
+            moved = q - image
+            if np.abs(moved - moved[along > 0][0] * along).max() < 1e-6:
+                return k
+            image = A @ image + s * e + c
+        return None
+
+    walked = walk_on(plan, 3)
+    assert _strike_nodes(walked) == [N - 1, 2 * (N - 1)]
+    # mirrored once; twice: the first node itself, two steps on
+    assert [on_gait(walked.q[n]) for n in _strike_nodes(walked)] == [1, 0]
+    joined = plan_transition(planner, scene, settings, turned_start(
+        scene, start_of_plan(plan), 0.0, 0.05), steps=2, halves=2)
+    assert joined.success, joined.message
+    gait_part = [n for n in _strike_nodes(joined)
+                 if n >= int(joined.settings["transition_nodes"]) - 1]
+    assert len(gait_part) == 2  # the join node and one more (the last half cycle's end is none)
+    assert None not in [on_gait(joined.q[n]) for n in gait_part]
+
+
+def test_a_stop_from_where_the_last_stop_began_starts_warm_and_repeats_it(gait):
+    """A stop from a strike of the gait walked on begins where the stop from the gait's
+    first node began (mirrored and moved along x): it is planned from that stop with
+    IPOPT's warm variant (`transitions.REPEATED_ATTEMPT`) in at most two iterations, and is
+    that stop moved along."""
+    scene, settings, planner, plan = gait
+    first = plan_transition(planner, scene, settings, None, stop=True)
+    assert first.success, first.message
+    walked = walk_on(plan, 3)
+    n = _strike_nodes(walked)[1]  # the same foot's, two steps on
+    start = start_of_node(scene, walked.q, walked.times, walked.generalized_force, n,
+                          "the walk's second strike")
+    again = plan_transition(planner, scene, settings, start, stop=True)
+    assert again.success, again.message
+    assert again.stats.iterations <= 2, again.stats.iterations
+    assert "warm: it began at this start" in again.settings["initial_guess"]
+    moved = again.q - first.q
+    assert np.abs(moved - moved[0]).max() < 1e-5  # m: to the solver's tolerance
