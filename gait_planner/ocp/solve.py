@@ -219,7 +219,8 @@ class Planner:
     kept for later plans); library: the plans of earlier processes (`ocp.warm_starts`),
     read when a problem is built and written after every optimum kept (None: this
     process's plans only); pin: the optima it keeps are pinned in the library (`gait-planner
-    prepare`'s default plans and warm-start anchors, `StoredPlan.pinned`)."""
+    prepare`'s default plans and warm-start anchors, `StoredPlan.pinned`). gaits: the
+    certified periodic gaits that transitions join, by request (`transitions.gait_to_join`)."""
 
     def __init__(self, *, progress: Progress | None = None, stage: Stage | None = None,
                  stop: Stop | None = None, library: WarmStartStore | None = None,
@@ -227,6 +228,7 @@ class Planner:
         self.progress, self.stage, self.stop = progress, stage or (lambda name: None), stop
         self.library, self.pin = library, pin
         self._built: dict = {}
+        self.gaits: dict = {}
 
     def stopped(self) -> bool:
         """Whether `stop` asks the plan to end."""

@@ -32,8 +32,7 @@ from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.transition import StartError, StartState, start_of_plan
 from gait_planner.result import PlanResult
-from gait_planner.strategies import plan_certified
-from gait_planner.transitions import plan_transition
+from gait_planner.transitions import gait_to_join, plan_transition
 from gait_planner.walk.reference import Reference
 
 __all__ = ["Answer", "Followed", "Measured", "Planning", "local_planning", "measure",
@@ -168,7 +167,7 @@ def local_planning(planner: Planner, scene: Scene, settings: GaitSettings,
                  limit: float | None, **fields) -> Answer:
         fields.pop("source", None)
         if start is None and kind in ("start", "prepare re-plan"):
-            gait, _ = plan_certified(planner, scene, settings)
+            gait = gait_to_join(planner, scene, settings)
             if not gait.success:
                 return Answer(False, f"the gait: {gait.message}", gait.stats.iterations, None)
             start = start_of_plan(gait)
