@@ -80,18 +80,21 @@ def _problem(request: PlanRequest | str, scenes: SceneLookup):
 
 def walk_replanned(request: PlanRequest | str, half_cycles: int = 10, replan: bool = True,
                    planner: Planner | None = None, scenes: SceneLookup = load_scene,
-                   progress=None, model_error=None) -> dict:
+                   progress=None, model_error=None, deadline: float | None = None) -> dict:
     """Walk `request` in MuJoCo from standing, `half_cycles` half cycles re-planned at
     every strike from the walker's measured state (replan False: one plan), then stop and
     stand 2 s (`gait_planner.walk.replan`); the walk's summary. planner, scenes: as `plan`;
     progress(line) hears each plan and strike; model_error: a
     `gait_planner.walk.model_error.ModelError`, how the simulated walker differs from the
-    plans' model (masses, friction, contacts, a torque delay)."""
-    from gait_planner.walk.replan import walk_replanned as walk
+    plans' model (masses, friction, contacts, a torque delay); deadline: a re-plan's time
+    limit in half cycles of the gait (None: `walk.replan.DEADLINE`, 0.75; walker3d's
+    re-plans need about 2)."""
+    from gait_planner.walk.replan import DEADLINE, walk_replanned as walk
 
     problem = _problem(request, scenes)
     return walk(_planner_for(planner), problem.scene, problem.settings, half_cycles,
-                replan=replan, progress=progress, model_error=model_error)
+                replan=replan, progress=progress, model_error=model_error,
+                deadline=DEADLINE if deadline is None else deadline)
 
 
 def check(result: PlanResult):

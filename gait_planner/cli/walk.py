@@ -1,5 +1,6 @@
 """``gait-planner walk RUN.mcap [--steps K] [--self-test] [--json] [--out WALK.mcap]
-[--rrd WALK.rrd]``, ``gait-planner walk --replan SCENE [--steps K] [--json]``: walk a
+[--rrd WALK.rrd]``, ``gait-planner walk --replan SCENE [--steps K] [--deadline H]
+[--json]``: walk a
 recorded plan in MuJoCo with the reference controller
 (`gait_planner.walk.walk_plan`): a line on stderr at each half cycle's end, the summary
 (`gait_planner.walk.summary`) on stdout; --out records the walk
@@ -20,6 +21,16 @@ from typing import Any
 
 from gait_planner.cli.errors import CliError
 from gait_planner.walk.summary import format_summary, half_cycles_done
+
+
+def _deadline(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not 0.0 < value <= 10.0:  # nan fails too
+        raise argparse.ArgumentTypeError(f"must be in (0, 10] half cycles, got {text}")
+    return value
 
 
 def _steps(text: str) -> int:
@@ -67,6 +78,10 @@ def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.Argument
                         "2 s (gait_planner.walk.replan)")
     parser.add_argument("--steps", type=_steps, default=10, metavar="K",
                         help="half cycles to walk (default 10)")
+    parser.add_argument("--deadline", type=_deadline, default=None, metavar="H",
+                        help="with --replan: a re-plan's time limit in half cycles of the "
+                        "gait (default 0.75; a later plan is dropped; above 1 the plans "
+                        "carry more of the gait and the stop is planned earlier)")
     parser.add_argument("--self-test", action="store_true",
                         help="also walk with the plan's torques x0 and x0.5 and check they do worse")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -109,7 +124,7 @@ def _replan_command(args: argparse.Namespace) -> int:
         raise CliError("--replan walks a scene from standing: no RUN.mcap, --self-test, "
                        "--out, --rrd or --config with it")
     try:
-        result = walk_replanned(args.replan, args.steps,
+        result = walk_replanned(args.replan, args.steps, deadline=args.deadline,
                                 progress=lambda line: print(f"-- {line}", file=sys.stderr,
                                                             flush=True))
     except ValueError as error:  # RequestError, StartError: an unknown scene, no start
@@ -135,6 +150,8 @@ def _walk_command(args: argparse.Namespace) -> int:
         return _replan_command(args)
     if args.recording is None:
         raise CliError("walk needs a recording RUN.mcap (or --replan SCENE)")
+    if args.deadline is not None:
+        raise CliError("--deadline is a re-plan's time limit: only with --replan SCENE")
 
     outputs = {k: v for k, v in (("out", args.out), ("rrd", args.rrd)) if v is not None}
     try:

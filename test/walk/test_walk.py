@@ -120,6 +120,14 @@ def test_a_broken_recording_gets_a_clear_error(tmp_path, walker2d_plan, capsys):
     assert "no such recording" in capsys.readouterr().err
 
 
+def test_a_replanned_walks_deadline_outside_its_range_is_refused(capsys):
+    for bad in ("0", "-1", "nan", "11", "soon"):
+        assert main(["walk", "--replan", "walker2d", "--deadline", bad]) == 2
+        assert "argument --deadline" in capsys.readouterr().err
+    assert main(["walk", "any.mcap", "--deadline", "2"]) == 2
+    assert "only with --replan" in capsys.readouterr().err
+
+
 def test_a_scene_without_feet_is_refused(tmp_path, capsys):
     out = tmp_path / "compass.mcap"
     exe = Path(sys.executable).with_name("gait-planner")
