@@ -4,12 +4,13 @@ request's steps ask, as one motion, certified against the continuous dynamics li
 plan; or, with `stop`, to standing at rest.
 
 The gait is planned (or found in the planner's store) first, with `strategies.
-plan_certified`, and kept by the planner for its next transitions (`gait_to_join`); the transition is then solved on the gait's grid, starting from the gait
-itself (its inner nodes, torques and phase durations; the start at node 0 and the gait's
-next half cycle at nodes N-1 and N: from the gait's own first state, `start_of_plan`, that
-is the optimum) or, re-planning, from the planner's last transition of the same shape with
-its multipliers. A start on the other foot is planned as its mirror image; a state of a
-recording is `start_of_recording`'s.
+plan_certified`, and kept by the planner for its next transitions (`gait_to_join`); the
+transition is then solved on the gait's grid, starting from the gait itself (its inner
+nodes, torques and phase durations; the start at node 0 and the gait's next half cycle at
+nodes N-1 and N: from the gait's own first state, `start_of_plan`, that is the optimum) or,
+re-planning, from the planner's last transition of the same shape with its multipliers
+(warm if it began at the same state, `REPEATED_ATTEMPT`). A start on the other foot is
+planned as its mirror image; a state of a recording is `start_of_recording`'s.
 """
 from __future__ import annotations
 
@@ -54,6 +55,7 @@ FIRST_ATTEMPT = ([("cold", False, False)],)
 # half cycle's mirrored back differ by 1.4e-7 m (a stop from it took 11 iterations cold).
 REPEATED_ATTEMPT = ([("warm", False, False)],)
 SAME_START = 1e-6
+GAITS_KEPT = 16  # the gaits a planner keeps for transitions (`gait_to_join`), newest
 MAX_HALVES = 4  # half cycles a transition may take
 # Half cycles by default: walker3d from starts 1.3-1.4 cm and 0.1 rad/s off its first node
 # needed 2 (in one: 2021-4621 iterations, J 40-43 against 21, the certificate missed or the
@@ -168,18 +170,22 @@ def _shift(tr: Transcription, last: StoredPlan, start: StartState, gait: PlanRes
 def gait_to_join(planner: Planner, scene: Scene, settings: GaitSettings,
                  warm_start: bool = True) -> PlanResult:
     """The certified periodic gait of (scene, settings) (`strategies.plan_certified`), kept
-    in `planner.gaits` for the planner's next transitions onto it whatever their time
-    limits: the same request's gait is planned once (re-solved from its stored optimum and
-    certified again at every re-plan, it took 0.13 s of walker3d's 0.96 s, 2026-12-07).
-    warm_start False plans it again from its guess and keeps nothing."""
+    in `planner.gaits` (the `GAITS_KEPT` used last) for the planner's next transitions onto
+    it whatever their time limits: the same request's gait is planned once (re-solved from
+    its stored optimum and certified again at every re-plan, it took 0.13 s of walker3d's
+    0.96 s, 2026-12-07). warm_start False plans it again from its guess and keeps
+    nothing."""
     if not warm_start:
         return plan_certified(planner, scene, settings, warm_start=False)[0]
     key = (scene.name, scene.source, settings.with_solve(max_solve_time=1.0))
-    gait = planner.gaits.get(key)
+    gait = planner.gaits.pop(key, None)
     if gait is None:
         gait, _ = plan_certified(planner, scene, settings)
-        if gait.success:
-            planner.gaits[key] = gait
+        if not gait.success:
+            return gait
+    planner.gaits[key] = gait  # the newest last
+    while len(planner.gaits) > GAITS_KEPT:
+        del planner.gaits[next(iter(planner.gaits))]
     return gait
 
 

@@ -25,14 +25,14 @@ again from the walker's measured state.
    `transitions.STOP_HALVES`: to standing at rest) from the plan's own state at strike
    `half_cycles`, where it takes over. A stop that fails or arrives after that strike is
    dropped (one taking over 0.74 s late made walker2d fall at once) and planned again for a
-   strike further on, after a re-plan that extends the walk. It is solved to the end, not
-   stopped at its strike's time: a late stop is kept by the planner and the next starts
-   from it (through the node walker2d's stops stopped at their strikes failed 40 times in
-   a row, 80-130 iterations each; solved to the end, the third took 7, 2026-12-07). A walk
-   that has not stopped `half_cycles` + `lead` strikes past the last asked ends there.
-   Planned from the measured state the stop took 165-208 iterations (walker2d, 2.5-3.4 s,
-   2026-12-07) and the walker was far past it when it arrived. When the stop ends the walker holds its last node for `stand`
-   s.
+   strike further on, after a re-plan that extends the walk; it is solved to the end (a
+   late one is kept by the planner and the next starts from it). From the plan's own state
+   at a strike of its gait the stop repeats the one prepared before the walk, warm, in one
+   iteration (`transitions.REPEATED_ATTEMPT`). A walk that has not stopped
+   `half_cycles` + `lead` strikes past the last asked ends there. Planned from the
+   measured state the stop took 165-208 iterations (walker2d, 2.5-3.4 s, 2026-12-07) and
+   the walker was far past it when it arrived. When the stop ends the walker holds its last
+   node for `stand` s.
 
 standing=False begins the walk moving at the gait's first node instead. replan=False is
 the same walk with one plan: the start plan carries `half_cycles` of the gait and only the

@@ -23,7 +23,7 @@ from gait_planner.model.angles import (
     spherical_angles,
     spherical_rotation,
 )
-from gait_planner.model.rotations import rot_x, rot_y, rot_z
+from gait_planner.model.rotations import cross, rot_x, rot_y, rot_z
 from gait_planner.model.scene import InitialPose, JointType
 
 ROUND_OFF = 1e-12
@@ -162,3 +162,12 @@ def test_initial_poses_stand_on_the_ground(any_model):
         # the torso's centre of mass at the height docs/design.md section 6 implies
         assert q[2] == pytest.approx(0.0133 + 0.0502 + 0.1810 + 0.1943 + 0.2803 + 0.1779
                                      + 0.2398, abs=1e-12)
+
+
+VECTORS = st.lists(st.floats(-1e3, 1e3), min_size=3, max_size=3).map(np.array)
+
+
+@given(a=VECTORS, b=VECTORS)
+def test_the_plain_cross_product_is_numpys(a, b):
+    """`model.rotations.cross` (foot wrenches' moments) against np.cross, to round-off."""
+    assert np.allclose(cross(a, b), np.cross(a, b), rtol=1e-12, atol=1e-9)

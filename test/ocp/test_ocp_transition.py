@@ -26,6 +26,7 @@ from gait_planner.io.mcap_writer import write_plan_mcap
 from gait_planner.transitions import plan_transition, start_of_node, start_of_recording
 from gait_planner.verify import verify_result
 from gait_planner.walk.followed import Followed
+from synthetic_result import make_result
 
 
 @pytest.fixture(scope="module", params=["walker2d", "walker3d"])
@@ -302,3 +303,32 @@ def test_a_stop_from_where_the_last_stop_began_starts_warm_and_repeats_it(gait):
     assert "warm: it began at this start" in again.settings["initial_guess"]
     moved = again.q - first.q
     assert np.abs(moved - moved[0]).max() < 1e-5  # m: to the solver's tolerance
+
+
+def test_a_planner_keeps_the_gaits_its_transitions_join_the_newest_first(monkeypatch):
+    """`transitions.gait_to_join`: the same request's gait is planned once whatever the
+    time limit, a failed plan is not kept, and at most `GAITS_KEPT` are, the least recently
+    used dropped first."""
+    import gait_planner.transitions as transitions
+
+    planned = []
+
+    def plan(planner, scene, settings, warm_start=True):
+        planned.append(settings.step_length)
+        return dataclasses.replace(solved, success=settings.step_length != 0.9), None
+
+    scene = load_scene("walker2d")
+    settings = settings_for(scene)
+    solved = make_result("walker2d")
+    monkeypatch.setattr(transitions, "plan_certified", plan)
+    planner = Planner()
+    ask = lambda step, limit=60.0: transitions.gait_to_join(  # noqa: E731
+        planner, scene, dataclasses.replace(settings, step_length=step).with_solve(
+            max_solve_time=limit))
+    assert ask(0.5).success and ask(0.5, 0.3).success and planned == [0.5]
+    assert not ask(0.9).success and not ask(0.9).success and planned == [0.5, 0.9, 0.9]
+    for k in range(transitions.GAITS_KEPT):
+        ask(0.6 + 0.01 * k)
+    assert len(planner.gaits) == transitions.GAITS_KEPT
+    ask(0.5)  # dropped as the least recently used: planned again
+    assert planned[-1] == 0.5 and planned.count(0.5) == 2
