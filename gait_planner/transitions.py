@@ -55,7 +55,7 @@ FIRST_ATTEMPT = ([("cold", False, False)],)
 # half cycle's mirrored back differ by 1.4e-7 m (a stop from it took 11 iterations cold).
 REPEATED_ATTEMPT = ([("warm", False, False)],)
 SAME_START = 1e-6
-GAITS_KEPT = 16  # the gaits a planner keeps for transitions (`gait_to_join`), newest
+GAITS_KEPT = 16  # the gaits a planner keeps for transitions (`gait_to_join`): those used last
 MAX_HALVES = 4  # half cycles a transition may take
 # Half cycles by default: walker3d from starts 1.3-1.4 cm and 0.1 rad/s off its first node
 # needed 2 (in one: 2021-4621 iterations, J 40-43 against 21, the certificate missed or the
