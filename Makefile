@@ -30,8 +30,8 @@ prepare: setup
 test: prepare
 	$(PYTEST) test -m "not slow" $(PYTEST_ARGS)
 
-# the tests marked `alone` (re-planned walks charge this machine's wall time) run after
-# the others, with no test beside them
+# the tests marked `alone` (re-planned walks charge this machine's wall time; the node's G1
+# plan takes half its memory) run after the others, with no test beside them
 test-slow: prepare
 	$(PYTEST) test -m "slow and not alone" $(PYTEST_ARGS); others=$$?; \
 	$(PYTHON) -m pytest test -m "slow and alone" --durations=5 $(PYTEST_ARGS); alone=$$?; \

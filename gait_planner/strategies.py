@@ -26,9 +26,10 @@ import time
 
 import numpy as np
 
+from gait_planner.memory import available_bytes, gigabytes
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.guess import GUESSES, guess_x
-from gait_planner.ocp.refine import refined_settings, refined_start
+from gait_planner.ocp.refine import refined_memory, refined_settings, refined_start
 from gait_planner.ocp.settings import GaitSettings, free_step_range, ground_of
 from gait_planner.ocp.solution import STATUS_WORDS, failed_result
 from gait_planner.ocp.solve import STOPPED, Clock, Planner, Reached, Start, stored
@@ -344,7 +345,8 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
                    seed: StoredPlan | None = None):
     """`plan_once`, then, while the latest converged plan has defects of its grid (it
     misses the continuous-dynamics certificate, or its efforts zigzag: `grid_defects`) and
-    `settings.refinements` allow, the same request on a grid twice as fine from that plan
+    `settings.refinements` allow and the machine has the memory to build it
+    (`_no_room_for`), the same request on a grid twice as fine from that plan
     (`ocp.refine`). Of the converged plans the one with the fewest defects (then the
     smallest torque error) is returned: a refinement may cure the certificate and still
     zigzag (walker3d on 3 intervals per phase: on 6 the certificate is 0.221 % and the
@@ -371,6 +373,10 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
                f"({latest[0].settings['initial_guess']}): {'; '.join(defects)}")
         if left <= 0:
             notes.append(f"{why}; no time left to refine")
+            break
+        room = _no_room_for(planner, scene, coarse, fine)
+        if room:
+            notes.append(f"{why}; not refined to {sum(fine.intervals)}: {room}")
             break
         planner.stage(f"refining the grid to {sum(fine.intervals)} intervals")
         refined = plan_once(planner, scene, fine, warm_start=warm_start, refine_from=coarse)
@@ -399,6 +405,23 @@ def plan_certified(planner: Planner, scene: Scene, settings: GaitSettings, *,
         result = dataclasses.replace(result, settings={**result.settings,
                                                        "refinement": " | ".join(notes)})
     return result, cert
+
+
+def _no_room_for(planner: Planner, scene: Scene, coarse: GaitSettings,
+                 fine: GaitSettings) -> str:
+    """Why the refined grid `fine` of `coarse` is not built: its build would take more
+    memory than the machine has available (`ocp.refine.refined_memory`; G1 refined a
+    second time needed about 17 GB), so that the process is not killed for it; "" if it
+    fits, is built already, or either amount is unknown."""
+    kept = planner.memory_kept(scene, coarse)
+    free = available_bytes()
+    if kept is None or free is None or planner.memory_kept(scene, fine) is not None:
+        return ""
+    need = refined_memory(kept)
+    if need <= free:
+        return ""
+    return (f"its problem would take about {gigabytes(need)} to build and "
+            f"{gigabytes(free)} is available")
 
 
 def plan_free_step(planner: Planner, scene: Scene, settings: GaitSettings, *,

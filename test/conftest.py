@@ -15,7 +15,10 @@
   memory (two G1 plans side by side, 12 GB each, ran it out on 2026-12-07). The tests
   marked ``alone`` run after the rest, in one process: a re-planned walk charges each
   solve's wall time to the simulation, and beside another test the node's re-plans of
-  walker2d arrived too late and its walk ran out of plan (2026-12-07).
+  walker2d arrived too late and its walk ran out of plan (2026-12-07); the node planning G1
+  (test_node_robot) grew a CI worker to 24.3 GB, the machine's memory, after the robots
+  before it on that worker (2026-12-07, cause not pinned down: alone it peaks at 12.6 GB;
+  a refinement the machine has no memory for is no longer built, `strategies._no_room_for`).
 * The `model` fixture returns a cached factory ``model(name) -> Model`` (scene, Multibody,
   DiscreteMechanics), so each scene's CasADi Functions are built once per session.
 """
@@ -24,7 +27,6 @@ from __future__ import annotations
 
 import gait_planner  # noqa: F401  (first: pins numpy's BLAS kernels before numpy loads)
 
-import ctypes
 import functools
 import gc
 from importlib import metadata
@@ -35,6 +37,7 @@ import numpy as np
 import pytest
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
+from gait_planner.memory import release_free_heap
 from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
@@ -52,8 +55,9 @@ def pytest_configure(config: pytest.Config) -> None:
         "markers", "slow: an end-to-end test of ten seconds or more (make test-slow; CI runs it)"
     )
     config.addinivalue_line(
-        "markers", "alone: charges this machine's wall time to a simulation (a re-planned "
-        "walk): `make test-slow` runs it after the others, with no test beside it")
+        "markers", "alone: needs this machine to itself (a re-planned walk charges its wall "
+        "time to a simulation; the node planning G1 in its own process takes 12.6 GB): "
+        "`make test-slow` runs it after the others, in one process, with no test beside it")
 
 
 def pytest_xdist_make_scheduler(config: pytest.Config, log):
@@ -79,10 +83,6 @@ def strict_numerics() -> Iterator[None]:
         yield
 
 
-# glibc's malloc_trim, None elsewhere: returns the freed heap to the system
-_MALLOC_TRIM = getattr(ctypes.CDLL(None), "malloc_trim", None)
-
-
 @pytest.fixture(autouse=True)
 def _release_memory_after_slow_tests(request) -> Iterator[None]:
     """After a slow test (whole robots planned: G1's plan peaks at 12 GB), collect and
@@ -92,8 +92,7 @@ def _release_memory_after_slow_tests(request) -> Iterator[None]:
     yield
     if request.node.get_closest_marker("slow") is not None:
         gc.collect()
-        if _MALLOC_TRIM is not None:
-            _MALLOC_TRIM(0)
+        release_free_heap()
 
 
 class Model(NamedTuple):

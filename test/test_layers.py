@@ -13,6 +13,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "gait_planner"
 # low to high: a room may import the rooms of lower rank (and its own)
 RANK = {
     "atomic": 0, "buffered": 0, "lazy": 0,  # file writing, buffers, lazily loaded names
+    "memory": 0,  # the process's and the machine's memory
     "gait_planner": 1,  # the package's own __init__: the environment, the API's names
     "model": 1, "request": 1,  # scenes, URDFs, grounds; a request's fields
     "result": 2,  # the plain result every adapter converts

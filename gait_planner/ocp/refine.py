@@ -30,11 +30,20 @@ import dataclasses
 import casadi as ca
 import numpy as np
 
+from gait_planner.memory import PEAK_PER_KEPT
 from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.transcription import TORQUE_SCALE, Transcription
 
 FACTOR = 2  # intervals per coarse interval
+
+
+def refined_memory(kept: int, factor: int = FACTOR) -> int:
+    """Bytes the build of a grid `factor` times finer is expected to take at its peak, from
+    `kept`, the bytes its coarse problem kept (`ocp.solve.Planner.memory_kept`): the
+    problem's memory grows with its intervals (Unitree G1 on 40 and 80 intervals: 3.64 and
+    6.99 GB) and a build peaks at `memory.PEAK_PER_KEPT` times what it keeps."""
+    return int(factor * kept * PEAK_PER_KEPT)
 
 
 def refined_settings(s: GaitSettings, factor: int = FACTOR) -> GaitSettings:

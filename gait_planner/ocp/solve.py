@@ -24,6 +24,7 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
+from gait_planner.memory import resident_bytes
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.compile import CompileError, compile_sources
@@ -171,6 +172,7 @@ class _Built:
     derivatives: dict  # nlpsol options grad_f, jac_g, hess_lag (ocp.derivatives)
     derivatives_used: str  # how, in words (result.settings["derivatives"])
     build_time: float
+    kept: int | None = None  # bytes its build and first IPOPT instances kept (`memory`)
     solvers: dict = dataclasses.field(default_factory=dict)  # variant -> IPOPT instance
     stored: list[StoredPlan] = dataclasses.field(default_factory=list)
     library_key: str | None = None  # its file in the warm-start store, if the planner has one
@@ -253,10 +255,20 @@ class Planner:
 
     def _built_with(self, scene: Scene, settings: GaitSettings, variants,
                     refinement: bool = False) -> _Built:
+        before = resident_bytes() if _key(scene, settings) not in self._built else None
         built = self._build(scene, settings, refinement)
         for variant in variants:
             self._solver(built, settings, variant)
+        after = resident_bytes() if before is not None else None
+        if after is not None:
+            built.kept = max(after - before, 0)
         return built
+
+    def memory_kept(self, scene: Scene, settings: GaitSettings) -> int | None:
+        """Bytes the problem of (scene, settings) kept when this planner built it with its
+        IPOPT instances (None: not built here by `build`/`prepare`, or not measurable)."""
+        built = self._built.get(_key(scene, settings))
+        return None if built is None else built.kept
 
     def problem_size(self, scene: Scene, settings: GaitSettings) -> dict[str, int]:
         """Size of the NLP of (scene, settings), built if needed: intervals, variables,

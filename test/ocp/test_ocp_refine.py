@@ -11,8 +11,10 @@ import numpy as np
 import pytest
 
 from gait_planner.model.loader import load_scene
+from gait_planner import strategies
+from gait_planner.memory import gigabytes
 from gait_planner.ocp import solve
-from gait_planner.ocp.refine import first_interval, refined_settings, refined_start
+from gait_planner.ocp.refine import first_interval, refined_memory, refined_settings, refined_start
 from gait_planner.ocp.settings import SettingsError, settings_for
 from gait_planner.ocp.solution import violations
 from gait_planner.ocp.solve import Planner
@@ -191,3 +193,23 @@ def test_walker3d_torque_squared_passes_every_check_after_refinement():
     assert cert.ok, cert.summary()
     report = verify_result(result)
     assert report.ok, report.failures
+
+
+def test_a_refinement_the_machine_has_no_memory_for_is_not_built(coarse_walker2d, monkeypatch):
+    """With less memory available than the refined grid's build is expected to take (twice
+    what the coarse problem kept, `refined_memory`), the grid is not refined: the coarse
+    plan is returned, the note says how much was needed and available, and no problem is
+    built (G1 refined to 160 intervals grew a CI process to 24.3 GB and it was killed)."""
+    scene, settings, planner, coarse = coarse_walker2d
+    settings = dataclasses.replace(settings, refinements=1)
+    planner.build(scene, settings, ())
+    kept = planner.memory_kept(scene, settings)
+    assert kept > 1e6  # walker2d's problem on 3 intervals a phase: tens of MB
+    monkeypatch.setattr(strategies, "available_bytes", lambda: refined_memory(kept) - 1)
+    built = set(planner._built)
+    result, cert = plan_certified(planner, scene, settings)
+    assert result.n_nodes == coarse.n_nodes and not cert.ok
+    note = result.settings["refinement"]
+    assert (f"not refined to {2 * sum(settings.intervals)}: its problem would take about "
+            f"{gigabytes(refined_memory(kept))} to build" in note), note
+    assert set(planner._built) == built

@@ -56,6 +56,7 @@ def test_an_unplannable_description_is_answered_with_its_reason(planner_node, ma
 
 
 @pytest.mark.slow
+@pytest.mark.alone  # 12.6 GB at its peak, in the node's process: with nothing beside it
 @pytest.mark.timeout(1500)
 def test_g1_on_robot_description_is_planned_in_its_joint_names(
         planner_node, make_node, executor, spin_until, example_robots, tmp_path):
