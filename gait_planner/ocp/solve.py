@@ -17,6 +17,7 @@ IPOPT's inertia test, the grid refinement, the free-step search, a gait library'
 from __future__ import annotations
 
 import dataclasses
+import gc
 import time
 from typing import Callable
 
@@ -24,7 +25,8 @@ import casadi as ca
 import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
-from gait_planner.memory import resident_bytes
+from gait_planner.memory import (PEAK_PER_KEPT, available_bytes, release_free_heap,
+                                  resident_bytes)
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.compile import CompileError, compile_sources
@@ -255,7 +257,10 @@ class Planner:
 
     def _built_with(self, scene: Scene, settings: GaitSettings, variants,
                     refinement: bool = False) -> _Built:
-        before = resident_bytes() if _key(scene, settings) not in self._built else None
+        new = _key(scene, settings) not in self._built
+        if new:
+            self._make_room()
+        before = resident_bytes() if new else None
         built = self._build(scene, settings, refinement)
         for variant in variants:
             self._solver(built, settings, variant)
@@ -263,6 +268,25 @@ class Planner:
         if after is not None:
             built.kept = max(after - before, 0)
         return built
+
+    def _make_room(self) -> None:
+        """Before a new problem is built: while the memory available is less than the
+        largest build this planner measured would take again (`memory.PEAK_PER_KEPT` times
+        what it kept), forget the problem used least recently (never the last one used,
+        which a refinement starts from; the optima of a planner with a library stay in
+        it), so that a node serving one robot after another is not killed for memory (G1's
+        problems held 10.6 GB after its plan, 2026-12-07)."""
+        kept = [built.kept for built in self._built.values() if built.kept]
+        if not kept:
+            return
+        need = int(max(kept) * PEAK_PER_KEPT)
+        while len(self._built) > 1:
+            free = available_bytes()
+            if free is None or free >= need:
+                return
+            del self._built[next(iter(self._built))]
+            gc.collect()
+            release_free_heap()
 
     def memory_kept(self, scene: Scene, settings: GaitSettings) -> int | None:
         """Bytes the problem of (scene, settings) kept when this planner built it with its
@@ -321,6 +345,7 @@ class Planner:
                 built.library_key = self.library.key(scene.source, key[2], nx, ng)
                 built.stored = self.library.load(built.library_key, nx, ng)
             self._built[key] = built
+        self._built[key] = self._built.pop(key)  # the last used last (`_make_room`)
         return self._built[key]
 
     def stored_plans(self, scene: Scene, settings: GaitSettings) -> list[StoredPlan]:
