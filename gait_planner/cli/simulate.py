@@ -19,6 +19,7 @@ import json
 import math
 from typing import Any
 
+from gait_planner.cli.arguments import integer_from
 from gait_planner.cli.errors import CliError
 
 # The numerics (CasADi) are imported when a simulation runs, so that registering the command
@@ -82,23 +83,8 @@ def format_table(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _integer_from(minimum: int):
-    """An argparse type: an integer >= minimum."""
-
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {value}")
-        return value
-
-    return parse
-
-
-_positive_int = _integer_from(1)
-_seed = _integer_from(0)
+_positive_int = integer_from(1)
+_seed = integer_from(0)
 
 
 def _positive_seconds(text: str) -> float:

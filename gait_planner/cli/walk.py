@@ -19,6 +19,7 @@ import json
 import sys
 from typing import Any
 
+from gait_planner.cli.arguments import integer_from
 from gait_planner.cli.errors import CliError
 from gait_planner.walk.summary import format_summary, half_cycles_done
 
@@ -30,16 +31,6 @@ def _deadline(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
     if not 0.0 < value <= 10.0:  # nan fails too
         raise argparse.ArgumentTypeError(f"must be in (0, 10] half cycles, got {text}")
-    return value
-
-
-def _steps(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
     return value
 
 
@@ -76,7 +67,7 @@ def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.Argument
                         "re-planned at every strike from the walker's measured state (each "
                         "solve's wall time charged to the simulation), then stop and stand "
                         "2 s (gait_planner.walk.replan)")
-    parser.add_argument("--steps", type=_steps, default=10, metavar="K",
+    parser.add_argument("--steps", type=integer_from(1), default=10, metavar="K",
                         help="half cycles to walk (default 10)")
     parser.add_argument("--deadline", type=_deadline, default=None, metavar="H",
                         help="with --replan: a re-plan's time limit in half cycles of the "
