@@ -2,7 +2,8 @@
 stop, stand 2 s, in MuJoCo (`gait_planner.walk.replan.walk_replanned`).
 
 Usage: .venv/bin/python benchmarks/replan_walk.py [--scenes walker2d walker3d]
-       [--half-cycles 10] [--deadline 0.75] [--moving] [--model-error SEEDS] [--json NAME]
+       [--half-cycles 10] [--deadline 0.75] [--moving] [--model-error SEEDS]
+       [--cases NAME ...] [--json NAME]
 
 For each scene two rows, each in a fresh Planner with the warm-start store (derivatives
 compiled; the gait from the store, as `gait-planner walk --replan` and the API meet it):
@@ -14,7 +15,9 @@ end, the re-plans (converged of asked, median iterations and wall time), the fee
 unplanned touches, the largest slide. `--model-error SEEDS`: each row walked SEEDS times
 with every model error at once (masses and inertias x U[0.9, 1.1], friction 0.5, a contact
 time constant of 2-10 ms, a 50 ms torque delay: `model_error.py`'s last row, its seeds), the
-plans made for the nominal model. Wall times depend on the machine and its load (the
+plans made for the nominal model. `--cases`: walker3d's hard requests of `hard_cases.py` by
+name (e.g. "mu 0.2"; each a request of its scene, in its gait), instead of the defaults;
+their gaits are planned cold with a time limit of `CASE_TIME_LIMIT` s. Wall times depend on the machine and its load (the
 load is printed): they decide when a plan takes over, so two runs differ. Threads: one
 (OPENBLAS_NUM_THREADS=1, the package's default).
 """
@@ -26,23 +29,31 @@ import os
 import platform
 import time
 
-from gait_planner.model.loader import load_scene
+from gait_planner.model.loader import load_scene, with_gait
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.warm_starts import WarmStartStore
 from gait_planner.walk.replan import DEADLINE, walk_replanned
+from hard_cases import Case, cases, settings_of
 from model_error import perturbations
+
+CASE_TIME_LIMIT = 300.0  # s, a hard case's gait planned cold (walk.py's plans take 120)
 
 
 def row(name: str, replan: bool, half_cycles: int, standing: bool, deadline: float,
-        error=None) -> dict:
+        error=None, case: Case | None = None) -> dict:
     scene = load_scene(name)
+    settings = settings_for(scene, compiled=True)
+    if case is not None:
+        scene = with_gait(scene, case.gait)
+        settings = settings_of(scene, case, CASE_TIME_LIMIT)
     began = time.perf_counter()
-    r = walk_replanned(Planner(library=WarmStartStore()), scene,
-                       settings_for(scene, compiled=True), half_cycles, replan=replan,
-                       standing=standing, deadline=deadline, model_error=error)
+    r = walk_replanned(Planner(library=WarmStartStore()), scene, settings, half_cycles,
+                       replan=replan, standing=standing, deadline=deadline,
+                       model_error=error)
     slides = r.get("foot_slide") or {}
-    return {"scene": name, "mode": "re-planned" if replan else "one plan",
+    return {"scene": name, "case": case.name if case else "default",
+            "mode": "re-planned" if replan else "one plan",
             "deadline": deadline,
             "model_error": r.get("model_error", {}).get("differences", "none"),
             "start": "standing" if standing else "moving",
@@ -72,22 +83,32 @@ def main() -> None:
                         help="begin moving at the gait's first node, not from standing")
     parser.add_argument("--model-error", type=int, metavar="SEEDS", default=0,
                         help="walk each row SEEDS times with every model error at once")
+    parser.add_argument("--cases", nargs="+", default=[], metavar="NAME",
+                        help="walker3d's hard requests of hard_cases.py by name")
     parser.add_argument("--json", metavar="NAME",
                         help="also write the rows to benchmarks/results/NAME.json")
     args = parser.parse_args()
     print(f"# {platform.node()} {platform.processor() or platform.machine()} "
           f"{time.strftime('%Y-%m-%d %H:%M')}, load {os.getloadavg()[0]:.2f}, "
           f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
-    print("| scene | mode | half cycles | ended | stood | re-plans converged | median it "
+    named = {c.name: c for c in cases(load_scene("walker3d"))}
+    unknown = [n for n in args.cases if n not in named]
+    if unknown:
+        parser.error(f"no hard case {', '.join(map(repr, unknown))}; the cases: "
+                     f"{', '.join(map(repr, named))}")
+    runs = ([("walker3d", named[n]) for n in args.cases] if args.cases
+            else [(name, None) for name in args.scenes])
+    print("| scene | case | mode | half cycles | ended | stood | re-plans converged | median it "
           "| median wall s | feedback | touches | model error |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     errors = perturbations(args.model_error)[-1][1] if args.model_error else [None]
     rows = []
-    for name in args.scenes:
+    for name, case in runs:
         for replan, error in ((r, e) for r in (True, False) for e in errors):
-            x = row(name, replan, args.half_cycles, not args.moving, args.deadline, error)
+            x = row(name, replan, args.half_cycles, not args.moving, args.deadline, error,
+                    case)
             rows.append(x)
-            print(f"| {name} | {x['mode']} | {x['half_cycles_walked']} | {x['stopped'][:60]} "
+            print(f"| {name} | {x['case']} | {x['mode']} | {x['half_cycles_walked']} | {x['stopped'][:60]} "
                   f"| {x['stood']} | {x['replans_converged']}/{x['replans']} | "
                   f"{x['replan_iterations_median']} | {x['replan_wall_median_s']} | "
                   f"{_number(x['feedback_share'])} | {x['touches']} | {x['model_error']} |",

@@ -891,12 +891,13 @@ def replan_walk(docs: list[dict]) -> list[str]:
         rows = [dict(r, walked=f"{r['half_cycles_walked']} of {doc['header']['half_cycles']}",
                      deadline=r.get("deadline", 0.75),  # the default before it was a row's
                      model_error=r.get("model_error", "none"),
+                     case=r.get("case", "default"),
                      replans=(f"{r['replans_converged']} of {r['replans']}"
                               if r["replans"] else "–"))
                 for r in doc["rows"]]
         out += [provenance(doc), ""] + _completed(rows, doc["header"]) + table(rows, [
-            ("scene", "scene", ""), ("start", "start", ""), ("mode", "mode", ""),
-            ("re-plan limit (half cycles)", "deadline", ".2f"),
+            ("scene", "scene", ""), ("request", "case", ""), ("start", "start", ""),
+            ("mode", "mode", ""), ("re-plan limit (half cycles)", "deadline", ".2f"),
             ("half cycles walked", "walked", ""), ("stood at the end", "stood", ""),
             ("re-plans converged", "replans", ""),
             ("median iterations", "replan_iterations_median", ".0f"),
@@ -953,7 +954,8 @@ def main() -> None:
                          docs["any_request_library"])
     lines += replan_walk([doc for name in ("replan_walk", "replan_walk_walker3d",
                                           "replan_walk_walker3d_deadline2", "replan_walk_20",
-                                          "replan_walk_model_error")
+                                          "replan_walk_model_error",
+                                          "replan_walk_hard", "replan_walk_hard_deadline2")
                           if (doc := load_results(name))])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")

@@ -411,14 +411,17 @@ def _no_room_for(planner: Planner, scene: Scene, coarse: GaitSettings,
                  fine: GaitSettings) -> str:
     """Why the refined grid `fine` of `coarse` is not built: its build would take more
     memory than the machine has available (`ocp.refine.refined_memory`; G1 refined a
-    second time needed about 17 GB), so that the process is not killed for it; "" if it
-    fits, is built already, or either amount is unknown."""
+    second time needed about 17 GB), so that the process is not killed for it, even after
+    the planner forgot the other problems it keeps (`Planner.make_room`: only if that
+    would make the room); "" if it fits, is built already, or either amount is unknown."""
     kept = planner.memory_kept(scene, coarse)
     free = available_bytes()
     if kept is None or free is None or planner.memory_kept(scene, fine) is not None:
         return ""
     need = refined_memory(kept)
-    if need <= free:
+    if free < need <= free + planner.forgettable_bytes():
+        free = planner.make_room(need)
+    if free is None or need <= free:
         return ""
     return (f"its problem would take about {gigabytes(need)} to build and "
             f"{gigabytes(free)} is available")

@@ -270,23 +270,31 @@ class Planner:
         return built
 
     def _make_room(self) -> None:
-        """Before a new problem is built: while the memory available is less than the
-        largest build this planner measured would take again (`memory.PEAK_PER_KEPT` times
-        what it kept), forget the problem used least recently (never the last one used,
-        which a refinement starts from; the optima of a planner with a library stay in
-        it), so that a node serving one robot after another is not killed for memory (G1's
-        problems held 10.6 GB after its plan, 2026-12-07)."""
+        """Before a new problem is built: `make_room` for the largest build this planner
+        measured taken again (`memory.PEAK_PER_KEPT` times what it kept), so that a node
+        serving one robot after another is not killed for memory (G1's problems held
+        10.6 GB after its plan, 2026-12-07)."""
         kept = [built.kept for built in self._built.values() if built.kept]
-        if not kept:
-            return
-        need = int(max(kept) * PEAK_PER_KEPT)
-        while len(self._built) > 1:
-            free = available_bytes()
-            if free is None or free >= need:
-                return
+        if kept:
+            self.make_room(int(max(kept) * PEAK_PER_KEPT))
+
+    def make_room(self, need: int) -> int | None:
+        """Forget the problems used least recently (never the last one used, which a
+        refinement starts from; the optima of a planner with a library stay in it) while
+        the memory available is below `need` bytes. Returns the bytes available then (None:
+        not known here)."""
+        free = available_bytes()
+        while free is not None and free < need and len(self._built) > 1:
             del self._built[next(iter(self._built))]
             gc.collect()
             release_free_heap()
+            free = available_bytes()
+        return free
+
+    def forgettable_bytes(self) -> int:
+        """Bytes the problems `make_room` may forget kept when built (`memory_kept`; those
+        not measured count nothing)."""
+        return sum(built.kept or 0 for built in list(self._built.values())[:-1])
 
     def memory_kept(self, scene: Scene, settings: GaitSettings) -> int | None:
         """Bytes the problem of (scene, settings) kept when this planner built it with its

@@ -1,13 +1,17 @@
 """What a planner keeps in memory (`ocp.solve.Planner`): each problem it builds is measured
 (`memory_kept`), and before a new one is built, a planner short of memory forgets the
-problems it used least recently, never the last one used."""
+problems it used least recently, never the last one used; a refinement is built when
+forgetting them makes the room for it (`strategies._no_room_for`), and nothing is forgotten
+when it would not."""
 
 from __future__ import annotations
 
 import pytest
 
 from gait_planner.model.loader import load_scene
+from gait_planner import strategies
 from gait_planner.ocp import solve
+from gait_planner.ocp.refine import refined_memory, refined_settings
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
 
@@ -51,3 +55,25 @@ def test_with_memory_to_spare_every_problem_is_kept(compass_grids, monkeypatch):
     for s in grids:
         planner.build(scene, s, ())
     assert _built(planner, scene, grids) == [3, 4, 5]
+
+
+@pytest.mark.parametrize("room", [True, False])
+def test_a_refinement_is_built_if_forgetting_makes_the_room(compass_grids, monkeypatch, room):
+    """The memory available rises by what the older problem kept once it is forgotten:
+    with enough then, the refinement of the last problem used is not refused and the older
+    problem is forgotten; one byte short, it is refused and nothing is forgotten."""
+    scene, grids = compass_grids
+    planner = Planner()
+    for s in grids[:2]:  # 4 used last: the coarse grid
+        planner.build(scene, s, ())
+    coarse, older = planner.memory_kept(scene, grids[1]), planner.memory_kept(scene, grids[0])
+    need = refined_memory(coarse)
+    short = need - older - (0 if room else 1)
+    free = lambda: short + (0 if _built(planner, scene, grids) == [3, 4] else older)  # noqa: E731
+    monkeypatch.setattr(solve, "available_bytes", free)
+    monkeypatch.setattr(strategies, "available_bytes", free)
+    why = strategies._no_room_for(planner, scene, grids[1], refined_settings(grids[1]))
+    if room:
+        assert why == "" and _built(planner, scene, grids) == [4]
+    else:
+        assert "its problem would take about" in why and _built(planner, scene, grids) == [3, 4]

@@ -200,12 +200,14 @@ def test_a_refinement_the_machine_has_no_memory_for_is_not_built(coarse_walker2d
     what the coarse problem kept, `refined_memory`), the grid is not refined: the coarse
     plan is returned, the note says how much was needed and available, and no problem is
     built (G1 refined to 160 intervals grew a CI process to 24.3 GB and it was killed)."""
-    scene, settings, planner, coarse = coarse_walker2d
+    scene, settings, _, coarse = coarse_walker2d
     settings = dataclasses.replace(settings, refinements=1)
+    planner = Planner()  # no other problem to forget (`Planner.make_room`)
     planner.build(scene, settings, ())
     kept = planner.memory_kept(scene, settings)
     assert kept > 1e6  # walker2d's problem on 3 intervals a phase: tens of MB
     monkeypatch.setattr(strategies, "available_bytes", lambda: refined_memory(kept) - 1)
+    monkeypatch.setattr(solve, "available_bytes", lambda: refined_memory(kept) - 1)
     built = set(planner._built)
     result, cert = plan_certified(planner, scene, settings)
     assert result.n_nodes == coarse.n_nodes and not cert.ok
