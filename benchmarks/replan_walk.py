@@ -17,7 +17,8 @@ with every model error at once (masses and inertias x U[0.9, 1.1], friction 0.5,
 time constant of 2-10 ms, a 50 ms torque delay: `model_error.py`'s last row, its seeds), the
 plans made for the nominal model. `--cases`: walker3d's hard requests of `hard_cases.py` by
 name (e.g. "mu 0.2"; each a request of its scene, in its gait), instead of the defaults;
-their gaits are planned cold with a time limit of `CASE_TIME_LIMIT` s. Wall times depend on the machine and its load (the
+their gait and the start are planned with a time limit of `CASE_TIME_LIMIT` s each.
+Wall times depend on the machine and its load (the
 load is printed): they decide when a plan takes over, so two runs differ. Threads: one
 (OPENBLAS_NUM_THREADS=1, the package's default).
 """
@@ -37,7 +38,7 @@ from gait_planner.walk.replan import DEADLINE, walk_replanned
 from hard_cases import Case, cases, settings_of
 from model_error import perturbations
 
-CASE_TIME_LIMIT = 300.0  # s, a hard case's gait planned cold (walk.py's plans take 120)
+CASE_TIME_LIMIT = 300.0  # s, a hard case's gait, and the start (walk.py's plans: 120)
 
 
 def row(name: str, replan: bool, half_cycles: int, standing: bool, deadline: float,
@@ -108,8 +109,9 @@ def main() -> None:
             x = row(name, replan, args.half_cycles, not args.moving, args.deadline, error,
                     case)
             rows.append(x)
-            print(f"| {name} | {x['case']} | {x['mode']} | {x['half_cycles_walked']} | {x['stopped'][:60]} "
-                  f"| {x['stood']} | {x['replans_converged']}/{x['replans']} | "
+            print(f"| {name} | {x['case']} | {x['mode']} | {x['half_cycles_walked']} | "
+                  f"{x['stopped'][:60]} | {x['stood']} | "
+                  f"{x['replans_converged']}/{x['replans']} | "
                   f"{x['replan_iterations_median']} | {x['replan_wall_median_s']} | "
                   f"{_number(x['feedback_share'])} | {x['touches']} | {x['model_error']} |",
                   flush=True)

@@ -886,7 +886,9 @@ def replan_walk(docs: list[dict]) -> list[str]:
             "the walk. The stop is planned two strikes ahead from the plan's own state there. "
             "Wall times (and so when plans take over) depend on the machine's load: two runs "
             "differ. Feedback share: RMS feedback / RMS planned effort over the whole walk "
-            "(start, walk, stop, standing).", ""]
+            "(start, walk, stop, standing). Request: the scene's default, or one of walker3d's hard "
+            "requests (`hard_cases.py`, `--cases`; a 300 s limit for its gait and for the "
+            "start).", ""]
     for doc in docs:
         rows = [dict(r, walked=f"{r['half_cycles_walked']} of {doc['header']['half_cycles']}",
                      deadline=r.get("deadline", 0.75),  # the default before it was a row's
@@ -955,7 +957,8 @@ def main() -> None:
     lines += replan_walk([doc for name in ("replan_walk", "replan_walk_walker3d",
                                           "replan_walk_walker3d_deadline2", "replan_walk_20",
                                           "replan_walk_model_error",
-                                          "replan_walk_hard", "replan_walk_hard_deadline2")
+                                          "replan_walk_hard_deadline2",
+                                          "replan_walk_hard_moving")
                           if (doc := load_results(name))])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
