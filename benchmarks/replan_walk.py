@@ -44,8 +44,9 @@ CASE_TIME_LIMIT = 300.0  # s, a hard case's gait, and the start (walk.py's plans
 def row(name: str, replan: bool, half_cycles: int, standing: bool, deadline: float,
         error=None, case: Case | None = None) -> dict:
     scene = load_scene(name)
-    settings = settings_for(scene, compiled=True)
-    if case is not None:
+    if case is None:
+        settings = settings_for(scene, compiled=True)
+    else:
         scene = with_gait(scene, case.gait)
         settings = settings_of(scene, case, CASE_TIME_LIMIT)
     began = time.perf_counter()

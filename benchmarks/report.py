@@ -886,9 +886,9 @@ def replan_walk(docs: list[dict]) -> list[str]:
             "the walk. The stop is planned two strikes ahead from the plan's own state there. "
             "Wall times (and so when plans take over) depend on the machine's load: two runs "
             "differ. Feedback share: RMS feedback / RMS planned effort over the whole walk "
-            "(start, walk, stop, standing). Request: the scene's default, or one of walker3d's hard "
-            "requests (`hard_cases.py`, `--cases`; a 300 s limit for its gait and for the "
-            "start).", ""]
+            "(start, walk, stop, standing). Request: the scene's default, or one of "
+            "walker3d's hard requests (`hard_cases.py`, `--cases`; a 300 s limit for its gait "
+            "and for the start).", ""]
     for doc in docs:
         rows = [dict(r, walked=f"{r['half_cycles_walked']} of {doc['header']['half_cycles']}",
                      deadline=r.get("deadline", 0.75),  # the default before it was a row's

@@ -26,7 +26,7 @@ import time
 
 import numpy as np
 
-from gait_planner.memory import available_bytes, gigabytes
+from gait_planner.memory import gigabytes
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.guess import GUESSES, guess_x
 from gait_planner.ocp.refine import refined_memory, refined_settings, refined_start
@@ -412,15 +412,13 @@ def _no_room_for(planner: Planner, scene: Scene, coarse: GaitSettings,
     """Why the refined grid `fine` of `coarse` is not built: its build would take more
     memory than the machine has available (`ocp.refine.refined_memory`; G1 refined a
     second time needed about 17 GB), so that the process is not killed for it, even after
-    the planner forgot the other problems it keeps (`Planner.make_room`: only if that
+    the planner forgot the other problems it keeps (`Planner.room_for`: only if that
     would make the room); "" if it fits, is built already, or either amount is unknown."""
     kept = planner.memory_kept(scene, coarse)
-    free = available_bytes()
-    if kept is None or free is None or planner.memory_kept(scene, fine) is not None:
+    if kept is None or planner.memory_kept(scene, fine) is not None:
         return ""
     need = refined_memory(kept)
-    if free < need <= free + planner.forgettable_bytes():
-        free = planner.make_room(need)
+    free = planner.room_for(need)
     if free is None or need <= free:
         return ""
     return (f"its problem would take about {gigabytes(need)} to build and "

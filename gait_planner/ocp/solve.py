@@ -291,10 +291,16 @@ class Planner:
             free = available_bytes()
         return free
 
-    def forgettable_bytes(self) -> int:
-        """Bytes the problems `make_room` may forget kept when built (`memory_kept`; those
-        not measured count nothing)."""
-        return sum(built.kept or 0 for built in list(self._built.values())[:-1])
+    def room_for(self, need: int) -> int | None:
+        """The bytes available for a build of `need` bytes (None: not known here), after
+        `make_room` if forgetting the problems it may forget (what they kept when built;
+        those not measured count nothing) would make the room; if it would not, none is
+        forgotten."""
+        free = available_bytes()
+        spare = sum(built.kept or 0 for built in list(self._built.values())[:-1])
+        if free is not None and free < need <= free + spare:
+            free = self.make_room(need)
+        return free
 
     def memory_kept(self, scene: Scene, settings: GaitSettings) -> int | None:
         """Bytes the problem of (scene, settings) kept when this planner built it with its

@@ -71,7 +71,6 @@ def test_a_refinement_is_built_if_forgetting_makes_the_room(compass_grids, monke
     short = need - older - (0 if room else 1)
     free = lambda: short + (0 if _built(planner, scene, grids) == [3, 4] else older)  # noqa: E731
     monkeypatch.setattr(solve, "available_bytes", free)
-    monkeypatch.setattr(strategies, "available_bytes", free)
     why = strategies._no_room_for(planner, scene, grids[1], refined_settings(grids[1]))
     if room:
         assert why == "" and _built(planner, scene, grids) == [4]

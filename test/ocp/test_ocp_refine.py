@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from gait_planner.model.loader import load_scene
-from gait_planner import strategies
 from gait_planner.memory import gigabytes
 from gait_planner.ocp import solve
 from gait_planner.ocp.refine import first_interval, refined_memory, refined_settings, refined_start
@@ -206,7 +205,6 @@ def test_a_refinement_the_machine_has_no_memory_for_is_not_built(coarse_walker2d
     planner.build(scene, settings, ())
     kept = planner.memory_kept(scene, settings)
     assert kept > 1e6  # walker2d's problem on 3 intervals a phase: tens of MB
-    monkeypatch.setattr(strategies, "available_bytes", lambda: refined_memory(kept) - 1)
     monkeypatch.setattr(solve, "available_bytes", lambda: refined_memory(kept) - 1)
     built = set(planner._built)
     result, cert = plan_certified(planner, scene, settings)
