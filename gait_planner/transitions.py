@@ -202,7 +202,9 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     store (`strategies.plan_certified`); from_last: the transition from the planner's last
     transition of this shape if it has one (`last_transition`), else from the gait.
     A standing start (`ocp.transition.standing_start`) begins with the scene's start
-    phases (gait.start: both feet flat, then the first heel off). stop: the transition
+    phases (gait.start: both feet flat, then the first heel off); on stairs it carries the
+    stairs with the gait it joins (settings.stairs_shift: the robot stands as far from the
+    first edge as that gait, joined `FIRST_STEP` of a step back, has them). stop: the transition
     ends with the scene's stop phases (gait.stop), the last standing at rest, instead of
     joining the gait; steps are not walked then; without a start it begins at the gait's
     first node.
@@ -234,6 +236,8 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     tr_scene = transition_scene(scene, halves, start.standing, stop)
     offset = stance_offset(scene, start.q, gait) - (
         FIRST_STEP * gait.step_length if start.standing and halves > 1 else 0.0)
+    if start.standing:  # the stairs stand where the gait joined that far back has them
+        tr_settings = dataclasses.replace(tr_settings, stairs_shift=offset)
     planner.stage("building the transition")
     try:
         tr = planner.build(tr_scene, tr_settings, VARIANTS, refinement=True)

@@ -173,13 +173,30 @@ def phase_rows(mb: Multibody, contacts: tuple[BodyContact, ...],
     return ca.vertcat(*rows) if rows else ca.DM.zeros(0, mb.k)
 
 
+def landing_treads(before: tuple[BodyContact, ...], after: tuple[BodyContact, ...],
+                   tread: dict[str, int], beside: bool = False) -> dict[str, int]:
+    """The stair tread of every contact point held in `after`, the phase that follows
+    `before` (tread 0: the one the first phase stands on; `Ground.tread_height`), from
+    `tread` (body -> tread of the bodies that have stood so far), which it updates: a body
+    held in `before` keeps its tread; one that touches down after a swing steps onto the
+    tread beyond the highest so far (each step of a walk on stairs climbs or descends one:
+    a half cycle's landing foot onto tread 1, the next half cycle's onto tread 2), or, if
+    `beside` (a stop's last step, which brings the feet together), onto the highest."""
+    held = {c.body for c in before}
+    for c in after:
+        if c.body not in held:
+            top = max(tread.values(), default=0)
+            tread[c.body] = top if beside else top + 1
+    return {p: tread.get(c.body, 0) for c in after for p in c.points}
+
+
 def establishing_rows(mb: Multibody, before: tuple[BodyContact, ...],
                       after: tuple[BodyContact, ...], ground: Ground | ParametricGround = LEVEL,
-                      landing: frozenset[str] = frozenset()):
+                      treads: dict[str, int] | None = None):
     """Rows E (r, k) and heights e (r,) m with E q = e at the node where `after` starts:
     the height above the ground of every point that touches down there, n . p = its
-    tread's height (n the ground's normal; on stairs tread 1 for the points of
-    `landing`, the contact points not held at the half cycle's start, else tread 0), and,
+    tread's height (n the ground's normal; on stairs the tread `treads` gives the point,
+    `landing_treads`, else tread 0), and,
     for a body whose full contact is completed there, its roll n . d2 = 0 (foot flat on
     the ground). r may be 0. CasADi expressions (of a `ParametricGround`'s parameters;
     the roll row `phase_rows`')."""
@@ -191,7 +208,7 @@ def establishing_rows(mb: Multibody, before: tuple[BodyContact, ...],
         for p in new:
             point = mb.scene.contact(p)
             rows.append(ground.along_normal(mb.point_matrix(point.body, point.point)))
-            heights.append(ground.tread_height(1 if p in landing else 0))
+            heights.append(ground.tread_height((treads or {}).get(p, 0)))
         if new and c.full and not c.planar:
             rows.append(phase_rows(mb, (c,), ground)[-1, :])
             heights.append(0.0)

@@ -133,6 +133,9 @@ class GaitSettings:
     (k,) N s, director coordinates; end_scaling, end_torque: a transition's last
     interval's sigma and the gait's torques walked as far, nodes 0..N ((N+1) nt,) N m;
     end_at_rest: a transition that stops: its nodes N-1 and N are its node N-2 (at rest).
+    stairs_shift m: how far along x the stairs' edges lie from where the gait has them
+    (`ground_of`): a transition from standing joins the gait that far back and carries
+    the stairs with it (`gait_planner.transitions`).
     solve: how the problem is solved, not what it is (`SolveOptions`).
     """
 
@@ -176,6 +179,7 @@ class GaitSettings:
     end_scaling: float = 0.0
     end_torque: tuple[float, ...] = ()
     end_at_rest: bool = False
+    stairs_shift: float = 0.0
     solve: SolveOptions = SolveOptions()
 
     def with_solve(self, **changes) -> "GaitSettings":
@@ -446,7 +450,7 @@ def ground_of(scene: Scene, s: GaitSettings) -> Ground:
     midway between the front of the foot that stands at the start of the half cycle (the
     largest heel-to-toe reach, along the body's d1, from the pinned contact point: the
     first contact of the first phase's first body, `ocp.transcription`) and the back of
-    the landing foot (at x = step_length)."""
+    the landing foot (at x = step_length), moved s.stairs_shift along x."""
     gait = scene.gait
     held = [c for c in scene.contacts if c.name in gait.phases[0].contacts]
     pinned = held[0] if held else scene.contacts[0]
@@ -454,7 +458,8 @@ def ground_of(scene: Scene, s: GaitSettings) -> Ground:
     reach = max(body.points[c.point][0] - body.points[pinned.point][0]
                 for c in scene.contacts if c.body == pinned.body)
     return Ground(slope=s.slope, step_height=s.step_height,
-                  riser=0.5 * (reach + s.step_length), tread=s.step_length,
+                  riser=0.5 * (reach + s.step_length) + s.stairs_shift,
+                  tread=s.step_length,
                   segment_rows=s.stair_segment_rows)
 
 

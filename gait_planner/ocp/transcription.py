@@ -50,7 +50,8 @@ import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.ground import PARAMETERS, ParametricGround
-from gait_planner.ocp.contacts import body_contacts, establishing_rows, phase_rows, stacked_rows
+from gait_planner.ocp.contacts import (body_contacts, establishing_rows, landing_treads,
+                                       phase_rows, stacked_rows)
 from gait_planner.ocp.cost_terms import CostTerms
 from gait_planner.ocp.elements import ElementGroup, Layout
 from gait_planner.ocp.held_efforts import HeldRows
@@ -310,13 +311,15 @@ class Transcription(PathRows, HeldRows, CostTerms):
         self._eq.append(("contact_hold", ca.vertcat(*chain)))
         self._without_elements["contact_hold"] = ca.MX(sum(int(c.shape[0]) for c in chain), 1)
         est = []
-        landing = frozenset(c.name for c in mb.scene.contacts) - frozenset(
-            p for bc in self.contacts[0] for p in bc.points)
+        tread = {bc.body: 0 for bc in self.contacts[self.phase_of_interval[0]]}
+        beside = {p.name for p in mb.scene.gait.stop} if self.settings.end_at_rest else set()
         for n in range(1, N):
             k_prev, k = self.phase_of_interval[n - 1], self.phase_of_interval[n]
             if k != k_prev:
+                treads = landing_treads(self.contacts[k_prev], self.contacts[k], tread,
+                                        self._phase_name(k) in beside)
                 E, e = establishing_rows(mb, self.contacts[k_prev], self.contacts[k],
-                                         self.gp, landing)
+                                         self.gp, treads)
                 if E.shape[0]:
                     est.append(ca.mtimes(E, self.Q[:, n]) - e)
         if est:
@@ -501,7 +504,8 @@ class Transcription(PathRows, HeldRows, CostTerms):
 
 def shape_of(settings: GaitSettings) -> GaitSettings:
     """The settings that shape a Transcription: `settings` with the values that enter it as
-    parameters (step length, friction coefficient, slope, step height, speed) replaced by
+    parameters (step length, friction coefficient, slope, step height and the stairs'
+    shift, speed) replaced by
     representatives of their form (level or stairs up or down; free or requested speed),
     so that two requests of one shape share one problem (`Transcription.parameters`)."""
     height = math.copysign(1.0, settings.step_height) if settings.step_height else 0.0
@@ -509,7 +513,8 @@ def shape_of(settings: GaitSettings) -> GaitSettings:
                                step_height=height, speed=1.0 if settings.speed > 0 else 0.0,
                                start_momentum=(0.0,) * len(settings.start_momentum),
                                end_scaling=1.0 if settings.start_momentum else 0.0,
-                               end_torque=(0.0,) * len(settings.end_torque))
+                               end_torque=(0.0,) * len(settings.end_torque),
+                               stairs_shift=0.0)
 
 
 def speed_row(step, duration, inverse_speed):
