@@ -958,7 +958,8 @@ def main() -> None:
                                           "replan_walk_walker3d_deadline2", "replan_walk_20",
                                           "replan_walk_model_error",
                                           "replan_walk_hard_deadline2",
-                                          "replan_walk_hard_moving")
+                                          "replan_walk_hard_moving",
+                                          "replan_walk_stairs_down")
                           if (doc := load_results(name))])
     out = (RESULTS if OTHER else HERE) / "REPORT.md"
     out.write_text("\n".join(lines) + "\n")
