@@ -31,13 +31,24 @@ def walker2d():
 
 @pytest.mark.slow
 def test_a_replanned_walk_from_standing_walks_ten_half_cycles_stops_and_stands(walker2d):
+    """The closed loop itself, not this machine's speed: every re-plan solved to its end
+    and taking over at its strike (a clock that stands still while plans are made). With
+    the solves' wall time charged and cut at the limit, a walk here depends on the load
+    (walker2d's re-plans 0.41-0.57 s median against a 0.44 s limit; one CI run ran out of
+    plan at 4.7 s): `benchmarks/replan_walk.py` measures that, and the next test checks
+    that the clock charges it."""
     scene, settings, planner = walker2d
-    r = walk_replanned(planner, scene, settings, 10)
+
+    def unlimited(planner, scene, s, start, **fields):
+        return plan_transition(planner, scene, s.with_solve(
+            max_solve_time=settings.solve.max_solve_time), start, **fields)
+
+    r = walk_replanned(planner, scene, settings, 10, wall=lambda: 0.0, plan=unlimited)
     assert r["stopped"] == "completed", r["stopped"]
     assert r["half_cycles_walked"] >= 10 and r["stood"]
     assert r["final_com_speed_m_s"] < 0.05  # standing still 2 s after the stop ended
     replans = [p for p in r["plans"] if p["kind"] == "re-plan"]
-    assert len(replans) >= 5 and sum(p["success"] for p in replans) >= 3, replans
+    assert len(replans) >= 5 and all(p["success"] for p in replans), replans
     stop = [p for p in r["plans"] if p["kind"] == "stop"]
     assert len(stop) == 1 and stop[0]["success"] and "took_over_s" in stop[0]
 
