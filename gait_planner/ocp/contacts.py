@@ -190,13 +190,26 @@ def landing_treads(before: tuple[BodyContact, ...], after: tuple[BodyContact, ..
     return {p: tread.get(c.body, 0) for c in after for p in c.points}
 
 
+def phase_treads(contacts: list[tuple[BodyContact, ...]], beside: list[bool]
+                 ) -> list[dict[str, int]]:
+    """Per phase k of a sequence (contacts[k] its held contacts, every phase at least one
+    interval), the stair tread of each of its points: phase 0's on tread 0, each next
+    phase's by `landing_treads` from the one before (beside[k]: phase k's landing foot
+    sets down beside the other)."""
+    tread = {c.body: 0 for c in contacts[0]}
+    out = [{p: 0 for c in contacts[0] for p in c.points}]
+    for k in range(1, len(contacts)):
+        out.append(landing_treads(contacts[k - 1], contacts[k], tread, beside[k]))
+    return out
+
+
 def establishing_rows(mb: Multibody, before: tuple[BodyContact, ...],
                       after: tuple[BodyContact, ...], ground: Ground | ParametricGround = LEVEL,
                       treads: dict[str, int] | None = None):
     """Rows E (r, k) and heights e (r,) m with E q = e at the node where `after` starts:
     the height above the ground of every point that touches down there, n . p = its
     tread's height (n the ground's normal; on stairs the tread `treads` gives the point,
-    `landing_treads`, else tread 0), and,
+    `phase_treads`, else tread 0), and,
     for a body whose full contact is completed there, its roll n . d2 = 0 (foot flat on
     the ground). r may be 0. CasADi expressions (of a `ParametricGround`'s parameters;
     the roll row `phase_rows`')."""

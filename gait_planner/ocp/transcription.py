@@ -50,8 +50,8 @@ import numpy as np
 
 from gait_planner.dynamics.discrete import DiscreteMechanics
 from gait_planner.model.ground import PARAMETERS, ParametricGround
-from gait_planner.ocp.contacts import (body_contacts, establishing_rows, landing_treads,
-                                       phase_rows, stacked_rows)
+from gait_planner.ocp.contacts import (body_contacts, establishing_rows, phase_rows,
+                                       phase_treads, stacked_rows)
 from gait_planner.ocp.cost_terms import CostTerms
 from gait_planner.ocp.elements import ElementGroup, Layout
 from gait_planner.ocp.held_efforts import HeldRows
@@ -311,15 +311,13 @@ class Transcription(PathRows, HeldRows, CostTerms):
         self._eq.append(("contact_hold", ca.vertcat(*chain)))
         self._without_elements["contact_hold"] = ca.MX(sum(int(c.shape[0]) for c in chain), 1)
         est = []
-        tread = {bc.body: 0 for bc in self.contacts[self.phase_of_interval[0]]}
-        beside = {p.name for p in mb.scene.gait.stop} if self.settings.end_at_rest else set()
+        stops = {p.name for p in mb.scene.gait.stop} if self.settings.end_at_rest else set()
+        treads = phase_treads(self.contacts, [p.name in stops for p in mb.scene.gait.phases])
         for n in range(1, N):
             k_prev, k = self.phase_of_interval[n - 1], self.phase_of_interval[n]
             if k != k_prev:
-                treads = landing_treads(self.contacts[k_prev], self.contacts[k], tread,
-                                        self._phase_name(k) in beside)
                 E, e = establishing_rows(mb, self.contacts[k_prev], self.contacts[k],
-                                         self.gp, treads)
+                                         self.gp, treads[k])
                 if E.shape[0]:
                     est.append(ca.mtimes(E, self.Q[:, n]) - e)
         if est:

@@ -12,7 +12,7 @@ import pytest
 from gait_planner.model.angles import configuration
 from gait_planner.model.loader import load_scene
 from gait_planner.model.multibody import Multibody
-from gait_planner.ocp.contacts import body_contacts, landing_treads
+from gait_planner.ocp.contacts import body_contacts, phase_treads
 from gait_planner.ocp.settings import settings_for
 from gait_planner.ocp.solve import Planner
 from gait_planner.ocp.transition import (StartError, StartState, check_start, standing_start,
@@ -210,23 +210,21 @@ def test_a_standing_start_begins_with_the_scenes_start_phases(gait):
         standing_start(load_scene("compass"))
 
 
-
 @pytest.mark.parametrize("stop", [False, True])
 def test_on_stairs_each_landing_foot_steps_one_tread_beyond_the_last(stop):
-    """`landing_treads` over walker3d's transition of two half cycles, from standing or
-    to standing: both feet stand on tread 0, the first landing foot touches down on tread
-    1, the second (the first copy's stance foot) on tread 2, a foot that stays down keeps
-    its tread, and a stop's last foot sets down beside the other. (The establishing rows
-    held every point but the first half cycle's landing foot at tread 0, so no transition
-    of two half cycles on stairs could converge; benchmarks/HISTORY.md.)"""
+    """`phase_treads` over walker3d's transition of two half cycles, from standing or to
+    standing: both feet stand on tread 0, the first landing foot touches down on tread 1,
+    the second (the first copy's stance foot) on tread 2, a foot that stays down keeps its
+    tread, and a stop's last foot sets down beside the other. (The establishing rows held
+    every point but the first half cycle's landing foot at tread 0, so no transition of
+    two half cycles on stairs could converge; benchmarks/HISTORY.md.)"""
     scene = load_scene("walker3d")
     mb = Multibody(scene)
     phases = transition_scene(scene, 2, standing=not stop, stop=stop).gait.phases
-    contacts = [body_contacts(mb, p.contacts) for p in phases]
-    tread = {bc.body: 0 for bc in contacts[0]}
-    beside = {p.name for p in scene.gait.stop} if stop else set()
-    down = {phase.name: landing_treads(before, after, tread, phase.name in beside)
-            for before, after, phase in zip(contacts, contacts[1:], phases[1:])}
+    stops = {p.name for p in scene.gait.stop} if stop else set()
+    treads = phase_treads([body_contacts(mb, p.contacts) for p in phases],
+                          [p.name in stops for p in phases])
+    down = {phase.name: t for phase, t in zip(phases, treads)}
     assert down["double_heel"] == {"foot_r_forefoot": 0, "foot_l_heel": 1}
     assert down["double_full~2"] == {"foot_l_forefoot": 1, "foot_r_heel": 2,
                                      "foot_r_forefoot": 2}
@@ -234,6 +232,7 @@ def test_on_stairs_each_landing_foot_steps_one_tread_beyond_the_last(stop):
         assert set(down["at_rest"].values()) == {2}
     else:
         assert set(down["left_heel_off"].values()) == {0}
+
 
 @pytest.mark.slow
 def test_from_standing_the_walker_sets_off_onto_the_gait(gait):
