@@ -30,9 +30,10 @@ from gait_planner.ocp.solve import Clock, Planner, Start
 from gait_planner.ocp.warm_starts import StoredPlan
 from gait_planner.ocp.transcription import TORQUE_SCALE, Transcription
 from gait_planner.ocp.transition import (StartError, StartState, check_start, end_intervals,
-                                         join, join_targets, mirrored_result, mirrored_start,
-                                         stance_offset, start_of_plan, transition_scene,
-                                         transition_settings)
+                                         ground_repeat, join, join_targets, mirrored_result,
+                                         mirrored_start, stance_offset, start_of_plan,
+                                         transition_scene, transition_settings, translated,
+                                         translated_result)
 from gait_planner.ocp.walk_on import walk_on
 from gait_planner.result import PlanResult
 from gait_planner.strategies import COLD_ATTEMPTS, plan_certified
@@ -204,7 +205,9 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     A standing start (`ocp.transition.standing_start`) begins with the scene's start
     phases (gait.start: both feet flat, then the first heel off); on stairs it carries the
     stairs with the gait it joins (settings.stairs_shift: the robot stands as far from the
-    first edge as that gait, joined `FIRST_STEP` of a step back, has them). stop: the transition
+    first edge as that gait, joined `FIRST_STEP` of a step back, has them). A start treads up
+    the stairs or along a ramp is planned moved back onto the gait's first tread and its
+    answer moved forward again (`ocp.transition.ground_repeat`). stop: the transition
     ends with the scene's stop phases (gait.stop), the last standing at rest, instead of
     joining the gait; steps are not walked then; without a start it begins at the gait's
     first node.
@@ -231,6 +234,8 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     if not gait.success:
         return dataclasses.replace(gait, message=f"the gait to join: {gait.message}")
     start = start_of_plan(gait) if start is None else start
+    dx, dz = ground_repeat(scene, start.q, gait)  # planned on the gait's first tread
+    start = dataclasses.replace(start, q=translated(scene, start.q, -dx, -dz))
     walked = walk_on(gait, halves + max(steps, 1))  # the guess, the references, the answer
     tr_settings = transition_settings(settings, gait, walked, start, halves, stop)
     tr_scene = transition_scene(scene, halves, start.standing, stop)
@@ -268,6 +273,7 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     else:
         joined = join(result, walked, offset, halves,
                       end_intervals(tr_settings, scene, start.standing, stop)[0])
+    joined = translated_result(joined, dx, dz)
     joined, cert = certified(mirrored_result(joined) if mirrored else joined)
     standing = {"transition_standing": "true"} if start.standing else {}
     return dataclasses.replace(joined, settings={

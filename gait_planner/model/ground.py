@@ -109,6 +109,18 @@ class Ground:
         """Height (m) of tread `tread` (0: the standing foot's, 1: the landing foot's)."""
         return tread * self.step_height
 
+    def repeat_at(self, x: float) -> tuple[float, float]:
+        """(dx, dz) m: the translation that maps this ground onto itself and takes its
+        point at x (m) back to where the half cycle's pinned point stands (x = 0, tread 0):
+        on stairs k treads back and k step heights down (k the tread that holds x), on a
+        ramp (x, x tan(slope)) along it; on level ground none, (0, 0): every shift along x
+        maps it onto itself, and a transition joins the gait where its start stands
+        (`ocp.transition.stance_offset`)."""
+        if self.stairs:
+            k = math.floor((x - self.riser) / self.tread) + 1
+            return k * self.tread, k * self.step_height
+        return (x, x * self.rise_per_step) if self.slope else (0.0, 0.0)
+
     def height(self, x) -> np.ndarray:
         """Ground height z (m) at x (m, array): x tan(slope) on a ramp, the tread's height on
         stairs (an edge belongs to the tread ahead of it)."""

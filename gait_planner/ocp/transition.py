@@ -240,6 +240,32 @@ def stance_offset(scene: Scene, q: np.ndarray, gait: PlanResult) -> float:
     return float(row @ q - row @ gait.q[0])
 
 
+def ground_repeat(scene: Scene, q: np.ndarray, gait: PlanResult) -> tuple[float, float]:
+    """(dx, dz) m: `Ground.repeat_at` of the gait's ground at the first held contact
+    point of a start's configuration q (k,). A transition's landing treads
+    (`ocp.contacts.landing_treads`), join targets and clearance edges are counted from the
+    tread the gait's first node stands on: a start k treads up the stairs (or along a
+    ramp) is planned moved back by (dx, dz) and its answer moved forward again
+    (`translated`, `translated_result`)."""
+    row = Multibody.of(scene).contact_rows(scene.gait.phases[0].contacts[0])[0]
+    return gait.ground.repeat_at(float(row @ q))
+
+
+def translated(scene: Scene, q: np.ndarray, dx: float, dz: float) -> np.ndarray:
+    """Configurations q (..., k) with every body moved dx m along x and dz m up."""
+    _, along, up = mirror_parts(Multibody.of(scene))
+    return q + dx * along + dz * up
+
+
+def translated_result(result: PlanResult, dx: float, dz: float) -> PlanResult:
+    """`result` with every body moved dx m along x and dz m up at every node (its
+    potential energy raised by m g dz); velocities, forces and times as they were."""
+    scene = result.scene
+    weight = sum(b.mass for b in scene.bodies) * scene.gravity  # N
+    return dataclasses.replace(result, q=translated(scene, result.q, dx, dz),
+                               potential_energy=result.potential_energy + weight * dz)
+
+
 def join_targets(gait: PlanResult, offset: float, halves: int = 1) -> np.ndarray:
     """(2, k): the gait's nodes 0 and 1 `halves` half cycles on (mirrored that many
     times, a step further each, `ocp.mirror.configuration_mirror`), moved `offset` m along
