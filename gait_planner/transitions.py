@@ -8,8 +8,8 @@ plan_certified`, and kept by the planner for its next transitions (`gait_to_join
 transition is then solved on the gait's grid, starting from the gait itself (its inner
 nodes, torques and phase durations; the start at node 0 and the gait's next half cycle at
 nodes N-1 and N: from the gait's own first state, `start_of_plan`, that is the optimum) or,
-re-planning, from the planner's last transition of the same shape with its multipliers
-(warm if it began at the same state, `REPEATED_ATTEMPT`). A start on the other foot is
+re-planning, from a kept transition of the same shape with its multipliers: one that
+began at the same state if there is one (warm, `REPEATED_ATTEMPT`), else the newest. A start on the other foot is
 planned as its mirror image; a state of a recording is `start_of_recording`'s.
 """
 from __future__ import annotations
@@ -56,6 +56,7 @@ FIRST_ATTEMPT = ([("cold", False, False)],)
 # half cycle's mirrored back differ by 1.4e-7 m (a stop from it took 11 iterations cold).
 REPEATED_ATTEMPT = ([("warm", False, False)],)
 SAME_START = 1e-6
+SAME_MOMENTUM = 1e-3  # N s: a body of 10 kg 0.1 mm/s apart
 GAITS_KEPT = 16  # the gaits a planner keeps for transitions (`gait_to_join`): those used last
 MAX_HALVES = 4  # half cycles a transition may take
 # Half cycles by default: walker3d from starts 1.3-1.4 cm and 0.1 rad/s off its first node
@@ -156,9 +157,12 @@ def repeats(tr: Transcription, last: StoredPlan, start: StartState, gait: PlanRe
             ) -> bool:
     """Whether `start` begins where the kept transition `last` began, moved along x (its
     configuration within `SAME_START` m of last's first reference moved by their stance
-    offsets' difference, as `last_transition` moves it)."""
+    offsets' difference, as `last_transition` moves it, and its momentum within
+    `SAME_MOMENTUM` of last's)."""
     moved = last.qref[0] + _shift(tr, last, start, gait) * mirror_parts(tr.mb)[1]
-    return float(np.abs(start.q - moved).max()) <= SAME_START
+    return (last.momentum.shape == start.momentum.shape
+            and float(np.abs(start.q - moved).max()) <= SAME_START
+            and float(np.abs(start.momentum - last.momentum).max()) <= SAME_MOMENTUM)
 
 
 def _shift(tr: Transcription, last: StoredPlan, start: StartState, gait: PlanResult
@@ -201,7 +205,9 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     other foot: every other strike of a walk) is planned mirrored and the answer mirrored
     back (`mirrored_start`, `mirrored_result`). warm_start: the gait from the planner's
     store (`strategies.plan_certified`); from_last: the transition from the planner's last
-    transition of this shape if it has one (`last_transition`), else from the gait.
+    transition of this shape that began at this start (kept by this process or, in the
+    warm-start store, by another: `gait-planner prepare` plans the scene's start from
+    standing and its stop), else from its newest (`last_transition`), else from the gait.
     A standing start (`ocp.transition.standing_start`) begins with the scene's start
     phases (gait.start: both feet flat, then the first heel off); on stairs it carries the
     stairs with the gait it joins (settings.stairs_shift: the robot stands as far from the
@@ -251,8 +257,10 @@ def plan_transition(planner: Planner, scene: Scene, settings: GaitSettings,
     first = transition_start(tr, gait, walked, start, offset, tr_settings.end_scaling,
                              halves)
     kept = planner.stored_plans(tr_scene, tr_settings) if from_last else []
-    begin = last_transition(tr, kept[-1], start, offset, gait, halves) if kept else first
-    repeated = bool(kept) and repeats(tr, kept[-1], start, gait)
+    same = [plan for plan in kept if repeats(tr, plan, start, gait)]
+    last = (same or kept)[-1] if kept else None  # one that began here, else the newest
+    begin = first if last is None else last_transition(tr, last, start, offset, gait, halves)
+    repeated = bool(same)
     clock = Clock.begin(settings.solve.max_solve_time)
     attempts = (REPEATED_ATTEMPT if repeated else FIRST_ATTEMPT) + COLD_ATTEMPTS
     reached = planner.attempt(tr_scene, tr_settings, attempts[0], begin, clock)

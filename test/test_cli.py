@@ -83,6 +83,31 @@ def test_prepare_compiles_marks_skips_and_refuses_unknown_scenes(capsys, tmp_pat
     assert "gait-planner: error:" in capsys.readouterr().err
 
 
+def test_a_prepared_start_and_stop_are_repeated_warm_by_a_fresh_process(tmp_path):
+    """`prepare` plans the scene's start from standing and its stop into the warm-start
+    store; a fresh process's first `plan --from standing` and `--to standing` (a new
+    Planner on that store) begin where those did and repeat them warm, in at most two
+    iterations (walker3d from standing planned cold: 71; benchmarks/HISTORY.md)."""
+    from gait_planner.cli.prepare import _plan_start_and_stop
+    from gait_planner.model.loader import load_scene
+    from gait_planner.ocp.settings import settings_for
+    from gait_planner.ocp.solve import Planner
+    from gait_planner.ocp.transition import standing_start
+    from gait_planner.ocp.warm_starts import WarmStartStore
+    from gait_planner.transitions import plan_transition
+
+    scene = load_scene("walker2d")
+    settings = settings_for(scene, compiled=True)
+    prepared = Planner(library=WarmStartStore(tmp_path), pin=True)
+    assert _plan_start_and_stop(prepared, scene, settings) == [True, True]
+    fresh = Planner(library=WarmStartStore(tmp_path))
+    for start, stop in ((standing_start(scene), False), (None, True)):
+        result = plan_transition(fresh, scene, settings, start, stop=stop)
+        assert result.success, result.message
+        assert "warm: it began at this start" in result.settings["initial_guess"]
+        assert result.stats.iterations <= 2, result.stats.iterations
+
+
 def test_node_takes_the_ros_arguments_in_order(monkeypatch):
     import gait_planner.ros.node as node
 

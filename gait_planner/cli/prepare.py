@@ -1,7 +1,8 @@
 """``gait-planner prepare SCENE...``: compile the scenes' derivatives and plan their
-defaults and warm-start anchors into the warm-start store (`make prepare`; `make setup`
-runs ``prepare --default-only walker3d``, what `make run`'s plan needs; the node prepares
-its `prepare_scenes` in the background by running this command)."""
+defaults, warm-start anchors, starts from standing and stops into the warm-start store
+(`make prepare`; `make setup` runs ``prepare --default-only walker3d``, what `make run`'s
+plan needs; the node prepares its `prepare_scenes` in the background by running this
+command)."""
 
 from __future__ import annotations
 
@@ -20,8 +21,9 @@ def add_prepare_parser(commands: argparse._SubParsersAction) -> None:
         "level or ramp, a requested speed, stairs up, stairs down; for each of its gaits), so "
         "that the C libraries are in the cache (~/.cache/gait_planner or $GAIT_PLANNER_CACHE) "
         "and no request within the scene's ranges compiles, and plan its default request and "
-        "its warm-start anchors into the warm-start store (gait_planner/ocp/warm_starts.py), "
-        "from which the node's first request re-plans warm. A scene prepared in full is marked "
+        "its warm-start anchors, its start from standing and its stop to standing into the "
+        "warm-start store (gait_planner/ocp/warm_starts.py), from which the node's first "
+        "request re-plans warm. A scene prepared in full is marked "
         "in the cache (gait_planner/ocp/prepared.py) and skipped the next time unless its file "
         "or the code changed. The first time it compiles for minutes (walker3d in full about "
         "4.5 min on 2 cores, walker2d 1.3, the compass seconds); --default-only builds only "
@@ -57,6 +59,28 @@ def _plan_anchors(planner, scene) -> list[bool]:
         print(f"{scene.name}: warm-start anchor {k} of {len(anchors)} "
               + ("planned" if result.success else f"{anchor} failed: {result.message}"),
               flush=True)
+    return out
+
+
+def _plan_start_and_stop(planner, scene, settings) -> list[bool]:
+    """Plan the scene's start from standing and its stop to standing from the gait's first
+    node (`transitions.plan_transition`, the defaults of `plan --from standing` and `plan
+    --to standing`), if it declares start and stop phases, into the warm-start store: a
+    fresh process's first such plan begins where these ended and repeats them warm
+    (`transitions.REPEATED_ATTEMPT`); each reported as it ends; whether each converged."""
+    from gait_planner.ocp.transition import standing_start
+    from gait_planner.transitions import plan_transition
+
+    out = []
+    for name, start, stop in (("start from standing", scene.gait.start, False),
+                              ("stop to standing", scene.gait.stop, True)):
+        if not start:
+            continue
+        result = plan_transition(planner, scene, settings,
+                                 None if stop else standing_start(scene), stop=stop)
+        out.append(result.success)
+        print(f"{scene.name}: {name} " + ("planned" if result.success
+                                          else f"failed: {result.message}"), flush=True)
     return out
 
 
@@ -96,14 +120,18 @@ def _prepare(args: argparse.Namespace) -> int:
             result = plan_once(planner, scene, settings, warm_start=False)
             print(f"{name}: default problem built and planned "
                   f"({time.perf_counter() - start:.1f} s)", flush=True)
-            anchors = []
+            anchors, motions = [], []
             if not args.default_only:
                 _build_forms(planner, scene)
-                anchors = _plan_anchors(planner, scene) if result.success else []
+                if result.success:
+                    anchors = _plan_anchors(planner, scene)
+                    motions = _plan_start_and_stop(planner, scene, settings)
         except (SceneError, SettingsError) as error:
             raise CliError(str(error)) from None
-        kept = ("its default plan" + (f" and {sum(anchors)} of {len(anchors)} warm-start "
+        kept = ("its default plan" + (f", {sum(anchors)} of {len(anchors)} warm-start "
                                       "anchors" if anchors else "")
+                + (f", {sum(motions)} of {len(motions)} of its start and stop"
+                   if motions else "")
                 + " kept in the warm-start store" if result.success
                 else f"its default plan failed: {result.message}")
         gaits = (f"; its gaits {', '.join(scene.gaits)} built"

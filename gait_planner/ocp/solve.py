@@ -209,7 +209,7 @@ def stored(settings: GaitSettings, reached: Reached) -> StoredPlan:
     return StoredPlan(settings.step_length, settings.friction_coefficient, reached.x,
                       reached.duals["lam_x0"], reached.duals["lam_g0"], reached.qref,
                       slope=settings.slope, step_height=settings.step_height,
-                      speed=settings.speed)
+                      speed=settings.speed, momentum=np.array(settings.start_momentum, float))
 
 
 class Planner:
@@ -354,8 +354,7 @@ class Planner:
             nx, ng = int(tr.x.shape[0]), int(tr.g.shape[0])
             cb = IterationCallback(nx, ng, bounds[2], bounds[3])
             built = _Built(tr, nlp, bounds, cb, derivatives, used, time.perf_counter() - start)
-            if self.library is not None and not tr.transition:  # a transition's optimum
-                # serves the next re-plan of this process, not later processes
+            if self.library is not None:
                 built.library_key = self.library.key(scene.source, key[2], nx, ng)
                 built.stored = self.library.load(built.library_key, nx, ng)
             self._built[key] = built
@@ -388,17 +387,22 @@ class Planner:
 
     def keep(self, scene: Scene, settings: GaitSettings, plan: StoredPlan) -> None:
         """Keep an optimum of (scene, settings) for warm starts, in the library too if the
-        planner has one; the pinned plans another process added to the library's file
-        since this one read it (a node's background preparation) are taken in first, so
-        that saving does not drop them."""
+        planner has one (a transition's only if the planner pins its plans: `gait-planner
+        prepare`'s start from standing and stop, which later processes repeat; the others
+        serve this process's next re-plans, its measured starts never repeat); the pinned
+        plans another process added to the library's file since this one read it (a
+        node's background preparation) are taken in first, so that saving does not drop
+        them."""
         built = self._build(scene, settings)
-        if self.library is not None and built.library_key is not None:
+        saved = (self.library is not None and built.library_key is not None
+                 and (self.pin or not built.tr.transition))
+        if saved:
             known = {p.request for p in built.stored}
             built.stored[:0] = [p for p in self.library.load(
                 built.library_key, int(built.tr.x.shape[0]), int(built.tr.g.shape[0]))
                 if p.pinned and p.request not in known]
         built.stored.append(dataclasses.replace(plan, pinned=True) if self.pin else plan)
-        if self.library is not None and built.library_key is not None:
+        if saved:
             self.library.save(built.library_key, built.stored)
 
     def _solver(self, built: _Built, s: GaitSettings, variant: str = "cold") -> ca.Function:

@@ -17,7 +17,8 @@ re-plans from it in 1 IPOPT iteration instead of 64 cold, answered in 0.71 s ins
 2.91 s (benchmarks/node_latency.py, 2026-11-23); other requests as warm re-plans. A request
 with cold_start = true ignores it, as it ignores the plans of the running process. A
 problem's file keeps the MAX_PLANS newest plans of the processes that used it, and besides
-them, pinned, the plans `prepare` made (the default and the scene's warm-start anchors),
+them, pinned, the plans `prepare` made (the default, the scene's warm-start anchors, its
+start from standing and its stop: a transition is kept like any plan, per problem shape),
 so that a node answering many requests of one shape does not evict its anchors.
 """
 
@@ -37,7 +38,7 @@ from gait_planner.ocp.compile import cache_folder
 
 MAX_PLANS = 16  # per problem, besides its pinned plans; the oldest go first
 _REQUEST = ("slope", "step_height", "speed")  # StoredPlan's request beyond step and mu
-_FIELDS = ("step", "mu", "x", "lam_x", "lam_g", "qref", *_REQUEST, "pinned")
+_FIELDS = ("step", "mu", "x", "lam_x", "lam_g", "qref", *_REQUEST, "pinned", "momentum")
 _CODE = ("model", "dynamics", "ocp")  # packages whose source defines the stored vectors
 
 
@@ -49,7 +50,8 @@ class StoredPlan:
     library file), and the rest of its request: slope deg, step height m, speed m/s (one
     problem serves every value of these, `ocp.transcription.shape_of`); pinned: planned by
     `gait-planner prepare` (the default and the warm-start anchors), never evicted by the
-    plans a busy process keeps after it."""
+    plans a busy process keeps after it; momentum: a transition's start momentum (k,) N s
+    (its node 0 is qref[0]), else empty."""
 
     step: float
     mu: float
@@ -62,6 +64,7 @@ class StoredPlan:
     step_height: float = 0.0
     speed: float = 0.0
     pinned: bool = False
+    momentum: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
 
     @property
     def request(self) -> tuple[float, ...]:
@@ -114,6 +117,7 @@ class WarmStartStore:
         count = fields["step"].shape[0]
         shapes_ok = (fields["x"].shape == (count, nx) and fields["lam_x"].shape == (count, nx)
                      and fields["lam_g"].shape == (count, ng) and fields["qref"].ndim == 3
+                     and fields["momentum"].ndim == 2 and fields["momentum"].shape[0] == count
                      and all(fields[name].shape == (count,)
                              for name in ("mu", *_REQUEST, "pinned")))
         finite = shapes_ok and all(np.all(np.isfinite(v)) for v in fields.values())
@@ -123,7 +127,7 @@ class WarmStartStore:
                            fields["lam_x"][i], fields["lam_g"][i], fields["qref"][i],
                            f"the warm-start store ({path.name[:12]})",
                            *(float(fields[name][i]) for name in _REQUEST),
-                           bool(fields["pinned"][i]))
+                           bool(fields["pinned"][i]), fields["momentum"][i])
                 for i in range(count)]
 
     def save(self, key: str, plans: list[StoredPlan]) -> None:
@@ -149,6 +153,7 @@ class WarmStartStore:
                          x=np.stack([p.x for p in newest]),
                          lam_x=np.stack([p.lam_x for p in newest]),
                          lam_g=np.stack([p.lam_g for p in newest]),
-                         qref=np.stack([p.qref for p in newest]))
+                         qref=np.stack([p.qref for p in newest]),
+                         momentum=np.stack([p.momentum for p in newest]))
         except OSError:
             return

@@ -314,10 +314,13 @@ def test_a_stop_from_where_the_last_stop_began_starts_warm_and_repeats_it(gait):
     """A stop from a strike of the gait walked on begins where the stop from the gait's
     first node began (mirrored and moved along x): it is planned from that stop with
     IPOPT's warm variant (`transitions.REPEATED_ATTEMPT`) in at most two iterations, and is
-    that stop moved along."""
+    that stop moved along, also when a stop from elsewhere was planned after it."""
     scene, settings, planner, plan = gait
     first = plan_transition(planner, scene, settings, None, stop=True)
     assert first.success, first.message
+    elsewhere = turned_start(scene, start_of_plan(plan), 0.002, 0.01)
+    newest = plan_transition(planner, scene, settings, elsewhere, stop=True)
+    assert newest.success, newest.message
     walked = walk_on(plan, 3)
     n = _strike_nodes(walked)[1]  # the same foot's, two steps on
     start = start_of_node(scene, walked.q, walked.times, walked.generalized_force, n,
