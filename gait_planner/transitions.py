@@ -9,8 +9,9 @@ transition is then solved on the gait's grid, starting from the gait itself (its
 nodes, torques and phase durations; the start at node 0 and the gait's next half cycle at
 nodes N-1 and N: from the gait's own first state, `start_of_plan`, that is the optimum) or,
 re-planning, from a kept transition of the same shape with its multipliers: one that
-began at the same state if there is one (warm, `REPEATED_ATTEMPT`), else the newest. A start on the other foot is
-planned as its mirror image; a state of a recording is `start_of_recording`'s.
+began at the same state if there is one (warm, `REPEATED_ATTEMPT`), else the newest. A
+start on the other foot is planned as its mirror image; a state of a recording is
+`start_of_recording`'s.
 """
 from __future__ import annotations
 

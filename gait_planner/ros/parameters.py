@@ -84,7 +84,8 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
     "prepare_scenes": (["walker3d", "walker2d", "compass"], _descriptor(
         ParameterType.PARAMETER_STRING_ARRAY,
         "Scenes prepared in full in the background when prepare_on_start is true (every "
-        "ground form and gait compiled, the default and the warm-start anchors planned: "
+        "ground form and gait compiled, the default, the warm-start anchors, the start from "
+        "standing and the stop planned: "
         "`gait-planner prepare` in a child process, gait_planner/ros/preparation.py), each "
         "that the cache does not mark prepared; the service /gait_planner/preparation "
         "answers what is ready; empty entries are ignored; fixed at start", read_only=True)),
@@ -92,7 +93,8 @@ DECLARATIONS: dict[str, tuple[Any, ParameterDescriptor]] = {
         ParameterType.PARAMETER_BOOL,
         "Warm-start from the optima of earlier processes (the warm-start store in the cache "
         "folder, gait_planner/ocp/warm_starts.py; `make prepare` plans the shipped scenes' "
-        "default requests and warm-start anchors into it; a request on another ground or at "
+        "default requests, warm-start anchors, starts from standing and stops into it; a "
+        "request on another ground or at "
         "another pace is continued from the nearest along a path of parameters) and add this "
         "node's optima to it; a request with cold_start ignores it", read_only=True)),
     DEPRECATED_STORE: (True, _descriptor(
