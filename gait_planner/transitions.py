@@ -24,7 +24,6 @@ from gait_planner.model.angles import blended, configuration
 from gait_planner.model.multibody import Multibody
 from gait_planner.model.scene import Scene
 from gait_planner.ocp.guess import initial_multipliers
-from gait_planner.ocp.mirror import mirror_parts
 from gait_planner.ocp.settings import GaitSettings
 from gait_planner.ocp.solution import failed_result
 from gait_planner.ocp.solve import Clock, Planner, Start
@@ -98,9 +97,8 @@ def transition_start(tr: Transcription, gait: PlanResult, walked: PlanResult,
     each half cycle, the upper bound for the start and stop phases; the contact
     multipliers of `ocp.guess.initial_multipliers`."""
     N, settings, scene = tr.N, tr.settings, tr.mb.scene
-    along = mirror_parts(tr.mb)[1]
     S, P = end_intervals(settings, scene, start.standing, tr.layout.rest)
-    inner = walked.q[: N - 1 - S] + offset * along
+    inner = translated(gait.scene, walked.q[: N - 1 - S], offset, 0.0)
     lead = [blended(scene, start.q, inner[0], _ease(n / S)) for n in range(S)]
     inner = np.vstack(lead + list(inner))[1 : N - 1]
     extra = tr.mb.scene.gait.n_scalings - halves * gait.scene.gait.n_scalings
@@ -146,10 +144,9 @@ def last_transition(tr: Transcription, last: StoredPlan, start: StartState, offs
     inner references moved along x as far as the new start is from the last one, the new
     start and targets at the ends."""
     N = tr.N
-    along = mirror_parts(tr.mb)[1]
     shift = _shift(tr, last, start, gait)
     ends = [] if tr.layout.rest else [join_targets(gait, offset, halves)]
-    qref = np.vstack([start.q, last.qref[1 : N - 1] + shift * along, *ends])
+    qref = np.vstack([start.q, translated(gait.scene, last.qref[1 : N - 1], shift, 0.0), *ends])
     return Start(last.x, last.lam_x, last.lam_g, qref,
                  f"a transition from {start.origin}, re-planned from the last transition")
 
@@ -160,7 +157,7 @@ def repeats(tr: Transcription, last: StoredPlan, start: StartState, gait: PlanRe
     configuration within `SAME_START` m of last's first reference moved by their stance
     offsets' difference, as `last_transition` moves it, and its momentum within
     `SAME_MOMENTUM` of last's)."""
-    moved = last.qref[0] + _shift(tr, last, start, gait) * mirror_parts(tr.mb)[1]
+    moved = translated(gait.scene, last.qref[0], _shift(tr, last, start, gait), 0.0)
     return (last.momentum.shape == start.momentum.shape
             and float(np.abs(start.q - moved).max()) <= SAME_START
             and float(np.abs(start.momentum - last.momentum).max()) <= SAME_MOMENTUM)

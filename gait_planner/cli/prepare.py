@@ -72,9 +72,9 @@ def _plan_start_and_stop(planner, scene, settings) -> list[bool]:
     from gait_planner.transitions import plan_transition
 
     out = []
-    for name, start, stop in (("start from standing", scene.gait.start, False),
-                              ("stop to standing", scene.gait.stop, True)):
-        if not start:
+    for name, phases, stop in (("start from standing", scene.gait.start, False),
+                               ("stop to standing", scene.gait.stop, True)):
+        if not phases:
             continue
         result = plan_transition(planner, scene, settings,
                                  None if stop else standing_start(scene), stop=stop)

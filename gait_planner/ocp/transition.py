@@ -275,7 +275,7 @@ def join_targets(gait: PlanResult, offset: float, halves: int = 1) -> np.ndarray
     q = gait.q[0:2]
     for _ in range(halves):
         q = q @ A.T + gait.step_length * shift + lift
-    return q + offset * mirror_parts(mb)[1]
+    return translated(gait.scene, q, offset, 0.0)
 
 
 def transition_scene(scene: Scene, halves: int, standing: bool = False, stop: bool = False
@@ -385,9 +385,8 @@ def join(transition: PlanResult, walked: PlanResult, offset: float, halves: int 
     says where the gait begins."""
     N = transition.n_nodes - 1
     M = N - lead  # the gait's node joined at the transition's node N
-    along = mirror_parts(Multibody.of(transition.scene))[1]
     t0 = transition.times[N - 1] - walked.times[M - 1]
-    q = np.vstack([transition.q[:N], walked.q[M:] + offset * along])
+    q = np.vstack([transition.q[:N], translated(walked.scene, walked.q[M:], offset, 0.0)])
     times = np.concatenate([transition.times[:N], walked.times[M:] + t0])
 
     def stack(a, b):
